@@ -1,0 +1,1 @@
+//! `hairfit eval`: stream an angles file through the model (filled in by the eval work).

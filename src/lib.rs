@@ -1,0 +1,20 @@
+//! hairfit: fit the Marschner 2003 hair scattering model to measured or synthetic
+//! fiber-scattering data.
+//!
+//! The crate is a library with a thin CLI (`src/main.rs`). Module map:
+//! - [`model`]: the forward model of `MODEL.md` (one pure function per equation), generic over
+//!   the number type so that forward-mode AD gives exact Jacobians.
+//! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
+//! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
+//! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
+//! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
+//! - [`error`]: the error type shared by the library.
+
+pub mod data;
+pub mod error;
+pub mod eval;
+pub mod lm;
+pub mod model;
+pub mod params;
+
+pub use error::{Error, Result};

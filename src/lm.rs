@@ -1,0 +1,1 @@
+//! Levenberg–Marquardt as an argmin `Solver` (filled in by the solver work).

@@ -1,0 +1,1 @@
+//! The Marschner 2003 forward model (filled in by the model work).

@@ -1,0 +1,1 @@
+//! The parameter file with MODEL.md's names (filled in by the model work).
