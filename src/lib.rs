@@ -10,6 +10,7 @@
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`error`]: the error type shared by the library.
 
+pub mod atomic;
 pub mod data;
 pub mod error;
 pub mod eval;
