@@ -1,1 +1,282 @@
-//! `hairfit eval`: stream an angles file through the model (filled in by the eval work).
+//! `hairfit eval`: stream an angles CSV through the model and append the scattering values.
+//!
+//! The input is read and written in fixed-size chunks (evaluated in parallel with rayon), so memory
+//! stays bounded whatever the row count. Output files are written atomically: an error on any row
+//! leaves no output file behind.
+
+use std::fmt::Write as _;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use crate::atomic::write_atomically;
+use crate::error::{Error, Result};
+use crate::model::{scattering, Angles, ModelConfig, Params};
+
+/// Rows evaluated per parallel chunk: large enough to amortise the rayon fork, small enough that
+/// memory does not grow with the file.
+const CHUNK_ROWS: usize = 16_384;
+
+/// The four angle columns every angles file must have, in degrees.
+pub const ANGLE_COLUMNS: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+
+/// What `hairfit eval` needs besides the files.
+#[derive(Debug, Clone)]
+pub struct EvalRequest {
+    pub params: Params<f64>,
+    /// Column names for the appended values: `["s"]` or `["s_0", …]`.
+    pub output_columns: Vec<String>,
+    pub config: ModelConfig,
+}
+
+/// Summary of an evaluation run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EvalSummary {
+    pub rows: u64,
+}
+
+/// Output column names: `s` for a scalar `sigma_a`, `s_0…s_{N−1}` for N channels.
+pub fn output_columns(n_channels: usize, scalar: bool) -> Vec<String> {
+    if scalar {
+        vec!["s".to_string()]
+    } else {
+        (0..n_channels).map(|c| format!("s_{c}")).collect()
+    }
+}
+
+/// Evaluate `input` and write to `output` (atomically), or to stdout when `output` is `None`.
+pub fn eval_file(
+    input: &Path,
+    output: Option<&Path>,
+    request: &EvalRequest,
+) -> Result<EvalSummary> {
+    let file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
+    match output {
+        Some(out) => {
+            let mut summary = EvalSummary { rows: 0 };
+            write_atomically(out, |w| {
+                summary = eval_stream(file, input, w, request)?;
+                Ok(())
+            })?;
+            Ok(summary)
+        }
+        None => {
+            let stdout = std::io::stdout();
+            let mut lock = std::io::BufWriter::new(stdout.lock());
+            let summary = eval_stream(file, input, &mut lock, request)?;
+            lock.flush().map_err(|e| Error::io("<stdout>", e))?;
+            Ok(summary)
+        }
+    }
+}
+
+/// Evaluate a CSV stream; `source` names the input in error messages.
+pub fn eval_stream<R: Read, W: Write + ?Sized>(
+    input: R,
+    source: &Path,
+    output: &mut W,
+    request: &EvalRequest,
+) -> Result<EvalSummary> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(false)
+        .comment(Some(b'#'))
+        .from_reader(input);
+    let headers = reader
+        .byte_headers()
+        .map_err(|e| csv_error(source, &e))?
+        .clone();
+    let header_names: Vec<String> = headers
+        .iter()
+        .enumerate()
+        .map(|(i, h)| {
+            let name = String::from_utf8_lossy(h);
+            // A UTF-8 byte-order mark may precede the first header.
+            let name = if i == 0 {
+                name.trim_start_matches('\u{feff}')
+            } else {
+                &name
+            };
+            name.trim().to_string()
+        })
+        .collect();
+    let angle_index = locate_angle_columns(source, &header_names)?;
+    for name in &request.output_columns {
+        if header_names.iter().any(|h| h == name) {
+            return Err(Error::input(
+                source,
+                1,
+                1 + header_names.iter().position(|h| h == name).unwrap() as u64,
+                format!(
+                    "the input already has a column `{name}`, which eval would append; rename it"
+                ),
+            ));
+        }
+    }
+
+    let mut writer = csv::WriterBuilder::new().from_writer(output);
+    let mut out_header: Vec<&str> = header_names.iter().map(String::as_str).collect();
+    out_header.extend(request.output_columns.iter().map(String::as_str));
+    writer
+        .write_record(&out_header)
+        .map_err(|e| write_error(&e))?;
+
+    let n_channels = request.params.sigma_a.len();
+    let mut records: Vec<csv::ByteRecord> = Vec::with_capacity(CHUNK_ROWS);
+    let mut angles: Vec<Angles> = Vec::with_capacity(CHUNK_ROWS);
+    let mut values: Vec<f64> = Vec::with_capacity(CHUNK_ROWS * n_channels);
+    let mut rows = 0u64;
+    let mut spare = csv::ByteRecord::new();
+    loop {
+        records.clear();
+        angles.clear();
+        while records.len() < CHUNK_ROWS {
+            if !reader
+                .read_byte_record(&mut spare)
+                .map_err(|e| csv_error(source, &e))?
+            {
+                break;
+            }
+            let line = spare.position().map_or(0, |p| p.line());
+            angles.push(parse_angles(
+                source,
+                line,
+                &spare,
+                &angle_index,
+                &header_names,
+            )?);
+            records.push(std::mem::take(&mut spare));
+        }
+        if records.is_empty() {
+            break;
+        }
+        values.clear();
+        values.resize(records.len() * n_channels, 0.0);
+        values
+            .par_chunks_mut(n_channels)
+            .zip(angles.par_iter())
+            .for_each(|(out, a)| scattering(&request.params, &request.config, a, out));
+        let mut buffer = String::with_capacity(32);
+        for (record, vals) in records.iter().zip(values.chunks(n_channels)) {
+            let mut out = record.clone();
+            for v in vals {
+                buffer.clear();
+                // `{:?}` is the shortest text that round-trips an f64, with an exponent when needed.
+                write!(buffer, "{v:?}").expect("writing to a String cannot fail");
+                out.push_field(buffer.as_bytes());
+            }
+            writer
+                .write_byte_record(&out)
+                .map_err(|e| write_error(&e))?;
+        }
+        rows += records.len() as u64;
+    }
+    writer.flush().map_err(|e| Error::io("<output>", e))?;
+    Ok(EvalSummary { rows })
+}
+
+/// Indices of the four angle columns, or an error naming the missing ones.
+fn locate_angle_columns(source: &Path, headers: &[String]) -> Result<[usize; 4]> {
+    let mut index = [0usize; 4];
+    let mut missing = Vec::new();
+    for (slot, name) in index.iter_mut().zip(ANGLE_COLUMNS) {
+        match headers.iter().position(|h| h == name) {
+            Some(i) => *slot = i,
+            None => missing.push(name),
+        }
+    }
+    if missing.is_empty() {
+        Ok(index)
+    } else {
+        Err(Error::input(
+            source,
+            1,
+            1,
+            format!(
+                "missing column(s) {}; the header must name theta_i,phi_i,theta_r,phi_r (degrees), found: {}",
+                missing.join(", "),
+                headers.join(",")
+            ),
+        ))
+    }
+}
+
+/// Parse one row's angles (degrees) with errors naming line and column.
+fn parse_angles(
+    source: &Path,
+    line: u64,
+    record: &csv::ByteRecord,
+    index: &[usize; 4],
+    headers: &[String],
+) -> Result<Angles> {
+    let mut deg = [0.0f64; 4];
+    for (k, &col) in index.iter().enumerate() {
+        let field = record.get(col).unwrap_or_default();
+        let text = std::str::from_utf8(field).map_err(|_| {
+            Error::input(source, line, col as u64 + 1, "the field is not valid UTF-8")
+        })?;
+        let value: f64 = text.trim().parse().map_err(|_| {
+            Error::input(
+                source,
+                line,
+                col as u64 + 1,
+                format!(
+                    "`{}` is not a number (column `{}`, degrees)",
+                    text.trim(),
+                    headers[col]
+                ),
+            )
+        })?;
+        if !value.is_finite() {
+            return Err(Error::input(
+                source,
+                line,
+                col as u64 + 1,
+                format!(
+                    "`{}` is not finite (column `{}`)",
+                    text.trim(),
+                    headers[col]
+                ),
+            ));
+        }
+        let is_theta = k % 2 == 0;
+        if is_theta && value.abs() >= 90.0 {
+            return Err(Error::input(
+                source,
+                line,
+                col as u64 + 1,
+                format!(
+                    "{} = {value}° lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90°",
+                    headers[col]
+                ),
+            ));
+        }
+        deg[k] = value;
+    }
+    Ok(Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]))
+}
+
+fn csv_error(source: &Path, err: &csv::Error) -> Error {
+    let (line, column) = match err.kind() {
+        csv::ErrorKind::UnequalLengths { pos, len, .. } => {
+            (pos.as_ref().map_or(0, |p| p.line()), *len + 1)
+        }
+        csv::ErrorKind::Utf8 { pos, err } => {
+            (pos.as_ref().map_or(0, |p| p.line()), err.field() as u64 + 1)
+        }
+        _ => (err.position().map_or(0, |p| p.line()), 1),
+    };
+    let message = match err.kind() {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => format!("this row has {len} fields but the header has {expected_len}"),
+        csv::ErrorKind::Io(e) => format!("read error: {e}"),
+        _ => err.to_string(),
+    };
+    Error::input(PathBuf::from(source), line, column, message)
+}
+
+fn write_error(err: &csv::Error) -> Error {
+    Error::Other(format!("could not write the output: {err}"))
+}

@@ -11,6 +11,7 @@
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
+pub mod cli;
 pub mod data;
 pub mod error;
 pub mod eval;

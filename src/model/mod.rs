@@ -97,8 +97,8 @@ impl Effects {
                 "TRT" => lobes.trt = true,
                 other => {
                     return Err(Error::Other(format!(
-                        "unknown lobe `{other}` in `{list}`: use a comma-separated list of R, TT, TRT"
-                    )))
+                    "unknown lobe `{other}` in `{list}`: use a comma-separated list of R, TT, TRT"
+                )))
                 }
             }
         }
@@ -239,7 +239,11 @@ impl Params<f64> {
             );
         }
         if !(self.delta_eta_prime.is_finite() && self.delta_eta_prime > 0.0) {
-            return bad("delta_eta_prime", self.delta_eta_prime, "must be finite and > 0");
+            return bad(
+                "delta_eta_prime",
+                self.delta_eta_prime,
+                "must be finite and > 0",
+            );
         }
         if !(self.delta_h_m.is_finite() && self.delta_h_m > 0.0) {
             return bad("delta_h_m", self.delta_h_m, "must be finite and > 0");

@@ -1,0 +1,43 @@
+//! Option groups shared by several commands (clap `Args`), so `main.rs` only composes them and
+//! every command spells the same option the same way.
+
+use clap::Args;
+
+use crate::error::Result;
+use crate::model::{Effects, ModelConfig, RootMode};
+
+/// The model's accuracy knob and effect switches (`--mode`, `--lobes`, `--no-glints`,
+/// `--no-eccentricity`).
+#[derive(Debug, Clone, Args)]
+pub struct ModelArgs {
+    /// Root mode of the exit-angle map: `cubic` (Marschner 2003) or `exact`.
+    #[arg(long, default_value = "cubic", value_parser = parse_mode)]
+    pub mode: RootMode,
+    /// Lobes to simulate, comma-separated (R, TT, TRT); the others are not computed.
+    #[arg(long, default_value = "R,TT,TRT")]
+    pub lobes: String,
+    /// Do not simulate the TRT glints (caustics): plain TRT roots only.
+    #[arg(long)]
+    pub no_glints: bool,
+    /// Do not simulate eccentricity: TRT sees a circular cross-section.
+    #[arg(long)]
+    pub no_eccentricity: bool,
+}
+
+fn parse_mode(s: &str) -> std::result::Result<RootMode, String> {
+    s.parse().map_err(|e: crate::error::Error| e.to_string())
+}
+
+impl ModelArgs {
+    /// The model configuration these options ask for.
+    pub fn config(&self) -> Result<ModelConfig> {
+        Ok(ModelConfig {
+            mode: self.mode,
+            effects: Effects {
+                lobes: Effects::parse_lobes(&self.lobes)?,
+                glints: !self.no_glints,
+                eccentricity: !self.no_eccentricity,
+            },
+        })
+    }
+}
