@@ -112,9 +112,7 @@ impl Model {
             }
             Model::DanWood => b[0] * (b[1] * t.ln()).exp(),
             Model::Misra1b => b[0] * (one - (one + b[1] * (t / 2.0)).powi(-2)),
-            Model::Kirby2 => {
-                (b[0] + b[1] * t + b[2] * (t * t)) / (one + b[3] * t + b[4] * (t * t))
-            }
+            Model::Kirby2 => (b[0] + b[1] * t + b[2] * (t * t)) / (one + b[3] * t + b[4] * (t * t)),
             Model::CubicRational => {
                 let (t2, t3) = (t * t, t * t * t);
                 (b[0] + b[1] * t + b[2] * t2 + b[3] * t3) / (one + b[4] * t + b[5] * t2 + b[6] * t3)
@@ -123,9 +121,7 @@ impl Model {
             Model::Mgh17 => b[0] + b[1] * (b[3] * -t).exp() + b[2] * (b[4] * -t).exp(),
             Model::Misra1c => b[0] * (one - (one + b[1] * (2.0 * t)).powf(-0.5)),
             Model::Misra1d => b[0] * b[1] * t / (one + b[1] * t),
-            Model::Roszman1 => {
-                b[0] - b[1] * t - (b[2] / (-b[3] + t)).atan() / std::f64::consts::PI
-            }
+            Model::Roszman1 => b[0] - b[1] * t - (b[2] / (-b[3] + t)).atan() / std::f64::consts::PI,
             Model::Enso => {
                 let w = 2.0 * std::f64::consts::PI * t;
                 let a4 = b[3].recip() * w;
@@ -227,7 +223,10 @@ fn header_range(lines: &[&str], label: &str, file: &Path) -> Result<(usize, usiz
                 file,
                 i as u64 + 1,
                 col as u64,
-                format!("line range {a} to {b} does not fit a file of {} lines", lines.len()),
+                format!(
+                    "line range {a} to {b} does not fit a file of {} lines",
+                    lines.len()
+                ),
             ));
         }
     }
@@ -327,7 +326,11 @@ impl NistProblem {
                     file,
                     ln as u64,
                     1,
-                    format!("expected {} numbers (y and predictors), found {}", n_x + 1, toks.len()),
+                    format!(
+                        "expected {} numbers (y and predictors), found {}",
+                        n_x + 1,
+                        toks.len()
+                    ),
                 ));
             }
             let v: Vec<f64> = toks
@@ -512,13 +515,7 @@ pub fn markdown_table(results: &[NistResult]) -> String {
     for r in results {
         s.push_str(&format!(
             "| {} | {} | {} | {:.1} | {} | {:.10e} | {:.10e} |\n",
-            r.problem,
-            r.difficulty,
-            r.start,
-            r.lre_min,
-            r.iterations,
-            r.certified_ss,
-            r.ss
+            r.problem, r.difficulty, r.start, r.lre_min, r.iterations, r.certified_ss, r.ss
         ));
     }
     s
