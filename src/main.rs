@@ -36,6 +36,19 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
     },
+    /// Load a data file and report what happened to every row (accepted or why rejected).
+    Load(LoadArgs),
+}
+
+#[derive(clap::Args)]
+struct LoadArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    file: PathBuf,
+    #[command(flatten)]
+    options: hairfit::data::LoadOptions,
+    /// Print the report as JSON instead of a summary.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() -> ExitCode {
@@ -51,6 +64,10 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Load(args) => {
+            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
+            print!("{text}");
+        }
         Command::Eval {
             params,
             input,
