@@ -429,21 +429,6 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     })
 }
 
-/// Replace non-finite numbers in a JSON value by null (serde_json would write them as null too,
-/// but this keeps the guarantee explicit whatever the serializer).
-fn scrub(v: &mut serde_json::Value) {
-    match v {
-        serde_json::Value::Array(a) => a.iter_mut().for_each(scrub),
-        serde_json::Value::Object(o) => o.values_mut().for_each(scrub),
-        serde_json::Value::Number(n) => {
-            if n.as_f64().is_some_and(|x| !x.is_finite()) {
-                *v = serde_json::Value::Null;
-            }
-        }
-        _ => {}
-    }
-}
-
 fn json_err(path: &Path, e: serde_json::Error) -> Error {
     Error::Other(format!("{}: cannot serialise: {e}", path.display()))
 }
@@ -461,10 +446,10 @@ fn cell(x: f64) -> String {
 pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let fit_path = dir.join("fit.json");
-    let mut v = serde_json::to_value(&out.json).map_err(|e| json_err(&fit_path, e))?;
-    scrub(&mut v);
+    // Serialised straight from the struct to keep contracts.md's field order; serde_json writes
+    // any non-finite f64 as null, and the Option fields already carry null + warning.
     write_atomically(&fit_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &v).map_err(|e| json_err(&fit_path, e))?;
+        serde_json::to_writer_pretty(&mut *w, &out.json).map_err(|e| json_err(&fit_path, e))?;
         w.write_all(b"\n").map_err(|e| Error::io(&fit_path, e))
     })?;
     let params_path = dir.join("params.json");
