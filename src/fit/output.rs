@@ -8,7 +8,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::bounds::{get, is_angle, report_factor, Bound};
+use super::bounds::{get, report_factor, typical_range, Bound};
+
+/// A standard error above this fraction of the typical range earns a "poorly determined" warning.
+pub const POORLY_DETERMINED: f64 = 0.2;
 use super::problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode};
 use super::solve::RunStatus;
 use super::{all_parameters, FitOutcome, StageTrace};
@@ -138,9 +141,11 @@ fn wrap(x: f64) -> f64 {
     }
 }
 
-/// Samples within 2 w_c of a glint azimuth ±φ_c(θ_d) (exact caustic, circular fiber, index η).
-fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> usize {
-    data.angles
+/// Samples within 2 w_c of a glint azimuth ±φ_c(θ_d) (exact caustic, circular fiber, index η),
+/// and the span of |φ| they cover.
+fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> (usize, f64) {
+    let near: Vec<f64> = data
+        .angles
         .iter()
         .filter(|a| {
             let td = 0.5 * (a.theta_r - a.theta_i);
@@ -154,7 +159,11 @@ fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> usize {
             let phi = wrap(a.phi_r - a.phi_i).abs();
             (phi - phic).abs() < 2.0 * w_c
         })
-        .count()
+        .map(|a| wrap(a.phi_r - a.phi_i).abs())
+        .collect();
+    let span = near.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - near.iter().copied().fold(f64::INFINITY, f64::min);
+    (near.len(), if near.is_empty() { 0.0 } else { span })
 }
 
 /// Why the data cannot determine `p` (geometry first, else the correlated partners).
@@ -171,11 +180,16 @@ fn why_undetermined(
     };
     match p {
         ParamName::KG | ParamName::WC => {
-            let n = samples_near_glint(data, params.eta, params.w_c);
+            let (n, span) = samples_near_glint(data, params.eta, params.w_c);
             if n == 0 {
                 format!("no sample near the glint (|phi - phi_c| < 2 w_c){tail}")
+            } else if span < params.w_c {
+                format!(
+                    "the {n} sample(s) near the glint span only {:.1} deg of |phi|: its width and height trade off{tail}",
+                    span.to_degrees()
+                )
             } else {
-                format!("only {n} sample(s) near the glint (|phi - phi_c| < 2 w_c){tail}")
+                format!("{n} sample(s) near the glint (|phi - phi_c| < 2 w_c){tail}")
             }
         }
         ParamName::Eccentricity => {
@@ -261,6 +275,12 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         }
         finite(c.matrix[(j, j)].max(0.0).sqrt())
     };
+    // Statistically undetermined: the standard error exceeds the whole typical range (the data
+    // say less than the prior box does), even when JᵀJ is numerically invertible.
+    let range_width = |p: ParamName| {
+        let (a, b) = typical_range(p);
+        (b - a) * report_factor(p)
+    };
     let corr = cov.as_ref().map(|c| crate::lm::correlation(&c.matrix));
 
     let mut parameters = Vec::new();
@@ -269,35 +289,57 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         let value = get(&params, p) * f;
         let entry = match ev.free.iter().position(|q| *q == p) {
             Some(j) => {
+                let se = std_of(j);
+                let too_wide = se.is_some_and(|e| e > range_width(p));
                 let undetermined =
-                    col_zero[j] || cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                    col_zero[j] || too_wide || cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                let partners: Vec<String> = match &corr {
+                    Some(r) => (0..nf)
+                        .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
+                        .map(|k| ev.free[k].json_name())
+                        .collect(),
+                    None => Vec::new(),
+                };
                 let status = if undetermined {
-                    let partners: Vec<String> = match &corr {
-                        Some(r) => (0..nf)
-                            .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
-                            .map(|k| ev.free[k].json_name())
-                            .collect(),
-                        None => Vec::new(),
-                    };
                     warnings.push(format!(
                         "{}: not determined by the data ({}); value is the best fit but has no standard error",
                         p.json_name(),
                         if col_zero[j] {
                             "S does not depend on it at any sample".to_string()
+                        } else if too_wide {
+                            format!(
+                                "standard error {:.3e} exceeds its whole typical range; {}",
+                                se.unwrap_or(f64::NAN),
+                                why_undetermined(p, data, &params, &partners)
+                            )
                         } else {
                             why_undetermined(p, data, &params, &partners)
                         }
                     ));
                     "undetermined"
                 } else if Bound::of(p).at_bound(get(&params, p)) {
+                    warnings.push(format!(
+                        "{}: at its bound {:.6} (the data push it there; its standard error is one-sided; {})",
+                        p.json_name(),
+                        value,
+                        why_undetermined(p, data, &params, &partners)
+                    ));
                     "at_bound"
                 } else {
+                    if let Some(e) = se.filter(|&e| e > POORLY_DETERMINED * range_width(p)) {
+                        warnings.push(format!(
+                            "{}: poorly determined (standard error {e:.3e} is {:.0}% of its typical range; {})",
+                            p.json_name(),
+                            100.0 * e / range_width(p),
+                            why_undetermined(p, data, &params, &partners)
+                        ));
+                    }
                     "free"
                 };
                 ParamEntry {
                     name: p.json_name(),
                     value: finite(value),
-                    std_error: if undetermined { None } else { std_of(j) },
+                    std_error: if undetermined { None } else { se },
                     status: status.into(),
                 }
             }
@@ -421,7 +463,6 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         trace,
         wall_time_s: started.elapsed().as_secs_f64(),
     };
-    let _ = is_angle;
     Ok(FitOutcome {
         json,
         params,
