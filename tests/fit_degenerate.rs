@@ -125,3 +125,19 @@ fn no_glint_and_no_tt_region_under_auto_effects() {
     }
     assert_clean(&out);
 }
+
+#[test]
+fn cancelled_fit_returns_the_best_so_far_as_interrupted() {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let truth = fit_support::random_params(5, 1);
+    let data = fit_support::data(&truth, &fit_support::azimuthal_scans(), 0.02, 5);
+    let opts = FitOptions {
+        // Set before the start: every run stops at its first iteration boundary.
+        cancel: Some(Arc::new(AtomicBool::new(true))),
+        ..FitOptions::default()
+    };
+    let out = fit(&data, "cancelled", serde_json::Value::Null, &opts).expect("fit returns");
+    assert_eq!(out.json.status, "interrupted");
+    assert_clean(&out);
+}
