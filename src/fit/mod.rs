@@ -361,11 +361,26 @@ pub fn fit(
         wall_s: ts.elapsed().as_secs_f64(),
         history: runs[order[0]].history.clone(),
     });
-    let mut candidates: Vec<Vec<f64>> = order
-        .iter()
-        .take(opts.polish.max(1))
-        .map(|&k| runs[k].u.clone())
-        .collect();
+    // The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
+    // typical range) are polished once, so the full-data stage is not spent twice on one basin.
+    let mut candidates: Vec<Vec<f64>> = Vec::new();
+    let mut chosen_x: Vec<Vec<f64>> = Vec::new();
+    for &k in &order {
+        if candidates.len() >= opts.polish.max(1) {
+            break;
+        }
+        let x = ev_sub.natural(&runs[k].u[..free.len()]);
+        let same = chosen_x.iter().any(|y| {
+            x.iter()
+                .zip(y)
+                .zip(&ranges)
+                .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
+        });
+        if !same {
+            chosen_x.push(x);
+            candidates.push(runs[k].u.clone());
+        }
+    }
 
     if opts.global == Global::NelderMead && !is_cancelled(&opts.cancel) {
         let tg = Instant::now();
