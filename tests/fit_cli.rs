@@ -122,10 +122,19 @@ fn fit_of_the_demo_csv_writes_the_contract_files() {
 #[test]
 fn bad_fix_is_a_clear_error() {
     let out = Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(["demo", "--out", "/nonexistent/never", "--fix", "eccentricity=0.5"])
+        .args([
+            "demo",
+            "--out",
+            "/nonexistent/never",
+            "--fix",
+            "eccentricity=0.5",
+        ])
         .output()
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("eccentricity") && err.contains("range"), "{err}");
+    assert!(
+        err.contains("eccentricity") && err.contains("range"),
+        "{err}"
+    );
 }

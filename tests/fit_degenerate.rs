@@ -62,8 +62,18 @@ fn one_incidence_in_plane_scan() {
         "{:#?}",
         out.json.warnings
     );
-    for p in out.json.parameters.iter().filter(|p| p.status == "undetermined" || p.status == "at_bound") {
-        assert!(warned(&out, &p.name), "{} {} but not warned", p.name, p.status);
+    for p in out
+        .json
+        .parameters
+        .iter()
+        .filter(|p| p.status == "undetermined" || p.status == "at_bound")
+    {
+        assert!(
+            warned(&out, &p.name),
+            "{} {} but not warned",
+            p.name,
+            p.status
+        );
     }
     assert_clean(&out);
 }
@@ -121,7 +131,11 @@ fn no_glint_and_no_tt_region_under_auto_effects() {
     assert!(!out.json.model.effects.glints, "glints should be off");
     for n in ["k_g", "w_c_deg"] {
         assert_eq!(status_of(&out, n), "fixed");
-        assert!(warned(&out, n), "{n} not fitted must be said: {:#?}", out.json.warnings);
+        assert!(
+            warned(&out, n),
+            "{n} not fitted must be said: {:#?}",
+            out.json.warnings
+        );
     }
     assert_clean(&out);
 }

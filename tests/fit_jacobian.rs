@@ -23,7 +23,10 @@ fn check(space: Space, loss: Loss, mode: RootMode, seed: u64) {
     // rule (projection included) is exercised.
     let x: Vec<f64> = {
         let p = fit_support::random_params(seed + 100, 3);
-        ev.free.iter().map(|&n| hairfit::fit::param(&p, n)).collect()
+        ev.free
+            .iter()
+            .map(|&n| hairfit::fit::param(&p, n))
+            .collect()
     };
     let mut u = ev.internal(&x);
     if ev.explicit_scale {

@@ -79,11 +79,19 @@ fn noise_free_data_recovers_every_free_parameter() {
         for (c, s) in out.json.scale.iter().enumerate() {
             let got = s.value.unwrap();
             if (got - scales[c]).abs() > 1e-6 * scales[c] {
-                failures.push(format!("set {set} ({geom}): scale[{c}] = {got} want {}", scales[c]));
+                failures.push(format!(
+                    "set {set} ({geom}): scale[{c}] = {got} want {}",
+                    scales[c]
+                ));
             }
         }
     }
-    assert!(failures.is_empty(), "{} misses:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} misses:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -158,11 +166,16 @@ fn reported_standard_errors_match_the_spread_over_noise_seeds() {
     let mut bad = Vec::new();
     for set in [0, 2] {
         for (name, sd, se) in spread_vs_reported(set, 24) {
-            eprintln!("set {set}: {name}: spread {sd:.3e} reported {se:.3e} ratio {:.2}", sd / se);
+            eprintln!(
+                "set {set}: {name}: spread {sd:.3e} reported {se:.3e} ratio {:.2}",
+                sd / se
+            );
             // With 24 repeats the sample standard deviation itself scatters by ~15% (1/√(2·23)),
             // so a factor of 2 is a real test of the covariance, not of the sampling.
             if !(se.is_finite() && sd / se < 2.0 && se / sd < 2.0) {
-                bad.push(format!("set {set}: {name}: spread {sd:.3e} vs reported {se:.3e}"));
+                bad.push(format!(
+                    "set {set}: {name}: spread {sd:.3e} vs reported {se:.3e}"
+                ));
             }
         }
     }
@@ -179,7 +192,9 @@ fn reported_standard_errors_match_the_spread_heavy() {
         for (name, sd, se) in spread_vs_reported(set, 100) {
             // 100 repeats: sample-SD scatter ~7%; factor 2 as in the light test.
             if !(se.is_finite() && sd / se < 2.0 && se / sd < 2.0) {
-                bad.push(format!("set {set}: {name}: spread {sd:.3e} vs reported {se:.3e}"));
+                bad.push(format!(
+                    "set {set}: {name}: spread {sd:.3e} vs reported {se:.3e}"
+                ));
             }
         }
     }

@@ -67,20 +67,23 @@ impl FitArgs {
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
         let cfg = self.model.config()?;
         let default_lobes = crate::model::Lobes::default();
-        let explicit =
-            cfg.effects.lobes != default_lobes || self.model.no_glints || self.model.no_eccentricity;
+        let explicit = cfg.effects.lobes != default_lobes
+            || self.model.no_glints
+            || self.model.no_eccentricity;
         let effects = if explicit {
             EffectsChoice::Explicit(cfg.effects)
         } else {
-            match self.effects.as_deref().map(|s| s.trim().to_ascii_lowercase()) {
+            match self
+                .effects
+                .as_deref()
+                .map(|s| s.trim().to_ascii_lowercase())
+            {
                 None => EffectsChoice::Auto,
                 Some(s) if s == "auto" => EffectsChoice::Auto,
                 Some(s) if s == "all" => EffectsChoice::All,
-                Some(s) => {
-                    return Err(Error::Other(format!(
-                        "--effects `{s}`: use auto or all (or --lobes/--no-glints/--no-eccentricity)"
-                    )))
-                }
+                Some(s) => return Err(Error::Other(format!(
+                    "--effects `{s}`: use auto or all (or --lobes/--no-glints/--no-eccentricity)"
+                ))),
             }
         };
         let mut free_eta = false;

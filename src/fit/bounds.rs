@@ -195,7 +195,10 @@ mod tests {
         ] {
             for x in [0.75, 0.8, 0.99] {
                 // 1e-12: asin/sin and sqrt round trips lose a few ulps of the span only.
-                assert!((b.to_natural(b.to_internal(x)) - x).abs() < 1e-12, "{b:?} {x}");
+                assert!(
+                    (b.to_natural(b.to_internal(x)) - x).abs() < 1e-12,
+                    "{b:?} {x}"
+                );
             }
             for u in [-1e3, -3.0, -1.0, 0.0, 0.5, 2.0, 1e3] {
                 let x = b.to_natural(u);

@@ -89,7 +89,12 @@ fn write_data_csv(data: &FitData, path: &Path) -> Result<()> {
     let nc = data.n_channels();
     crate::atomic::write_atomically(path, |w| {
         let io = |e| crate::Error::io(path, e);
-        let mut head = vec!["theta_i".to_string(), "phi_i".into(), "theta_r".into(), "phi_r".into()];
+        let mut head = vec![
+            "theta_i".to_string(),
+            "phi_i".into(),
+            "theta_r".into(),
+            "phi_r".into(),
+        ];
         head.extend(data.channels.iter().map(|c| format!("radiance_{c}")));
         if data.sigma.is_some() {
             head.extend(data.channels.iter().map(|c| format!("sigma_{c}")));
@@ -120,7 +125,14 @@ pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>)
         mode: opts.mode,
         ..ModelConfig::default()
     };
-    let data = synthesize(&truth, &config, &demo_geometry(), &DEMO_SCALE, DEMO_NOISE, opts.seed);
+    let data = synthesize(
+        &truth,
+        &config,
+        &demo_geometry(),
+        &DEMO_SCALE,
+        DEMO_NOISE,
+        opts.seed,
+    );
     std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;
     let data_path = out.join("data.csv");
     write_data_csv(&data, &data_path)?;

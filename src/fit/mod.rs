@@ -169,12 +169,18 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>>
         })?;
         let name = name.trim();
         let v: f64 = value.trim().parse().map_err(|_| {
-            Error::Other(format!("--fix `{item}`: `{}` is not a number", value.trim()))
+            Error::Other(format!(
+                "--fix `{item}`: `{}` is not a number",
+                value.trim()
+            ))
         })?;
         let names: Vec<ParamName> = if name == "sigma_a" {
             (0..nc).map(ParamName::SigmaA).collect()
         } else {
-            match all_parameters(nc).into_iter().find(|p| p.json_name() == name) {
+            match all_parameters(nc)
+                .into_iter()
+                .find(|p| p.json_name() == name)
+            {
                 Some(p) => vec![p],
                 None => {
                     let known: Vec<String> =
@@ -316,7 +322,11 @@ pub fn fit(
             ));
         }
     }
-    let sub_idx = design::subsample(data.len(), opts.subsample.max(1), opts.seed ^ 0x5b5b_0000_0001);
+    let sub_idx = design::subsample(
+        data.len(),
+        opts.subsample.max(1),
+        opts.seed ^ 0x5b5b_0000_0001,
+    );
     let sub_data = data.subset(&sub_idx);
     let (ev_sub, _) = Evaluator::new(
         &forward,
@@ -384,7 +394,8 @@ pub fn fit(
 
     if opts.global == Global::NelderMead && !is_cancelled(&opts.cancel) {
         let tg = Instant::now();
-        let (u, cost, iters, history) = solve::nelder_mead(&ev_sub, &candidates[0], 200 * free.len() as u64);
+        let (u, cost, iters, history) =
+            solve::nelder_mead(&ev_sub, &candidates[0], 200 * free.len() as u64);
         trace.push(StageTrace {
             stage: "global-nelder-mead".into(),
             iterations: iters,
@@ -445,21 +456,19 @@ pub fn fit(
         "scale": if ev_full.explicit_scale { "explicit (robust loss)" } else { "variable projection" },
         "log_floored": floored,
     });
-    output::assemble(
-        output::Assembly {
-            data,
-            file,
-            load_report,
-            config,
-            ev: &ev_full,
-            u: &best.u,
-            status,
-            options,
-            warnings,
-            trace,
-            started: t0,
-        },
-    )
+    output::assemble(output::Assembly {
+        data,
+        file,
+        load_report,
+        config,
+        ev: &ev_full,
+        u: &best.u,
+        status,
+        options,
+        warnings,
+        trace,
+        started: t0,
+    })
 }
 
 /// A progress bar on stderr when asked for (indicatif hides it when stderr is not a terminal).

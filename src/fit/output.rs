@@ -151,7 +151,7 @@ fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> (usize, f64) {
             let td = 0.5 * (a.theta_r - a.theta_i);
             let (s, c) = td.sin_cos();
             let ep = (eta * eta - s * s).sqrt() / c;
-            if !(ep < 2.0) {
+            if ep.is_nan() || ep >= 2.0 {
                 return false;
             }
             let hc = ((4.0 - ep * ep) / 3.0).sqrt();
@@ -193,7 +193,11 @@ fn why_undetermined(
             }
         }
         ParamName::Eccentricity => {
-            let c2: Vec<f64> = data.angles.iter().map(|a| (a.phi_i + a.phi_r).cos()).collect();
+            let c2: Vec<f64> = data
+                .angles
+                .iter()
+                .map(|a| (a.phi_i + a.phi_r).cos())
+                .collect();
             let spread = c2.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                 - c2.iter().copied().fold(f64::INFINITY, f64::min);
             format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
@@ -204,7 +208,9 @@ fn why_undetermined(
                 .iter()
                 .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * PI)
                 .count();
-            format!("absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}")
+            format!(
+                "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
+            )
         }
         ParamName::AlphaR | ParamName::BetaR => {
             let th: Vec<f64> = data
@@ -351,7 +357,10 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             },
         };
         if entry.value.is_none() {
-            warnings.push(format!("{}: value is not finite; written as null", p.json_name()));
+            warnings.push(format!(
+                "{}: value is not finite; written as null",
+                p.json_name()
+            ));
         }
         parameters.push(entry);
     }
@@ -433,11 +442,13 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             });
         }
     }
-    if curves
-        .iter()
-        .any(|r| ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight].iter().all(|v| v.is_finite()))
-    {
-        warnings.push("curves.csv: some fitted values are not finite; written as empty cells".into());
+    if curves.iter().any(|r| {
+        ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
+            .iter()
+            .all(|v| v.is_finite())
+    }) {
+        warnings
+            .push("curves.csv: some fitted values are not finite; written as empty cells".into());
     }
 
     let json = FitJson {
@@ -565,7 +576,11 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         j.model.mode,
         lobes.join("+"),
         if j.model.effects.glints { "on" } else { "off" },
-        if j.model.effects.eccentricity { "on" } else { "off" },
+        if j.model.effects.eccentricity {
+            "on"
+        } else {
+            "off"
+        },
         j.options["effects_choice"].as_str().unwrap_or("?")
     );
     if let Some(reasons) = j.options["effects_reasons"].as_array() {
@@ -575,10 +590,20 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     }
     s += "parameters:\n";
     for p in &j.parameters {
-        s += &format!("  {:<16} {}  {}\n", p.name, pm(p.value, p.std_error), p.status);
+        s += &format!(
+            "  {:<16} {}  {}\n",
+            p.name,
+            pm(p.value, p.std_error),
+            p.status
+        );
     }
     for c in &j.scale {
-        s += &format!("  scale[{}]{:<8} {}\n", c.channel, "", pm(c.value, c.std_error));
+        s += &format!(
+            "  scale[{}]{:<8} {}\n",
+            c.channel,
+            "",
+            pm(c.value, c.std_error)
+        );
     }
     let r = &j.residuals;
     s += &format!(
@@ -600,7 +625,10 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     }
     s += &format!("wall time {:.2} s", j.wall_time_s);
     if let Some(d) = dir {
-        s += &format!("; wrote {}/{{fit.json,params.json,curves.csv}}", d.display());
+        s += &format!(
+            "; wrote {}/{{fit.json,params.json,curves.csv}}",
+            d.display()
+        );
     }
     s.push('\n');
     s

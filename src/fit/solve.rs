@@ -160,7 +160,9 @@ pub fn run_local<F: Forward>(
     let solver = Cancellable {
         inner: local_solver(),
         flag: cancel.clone(),
-        dof: ev.n_residuals().saturating_sub(ev.n_params() + ev.n_channels),
+        dof: ev
+            .n_residuals()
+            .saturating_sub(ev.n_params() + ev.n_channels),
         costs: Vec::new(),
     };
     let result = Executor::new(LsqProblem { ev }, solver)

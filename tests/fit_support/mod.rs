@@ -43,7 +43,9 @@ pub fn azimuthal_scans() -> Vec<Angles> {
 pub fn longitudinal_scans() -> Vec<Angles> {
     let mut v = Vec::new();
     for ti in [-30.0, 10.0] {
-        for pr in [0.0, 25.0, 40.0, 60.0, 90.0, 120.0, 150.0, 170.0, 180.0, -35.0, -140.0] {
+        for pr in [
+            0.0, 25.0, 40.0, 60.0, 90.0, 120.0, 150.0, 170.0, 180.0, -35.0, -140.0,
+        ] {
             for j in -20..=20 {
                 let pi = if pr as i64 % 20 == 0 { 0.0 } else { 30.0 };
                 v.push(Angles::from_degrees(ti, pi, j as f64 * 4.0, pr + pi));
@@ -92,5 +94,12 @@ pub fn scales(nc: usize) -> Vec<f64> {
 /// Data from the model at `truth` (all effects on), relative noise `noise`.
 pub fn data(truth: &Params<f64>, angles: &[Angles], noise: f64, seed: u64) -> FitData {
     let nc = truth.sigma_a.len();
-    synthesize(truth, &ModelConfig::default(), angles, &scales(nc), noise, seed)
+    synthesize(
+        truth,
+        &ModelConfig::default(),
+        angles,
+        &scales(nc),
+        noise,
+        seed,
+    )
 }
