@@ -77,6 +77,41 @@ struct TrialStep {
 /// Problem: argmin [`Operator`] (residuals `r(x)`, `DVector<f64>`) and [`Jacobian`] (`m×n`
 /// `DMatrix<f64>`). Use it with `Executor::new(problem, LevenbergMarquardt::new())` and
 /// `.configure(|s| s.param(x0).max_iters(n))`, or through [`minimize`].
+///
+/// ```
+/// use argmin::core::{Error, Executor, Jacobian, Operator, State};
+/// use hairfit::lm::LevenbergMarquardt;
+/// use nalgebra::{DMatrix, DVector};
+///
+/// /// Fit y = a·exp(b·t) to three points.
+/// struct Exp;
+/// const T: [f64; 3] = [0.0, 1.0, 2.0];
+/// /// y = 2·exp(t/2) at t = 0, 1, 2.
+/// fn y(t: f64) -> f64 { 2.0 * (0.5 * t).exp() }
+/// impl Operator for Exp {
+///     type Param = DVector<f64>;
+///     type Output = DVector<f64>;
+///     fn apply(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
+///         Ok(DVector::from_iterator(3, T.iter().map(|&t| p[0] * (p[1] * t).exp() - y(t))))
+///     }
+/// }
+/// impl Jacobian for Exp {
+///     type Param = DVector<f64>;
+///     type Jacobian = DMatrix<f64>;
+///     fn jacobian(&self, p: &DVector<f64>) -> Result<DMatrix<f64>, Error> {
+///         Ok(DMatrix::from_fn(3, 2, |i, j| {
+///             let e = (p[1] * T[i]).exp();
+///             if j == 0 { e } else { p[0] * T[i] * e }
+///         }))
+///     }
+/// }
+/// let res = Executor::new(Exp, LevenbergMarquardt::new())
+///     .configure(|s| s.param(DVector::from_vec(vec![1.0, 0.0])).max_iters(100))
+///     .run()
+///     .unwrap();
+/// let p = res.state().get_param().unwrap();
+/// assert!((p[0] - 2.0).abs() < 1e-12 && (p[1] - 0.5).abs() < 1e-12);
+/// ```
 #[derive(Debug, Clone)]
 pub struct LevenbergMarquardt {
     ftol: f64,
