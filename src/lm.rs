@@ -235,7 +235,9 @@ impl LevenbergMarquardt {
         }
         let fnorm = residuals.norm();
         if fnorm == 0.0 {
+            // Also covers m = 0; nothing to factor.
             self.status = Some(LmTermination::ZeroResidual);
+            return;
         } else if scaled_gradient_norm(jacobian, residuals, &col_norms) <= self.gtol {
             self.status = Some(LmTermination::GradientConverged);
         }
@@ -373,6 +375,11 @@ where
         let x0 = state.take_param().ok_or_else(|| {
             anyhow_error("LevenbergMarquardt needs an initial parameter vector: configure the Executor with `.param(x0)`")
         })?;
+        if x0.is_empty() {
+            return Err(anyhow_error(
+                "LevenbergMarquardt needs at least one parameter",
+            ));
+        }
         let r = problem.apply(&x0)?;
         if r.iter().any(|v| !v.is_finite()) {
             return Err(anyhow_error(
@@ -395,6 +402,7 @@ where
             )));
         }
         self.diag = DVector::zeros(0);
+        self.svd = None;
         self.status = None;
         self.first_step = true;
         self.lambda = 0.0;
@@ -418,10 +426,9 @@ where
         problem: &mut Problem<O>,
         mut state: LmState,
     ) -> std::result::Result<(LmState, Option<KV>), ArgminError> {
-        let svd = self
-            .svd
-            .as_ref()
-            .ok_or_else(|| anyhow_error("LevenbergMarquardt: next_iter before init"))?;
+        let svd = self.svd.as_ref().ok_or_else(|| {
+            anyhow_error("LevenbergMarquardt: no factorisation; was init run and not converged?")
+        })?;
         let x = state
             .get_param()
             .ok_or_else(|| anyhow_error("LevenbergMarquardt: param not set"))?
@@ -507,11 +514,15 @@ where
             }
             self.refresh(&j, &r_new);
             let cost = 0.5 * fnorm1 * fnorm1;
-            state = state.param(x_new).residuals(r_new).jacobian(j).cost(cost);
+            state = state
+                .param(x_new.clone())
+                .residuals(r_new)
+                .jacobian(j)
+                .cost(cost);
         }
         let xnorm = self
             .diag
-            .component_mul(state.get_param().expect("param set above"))
+            .component_mul(if accepted { &x_new } else { &x })
             .norm();
 
         if self.status.is_none() {
