@@ -8,6 +8,7 @@
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
+//! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
@@ -17,6 +18,7 @@ pub mod error;
 pub mod eval;
 pub mod lm;
 pub mod model;
+pub mod nist;
 pub mod params;
 
 pub use error::{Error, Result};
