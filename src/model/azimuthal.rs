@@ -12,9 +12,11 @@ use super::longitudinal::gaussian;
 use super::roots::{exit_roots, lift_root};
 use super::RootMode;
 
-/// Smallest `|2 dΦ/dγ|` used: only reached within ~1e-24 rad of a caustic, where the exact value
-/// is infinite; it keeps S finite there (and the glint fade, ~δ², makes the product vanish).
-const MIN_DENOM: f64 = 1e-12;
+/// Smallest `|2 dΦ/dγ|` used. Next to a fold `|2Φ'| ≈ 2·sqrt(2|Φ''|δ)`, so this is reached only
+/// within δ ≈ 1e-17 of φ_c, below the f64 resolution of φ, where a root's Φ' is rounding noise
+/// (the root itself is only known to ~sqrt(ε)); it keeps N finite and of the size the exact map has
+/// one ulp away. With glints on, the fade (~δ²) makes the product vanish anyway.
+const MIN_DENOM: f64 = 1e-8;
 
 /// Where each lobe's contributions go: per channel, per lobe (0 = R, 1 = TT, 2 = TRT).
 pub trait Sink<T> {

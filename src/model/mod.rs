@@ -115,9 +115,11 @@ impl Effects {
                 "R" => lobes.r = true,
                 "TT" => lobes.tt = true,
                 "TRT" => lobes.trt = true,
-                other => return Err(Error::Other(format!(
+                other => {
+                    return Err(Error::Other(format!(
                     "unknown lobe `{other}` in `{list}`: use a comma-separated list of R, TT, TRT"
-                ))),
+                )))
+                }
             }
         }
         if !(lobes.r || lobes.tt || lobes.trt) {
