@@ -4,7 +4,7 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use hairfit::model::{
     scattering, scattering_jacobian, Angles, Effects, Lobes, ModelConfig, ParamName, Params,
-    RootMode,
+    RootMode, StaticJacobian,
 };
 
 const BATCH: usize = 1024;

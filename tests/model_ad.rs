@@ -4,7 +4,7 @@ mod model_common;
 
 use hairfit::model::{
     param_value, scattering, scattering_jacobian, Angles, Lobes, ModelConfig, ParamName, Params,
-    RootMode,
+    RootMode, StaticJacobian,
 };
 use model_common::*;
 use num_dual::DualSVec64;
@@ -138,4 +138,10 @@ fn static_dual_vectors_give_the_same_jacobian() {
     // Same operations in the same order: equal to rounding.
     assert!((eps[0] - jac[0][0]).abs() <= 1e-12 * jac[0][0].abs());
     assert!((eps[1] - jac[0][1]).abs() <= 1e-12 * jac[0][1].abs());
+    // And the reusable StaticJacobian gives the same, too.
+    let mut sj = StaticJacobian::<2>::new(&params, &which);
+    let (mut v, mut j) = ([0.0], [[0.0; 2]]);
+    sj.eval(&cfg, &angles, &mut v, &mut j);
+    assert_eq!(j[0], [eps[0], eps[1]]);
+    assert_eq!(v[0], out[0].re);
 }

@@ -521,6 +521,10 @@ fn exact_tt_root_matches_closed_form() {
             let h = s * (phi / 2.0).cos() / (1.0 + a * a - 2.0 * a * s * (phi / 2.0).sin()).sqrt();
             // Both are the root to ~machine precision; sin γ is well conditioned here.
             assert!((r.gamma[0].sin() - h).abs() < 1e-12, "η'={eta_p} φ={phi}");
+            // And the root solves MODEL.md's exact map 2·asin(h/η') − 2·asin(h) + π ≡ φ.
+            let phi_out = 2.0 * (h / eta_p).asin() - 2.0 * h.asin() + PI;
+            let miss = hairfit::model::angles::wrap(phi_out - phi);
+            assert!(miss.abs() < 1e-12, "η'={eta_p} φ={phi}: Φ misses by {miss}");
         }
     }
 }

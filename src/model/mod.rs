@@ -31,7 +31,7 @@ use eccentricity::eccentric_index;
 use exit_angle::ExitMap;
 use longitudinal::longitudinal;
 
-pub use jacobian::{param_value, scattering_jacobian};
+pub use jacobian::{param_value, scattering_jacobian, StaticJacobian};
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
