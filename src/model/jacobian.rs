@@ -73,7 +73,7 @@ impl<const N: usize> StaticJacobian<N> {
         scattering(&self.params, config, angles, &mut self.out);
         for ((d, v), j) in self.out.iter().zip(values.iter_mut()).zip(jac.iter_mut()) {
             *v = d.re;
-            let eps = d.eps.clone().unwrap_generic(Const::<N>, U1);
+            let eps = d.eps.unwrap_generic(Const::<N>, U1);
             j.copy_from_slice(eps.as_slice());
         }
     }

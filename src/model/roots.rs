@@ -84,7 +84,7 @@ fn tt_closed_form(map: &ExitMap<f64>, phi: f64) -> Option<f64> {
     let s = if phi < 0.0 { -1.0 } else { 1.0 };
     let (sh, ch) = (0.5 * phi).sin_cos();
     let h = s * ch / (1.0 + a * a - 2.0 * a * s * sh).sqrt();
-    if !(h.abs() <= 1.0) {
+    if h.is_nan() || h.abs() > 1.0 {
         return None;
     }
     let g = h.asin();
