@@ -60,6 +60,8 @@ fn energy_r_and_tt_both_modes_trt_exact() {
             (RootMode::Exact, 0),
             (RootMode::Exact, 1),
             (RootMode::Exact, 2),
+            // Not required by MODEL.md, but the cubic map is one consistent map too.
+            (RootMode::Cubic, 2),
         ] {
             let cfg = config(mode, only(p), false, false);
             let lhs = energy_lhs(&params, &cfg, p, theta_d);
