@@ -221,6 +221,36 @@ fn trt_bounded_next_to_caustic_trap() {
                     }
                 }
             }
+            // The Jacobian stays bounded next to the fold too (the fade's δ² beats the
+            // implicit-function 1/δ^{3/2}): within 10× its size 0.1 rad away.
+            let which = [
+                ParamName::Eta,
+                ParamName::SigmaA(0),
+                ParamName::AlphaR,
+                ParamName::WC,
+            ];
+            let jac_at = |phi: f64| {
+                let a = Angles {
+                    theta_i: -theta_d,
+                    phi_i: 0.0,
+                    theta_r: theta_d,
+                    phi_r: phi,
+                };
+                scattering_jacobian(&params, &cfg, &a, &which).1[0].clone()
+            };
+            let scale: f64 = jac_at(phi_c - 0.1)
+                .iter()
+                .map(|d| d.abs())
+                .fold(0.0, f64::max);
+            for k in 2..=14 {
+                for side in [1.0, -1.0] {
+                    let j = jac_at(phi_c + side * 10f64.powi(-k));
+                    assert!(
+                        j.iter().all(|d| d.is_finite() && d.abs() <= 10.0 * scale),
+                        "{mode} k={k}: {j:?} vs {scale}"
+                    );
+                }
+            }
             // Exactly at ±φ_c: finite value and finite derivatives.
             for sign in [1.0, -1.0] {
                 let a = Angles {
