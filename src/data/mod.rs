@@ -226,7 +226,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)>
     let format = detect_format(path, options);
     check_options_fit_format(path, format, options)?;
     if let Some(t) = options.negative_tolerance {
-        if !(t >= 0.0) {
+        // NaN fails this too.
+        if t.is_nan() || t < 0.0 {
             return Err(Error::Other(format!(
                 "--negative-tolerance must be a number >= 0 (got {t})"
             )));
