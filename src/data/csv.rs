@@ -292,7 +292,7 @@ pub(crate) fn parse_cell(
     column: u64,
     name: &str,
 ) -> Result<Cell> {
-    let text = std::str::from_utf8(bytes).map_err(|_| {
+    let text = std::str::from_utf8(bytes.trim_ascii()).map_err(|_| {
         Error::input(
             path,
             line,
@@ -300,7 +300,6 @@ pub(crate) fn parse_cell(
             format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
         )
     })?;
-    let text = text.trim();
     if text.is_empty() || text == missing {
         return Ok(None);
     }
