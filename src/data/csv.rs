@@ -144,6 +144,17 @@ fn parse_header_line(line: &[u8], path: &Path, line_no: u64) -> Result<csv::Stri
 const HEADER_HELP: &str = "required: theta_i, phi_i, theta_r, phi_r and either `radiance` or \
      `radiance_<channel>` columns; optional: sigma[_<channel>], weight[_<channel>]";
 
+/// A hint when the header is one column that looks split by another separator.
+fn separator_hint(header: &csv::StringRecord) -> &'static str {
+    match header.iter().next() {
+        Some(h) if header.len() == 1 && (h.contains(';') || h.contains('\t')) => {
+            " (the file seems to use `;` or tabs between columns: hairfit CSV uses commas; \
+             for a headerless scan give --columns)"
+        }
+        _ => "",
+    }
+}
+
 /// Assign a role to every header column and check the set is complete and consistent.
 fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Result<Columns> {
     let err = |col: usize, msg: String| Error::input(path, line, col as u64 + 1, msg);
@@ -202,8 +213,9 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
             return Err(err(
                 0,
                 format!(
-                    "header has no `{angle}` column ({HEADER_HELP}); found: {}",
-                    found()
+                    "header has no `{angle}` column ({HEADER_HELP}); found: {}{}",
+                    found(),
+                    separator_hint(header)
                 ),
             ));
         }
