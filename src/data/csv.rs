@@ -38,8 +38,8 @@ struct Columns {
     ignored: Vec<String>,
 }
 
-/// Read the header line and the comment/blank lines before it. Returns the header fields, the
-/// unit directive if any (with its line), and the number of lines consumed.
+/// What comes before the data: the header fields, the unit directive if any (with its line),
+/// and the number of lines consumed (comments, blanks and the header).
 struct Preamble {
     header: csv::StringRecord,
     directive: Option<(AngleUnit, u64)>,
@@ -76,6 +76,7 @@ fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<Angle
     }
 }
 
+/// Read the comment/blank lines and the header line at the top of a CSV file.
 fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
     skip_bom(reader, path)?;
     let mut buf = Vec::new();
@@ -295,7 +296,6 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
 
 /// Parse one cell: `None` when empty or the missing token, else a number (NaN/inf/1e999 parse
 /// to non-finite values, which validation rejects). Anything else is an input error.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn parse_cell(
     bytes: &[u8],
     missing: &str,
