@@ -1,4 +1,7 @@
 //! The `hairfit` command line: parses arguments and calls the library.
+//!
+//! Each subcommand is one `Command` variant holding its clap `Args` and one match arm in `run`
+//! that calls the library.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -23,19 +26,35 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r in degrees).
-    Eval {
-        /// Parameter file (JSON, MODEL.md's names).
-        #[arg(long)]
-        params: PathBuf,
-        /// Angles CSV with a header; other columns are carried through.
-        #[arg(long)]
-        input: PathBuf,
-        /// Output CSV (written atomically); stdout when absent.
-        #[arg(long)]
-        output: Option<PathBuf>,
-        #[command(flatten)]
-        model: ModelArgs,
-    },
+    Eval(EvalArgs),
+    /// Load a data file and report what happened to every row (accepted or why rejected).
+    Load(LoadArgs),
+}
+
+#[derive(clap::Args)]
+struct EvalArgs {
+    /// Parameter file (JSON, MODEL.md's names).
+    #[arg(long)]
+    params: PathBuf,
+    /// Angles CSV with a header; other columns are carried through.
+    #[arg(long)]
+    input: PathBuf,
+    /// Output CSV (written atomically); stdout when absent.
+    #[arg(long)]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    model: ModelArgs,
+}
+
+#[derive(clap::Args)]
+struct LoadArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    file: PathBuf,
+    #[command(flatten)]
+    options: hairfit::data::LoadOptions,
+    /// Print the report as JSON instead of a summary.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() -> ExitCode {
@@ -51,26 +70,28 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Eval {
-            params,
-            input,
-            output,
-            model,
-        } => {
-            let file = ParamFile::load(&params).map_err(|e| name_parameter_file(e, &params))?;
+        Command::Eval(args) => {
+            let file =
+                ParamFile::load(&args.params).map_err(|e| name_parameter_file(e, &args.params))?;
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
                 params: file.to_params(),
-                config: model.config()?,
+                config: args.model.config()?,
             };
-            let summary = eval_file(&input, output.as_deref(), &request)?;
-            if let Some(out) = output {
+            let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
+            if let Some(out) = args.output {
                 eprintln!(
                     "hairfit: evaluated {} rows into {}",
                     summary.rows,
                     out.display()
                 );
             }
+        }
+        Command::Load(args) => {
+            print!(
+                "{}",
+                hairfit::data::load_command(&args.file, &args.options, args.json)?
+            );
         }
     }
     Ok(())
