@@ -3,12 +3,10 @@
 //! Comment lines before the header may carry the unit directive `# angles: rad` (what
 //! [`write_csv`] writes, so that a write→load round trip is bit-exact).
 
-use std::cell::RefCell;
-use std::collections::VecDeque;
 use std::io::{BufRead, Read};
 use std::path::Path;
-use std::rc::Rc;
 
+use super::lines::LineCounter;
 use super::rows::{Cell, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
 use crate::atomic::write_atomically;
@@ -395,46 +393,6 @@ fn unit_name(u: AngleUnit) -> &'static str {
     }
 }
 
-/// Offsets of the newlines a reader has passed, so a byte offset can be turned into a line.
-/// csv's own record positions point before skipped blank/comment lines (and drift with CRLF),
-/// so lines are counted here; the queue only holds newlines still in csv's read-ahead buffer.
-#[derive(Default)]
-struct Newlines {
-    read: u64,
-    pending: VecDeque<u64>,
-    before: u64,
-}
-
-impl Newlines {
-    /// Number of newlines strictly before byte offset `byte` (offsets must not decrease).
-    fn count_before(&mut self, byte: u64) -> u64 {
-        while self.pending.front().is_some_and(|&nl| nl < byte) {
-            self.pending.pop_front();
-            self.before += 1;
-        }
-        self.before
-    }
-}
-
-/// A reader that records where its newlines are.
-struct NewlineCounting<R> {
-    inner: R,
-    lines: Rc<RefCell<Newlines>>,
-}
-
-impl<R: Read> Read for NewlineCounting<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.inner.read(buf)?;
-        let mut lines = self.lines.borrow_mut();
-        let start = lines.read;
-        for (i, _) in buf[..n].iter().enumerate().filter(|(_, &b)| b == b'\n') {
-            lines.pending.push_back(start + i as u64);
-        }
-        lines.read += n as u64;
-        Ok(n)
-    }
-}
-
 /// Where the data rows come from.
 struct Input<'a> {
     path: &'a Path,
@@ -460,16 +418,13 @@ fn read_rows(
         header_line,
         file_len,
     } = *input;
-    let newlines = Rc::new(RefCell::new(Newlines::default()));
+    let (reader, newlines) = LineCounter::wrap(reader);
     let mut csv = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .comment(Some(b'#'))
         .buffer_capacity(1 << 16)
-        .from_reader(NewlineCounting {
-            inner: reader,
-            lines: Rc::clone(&newlines),
-        });
+        .from_reader(reader);
     let nc = cols.channels.len();
     let mut record = csv::ByteRecord::new();
     let mut radiance: Vec<Cell> = vec![None; nc];

@@ -8,6 +8,7 @@
 mod csv;
 mod expr;
 mod json;
+pub(crate) mod lines;
 mod report;
 mod rows;
 mod scan;
