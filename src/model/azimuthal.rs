@@ -8,13 +8,15 @@ use super::bravais::Bravais;
 use super::exit_angle::ExitMap;
 use super::fresnel::{absorption, chord, cos_gamma_t, fresnel, fresnel_attenuation};
 use super::instrument;
-use super::longitudinal::gaussian;
+use super::longitudinal::INV_SQRT_TAU;
 use super::roots::{exit_roots, lift_root};
 use super::RootMode;
 
-/// Smallest `|2 dΦ/dγ|` used: only reached within ~1e-24 rad of a caustic, where the exact value
-/// is infinite; it keeps S finite there (and the glint fade, ~δ², makes the product vanish).
-const MIN_DENOM: f64 = 1e-12;
+/// Smallest `|2 dΦ/dγ|` used. Next to a fold `|2Φ'| ≈ 2·sqrt(2|Φ''|δ)`, so this is reached only
+/// within δ ≈ 1e-17 of φ_c, below the f64 resolution of φ, where a root's Φ' is rounding noise
+/// (the root itself is only known to ~sqrt(ε)); it keeps N finite and of the size the exact map has
+/// one ulp away. With glints on, the fade (~δ²) makes the product vanish anyway.
+const MIN_DENOM: f64 = 1e-8;
 
 /// Where each lobe's contributions go: per channel, per lobe (0 = R, 1 = TT, 2 = TRT).
 pub trait Sink<T> {
@@ -159,8 +161,8 @@ pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
     let dm = wrap_t(-gl.phi_c.clone() + phi);
     let dp = wrap_t(gl.phi_c.clone() + phi);
     // At φ = ±φ_c with t = 1 this factor is exactly 0, so N_2 (∞ there) contributes 0.
-    let fade = (-(gl.t.clone() * bump(dm.clone(), w_c)) + 1.0)
-        * (-(gl.t.clone() * bump(dp.clone(), w_c)) + 1.0);
+    let (g_m, g_p) = (bump(dm, w_c), bump(dp, w_c));
+    let fade = (-(gl.t.clone() * g_m.clone()) + 1.0) * (-(gl.t.clone() * g_p.clone()) + 1.0);
     add_root_sum(2, map, br, phi, sigma_a, &(fade * scale.clone()), sink);
     if gl.t.re() == 0.0 {
         return;
@@ -169,7 +171,8 @@ pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
     let (h_c, cos_gc) = gl.gamma_c.sin_cos();
     let cos_gt = cos_gamma_t(&h_c, &br.eta_p);
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gc, &cos_gt);
-    let lobes = gaussian(dm, w_c) + gaussian(dp, w_c);
+    // g(x; w_c) = G(x)/(w_c·√(2π)): reuse the two G values of the fade.
+    let lobes = (g_m + g_p) / w_c.clone() * INV_SQRT_TAU;
     let base = fresnel_attenuation(2, f) * gl.t * k_g.clone() * gl.delta_h * lobes * scale.clone();
     let ch = chord(&cos_gt, &br.cos_theta_t);
     for (c, s) in sigma_a.iter().enumerate() {
