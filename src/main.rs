@@ -36,6 +36,8 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
     },
+    /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
+    Synth(hairfit::synth::SynthArgs),
 }
 
 fn main() -> ExitCode {
@@ -71,6 +73,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     out.display()
                 );
             }
+        }
+        Command::Synth(args) => {
+            // argv[0] varies with the install; record the command as a user types it.
+            let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
+            let command_line = hairfit::synth::command_line_string(argv);
+            let summary = hairfit::synth::run(&args, Some(command_line))?;
+            eprintln!(
+                "hairfit: wrote {} samples ({} outliers) to {} and the truth to {}",
+                summary.n_samples,
+                summary.n_outliers,
+                summary.csv.display(),
+                summary.truth.display()
+            );
         }
     }
     Ok(())
