@@ -231,7 +231,10 @@ impl Rig {
                     for j in 0..*views {
                         let bend = photo_bend(j, *views, *span);
                         let (ti, pi) = fiber_frame_direction(light, bend);
-                        out.push([ti, pi, camera + bend, 0.0]);
+                        // |θ_i − light_theta| ≤ |β| exactly; clamp away asin's rounding so the
+                        // documented bound (checked at parse time) holds to the last bit.
+                        let bound = light_theta.abs() + bend.abs();
+                        out.push([ti.clamp(-bound, bound), pi, camera + bend, 0.0]);
                     }
                 }
             }
