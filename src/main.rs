@@ -36,8 +36,21 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
     },
+    /// Load a data file and report what happened to every row (accepted or why rejected).
+    Load(LoadArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
     Synth(hairfit::synth::SynthArgs),
+}
+
+#[derive(clap::Args)]
+struct LoadArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    file: PathBuf,
+    #[command(flatten)]
+    options: hairfit::data::LoadOptions,
+    /// Print the report as JSON instead of a summary.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() -> ExitCode {
@@ -73,6 +86,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     out.display()
                 );
             }
+        }
+        Command::Load(args) => {
+            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
+            print!("{text}");
         }
         Command::Synth(args) => {
             // argv[0] varies with the install; record the command as a user types it.

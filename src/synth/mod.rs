@@ -5,7 +5,6 @@
 //! Reproducibility: every random number comes from ChaCha8 keyed by the seed with one stream
 //! per purpose (see [`random`]), so the same command gives the same bytes on any machine.
 
-mod interim;
 mod noise;
 pub mod random;
 mod rig;
@@ -17,17 +16,21 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomically;
 use crate::cli::ModelArgs;
+use crate::data::{write_csv, Dataset};
 use crate::error::{Error, Result};
 use crate::model::{scattering, Angles, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
 
-pub use self::interim::{write_csv, Dataset};
 pub use self::noise::{Noise, Noisy, OUTLIER_FACTOR};
 pub use self::rig::{Rig, MAX_THETA_DEG};
 
 /// Generator description recorded in every truth file.
 pub const RNG_DESCRIPTION: &str = "ChaCha8 (rand_chacha 0.9), key = seed as u64 little-endian \
     zero-padded, stream 0 angles, 1 photon, 2 relative, 3 floor, 4 outliers";
+
+/// Line of the first sample in the CSV that [`write_csv`] writes (two comment lines, then the
+/// header): a synthesized dataset's `source_line` is what loading its file gives back.
+pub const CSV_FIRST_DATA_LINE: u64 = 4;
 
 /// One channel's scale factor (the same shape as `fit.json`'s `scale` entries).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -133,7 +136,9 @@ pub fn synthesize(
         radiance: noisy.values,
         sigma: noisy.sigma,
         weight: None,
-        source_line: Vec::new(),
+        source_line: (0..radians.len() as u64)
+            .map(|i| CSV_FIRST_DATA_LINE + i)
+            .collect(),
         meta: serde_json::Map::new(),
     };
     let truth = Truth {
@@ -159,7 +164,16 @@ pub fn synthesize(
         notes: Vec::new(),
         command_line: None,
     };
+    let mut dataset = dataset;
+    record_truth(&mut dataset, &truth)?;
     Ok((dataset, truth))
+}
+
+/// Keep the truth in the dataset's metadata too (key `truth`), for in-memory users.
+fn record_truth(dataset: &mut Dataset, truth: &Truth) -> Result<()> {
+    let value = serde_json::to_value(truth).map_err(|e| Error::Other(e.to_string()))?;
+    dataset.meta.insert("truth".into(), value);
+    Ok(())
 }
 
 /// `scale[c] · S_c` at every direction (row-major), evaluated in parallel; a value that is not
@@ -280,8 +294,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     truth.params = file;
     truth.notes = notes;
     truth.command_line = command_line;
-    let truth_json = serde_json::to_value(&truth).map_err(|e| Error::Other(e.to_string()))?;
-    dataset.meta.insert("truth".into(), truth_json);
+    record_truth(&mut dataset, &truth)?;
 
     let truth_file = truth_path(&args.output);
     write_csv(&dataset, &args.output)?;
