@@ -153,10 +153,16 @@ fn bad_rig_specs_get_clear_errors() {
     let cases = [
         ("cylinder", "unknown rig `cylinder`"),
         ("azimuthal:steps", "not KEY=VALUE"),
-        ("azimuthal:step=10", "has no option `step`; its options are incidences, steps"),
+        (
+            "azimuthal:step=10",
+            "has no option `step`; its options are incidences, steps",
+        ),
         ("azimuthal:steps=0", "steps: `0` is not a whole number >= 1"),
         ("azimuthal:steps=-3", "not a whole number"),
-        ("azimuthal:incidences=30,abc", "`abc` is not a finite number"),
+        (
+            "azimuthal:incidences=30,abc",
+            "`abc` is not a finite number",
+        ),
         ("azimuthal:incidences=90", "outside ±89°"),
         ("azimuthal:steps=3:steps=4", "given twice"),
         ("longitudinal:phi=-180", "outside (-180°, 180°]"),
@@ -184,7 +190,10 @@ fn every_rig_stays_away_from_the_axis() {
         "photo:light_theta=-59:span=60:camera=59",
     ] {
         for s in angles(spec, 3) {
-            assert!(s[0].abs() <= MAX_THETA_DEG && s[2].abs() <= MAX_THETA_DEG, "{spec} {s:?}");
+            assert!(
+                s[0].abs() <= MAX_THETA_DEG && s[2].abs() <= MAX_THETA_DEG,
+                "{spec} {s:?}"
+            );
         }
     }
 }

@@ -118,10 +118,7 @@ pub fn synthesize(
         )));
     }
     let directions = rig.angles(&mut random::generator(seed, random::Stream::Angles));
-    let radians: Vec<[f64; 4]> = directions
-        .iter()
-        .map(|a| a.map(f64::to_radians))
-        .collect();
+    let radians: Vec<[f64; 4]> = directions.iter().map(|a| a.map(f64::to_radians)).collect();
     let clean = clean_values(params, config, &radians, scale)?;
     let noisy = noise.apply(&clean, nc, seed);
 
@@ -233,7 +230,12 @@ pub struct SynthArgs {
     #[arg(long)]
     pub channels: Option<usize>,
     /// Scale factor(s): one for all channels, or one per channel, comma-separated.
-    #[arg(long, default_value = "1", value_delimiter = ',')]
+    #[arg(
+        long,
+        default_value = "1",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
     pub scale: Vec<f64>,
     /// Output CSV (`FILE.csv`); the truth goes to `FILE.truth.json`. Both written atomically.
     #[arg(long)]

@@ -114,7 +114,7 @@ pub fn log_gamma(x: f64) -> f64 {
         -5.952380952380952e-04,
         8.417508417508418e-04,
         -1.917526917526918e-03,
-        6.410256410256410e-03,
+        6.41025641025641e-03,
         -2.955065359477124e-02,
         1.796443723688307e-01,
         -1.39243221690590e+00,
@@ -198,7 +198,10 @@ mod tests {
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
         let se_mean = (lambda / n as f64).sqrt();
         let se_var = (lambda * (2.0 * lambda + 1.0) / n as f64).sqrt();
-        assert!((mean - lambda).abs() < 5.0 * se_mean, "λ={lambda}: mean {mean}");
+        assert!(
+            (mean - lambda).abs() < 5.0 * se_mean,
+            "λ={lambda}: mean {mean}"
+        );
         assert!((var - lambda).abs() < 5.0 * se_var, "λ={lambda}: var {var}");
     }
 

@@ -126,7 +126,10 @@ impl Rig {
             }
         };
         if rig.sample_count().is_none() {
-            return Err(rig_error(spec, "the sample count overflows: use smaller sizes"));
+            return Err(rig_error(
+                spec,
+                "the sample count overflows: use smaller sizes",
+            ));
         }
         Ok(rig)
     }
@@ -142,7 +145,10 @@ impl Rig {
         } = *self
         {
             if !(0.0..=180.0).contains(&span) {
-                return Err(rig_error(spec, format!("span={span}: use 0 to 180 degrees")));
+                return Err(rig_error(
+                    spec,
+                    format!("span={span}: use 0 to 180 degrees"),
+                ));
             }
             for (name, value) in [("light_theta", light_theta), ("camera", camera)] {
                 if value.abs() + span / 2.0 > MAX_THETA_DEG {
@@ -342,7 +348,10 @@ impl Options<'_> {
             .map(|t| self.parse_number(key, t))
             .collect::<Result<Vec<_>>>()?;
         if values.is_empty() || text.trim().is_empty() {
-            return Err(rig_error(self.spec, format!("{key}: give at least one value")));
+            return Err(rig_error(
+                self.spec,
+                format!("{key}: give at least one value"),
+            ));
         }
         Ok(values)
     }
@@ -408,12 +417,7 @@ impl FromStr for Rig {
 /// The canonical spec with every option spelled out (what the truth file records).
 impl fmt::Display for Rig {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let list = |v: &[f64]| {
-            v.iter()
-                .map(f64::to_string)
-                .collect::<Vec<_>>()
-                .join(",")
-        };
+        let list = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(",");
         match self {
             Rig::Azimuthal { incidences, steps } => {
                 write!(f, "azimuthal:incidences={}:steps={steps}", list(incidences))
