@@ -23,7 +23,9 @@ const POISSON_GAUSSIAN_LIMIT: f64 = 1e12;
 /// where `P = Poisson(ŷ·N)/N` for `photon:N` (else ŷ), `r` = `relative`, `f` = `floor`, and
 /// z₁, z₂ independent standard normals. The implied σ (written when any of photon, relative,
 /// floor is present) is `sqrt(ŷ/N + (r·ŷ)² + f²)`; outliers are deliberately not in σ. An
-/// outlier hits a whole sample (every channel), like a bad frame.
+/// outlier hits a whole sample (every channel), like a bad frame. A clean value of exactly 0
+/// under photon or relative noise alone has σ = 0 (the value is exact), which the loader
+/// rejects as a non-positive σ; add a `floor` to keep such samples.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Noise {
     /// `photon:N`: value·N is Poisson distributed (N counts at value 1).
