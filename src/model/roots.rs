@@ -5,8 +5,10 @@
 use num_dual::DualNum;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
+use super::angles::wrap;
 use super::exit_angle::ExitMap;
 use super::instrument;
+use super::RootMode;
 
 /// At most this many roots per lobe (TRT has 1 or 3; the cubic near η' → 1 may add wrapped ones).
 pub const MAX_ROOTS: usize = 8;
@@ -27,6 +29,14 @@ pub fn exit_roots(map: &ExitMap<f64>, phi: f64) -> Roots {
         target: [0.0; MAX_ROOTS],
         n: 0,
     };
+    if map.mode == RootMode::Exact && map.p == 1 {
+        if let Some(g) = tt_closed_form(map, phi) {
+            roots.gamma[0] = g;
+            roots.target[0] = phi + TAU * ((map.value(&g) - phi) / TAU).round();
+            roots.n = 1;
+            return roots;
+        }
+    }
     let mut bounds = [-FRAC_PI_2, 0.0, 0.0, FRAC_PI_2];
     let n_pieces = match map.caustic() {
         Some(gc) if gc > 0.0 => {
@@ -64,6 +74,30 @@ pub fn exit_roots(map: &ExitMap<f64>, phi: f64) -> Roots {
         f_lo = f_hi;
     }
     roots
+}
+
+/// Exact TT root from MODEL.md's closed form `h = s·cos(φ/2)/sqrt(1 + a² − 2as·sin(φ/2))`,
+/// `a = 1/η'`, `s = sign φ`, accepted only where `Φ(1, h)` indeed returns φ (else `None`: the
+/// bracketing solver decides, normally finding no root since |φ| < 2·asin(1/η')).
+fn tt_closed_form(map: &ExitMap<f64>, phi: f64) -> Option<f64> {
+    let a = 1.0 / map.eta_p;
+    let s = if phi < 0.0 { -1.0 } else { 1.0 };
+    let (sh, ch) = (0.5 * phi).sin_cos();
+    let h = s * ch / (1.0 + a * a - 2.0 * a * s * sh).sqrt();
+    if h.is_nan() || h.abs() > 1.0 {
+        return None;
+    }
+    let g = h.asin();
+    let r = wrap(map.value(&g) - phi);
+    // The closed form is exact up to rounding where valid; elsewhere it misses by O(1).
+    if r.abs() < 1e-9 {
+        // One Newton step polishes the last bits (the map's slope is ≤ −2·(1 − 1/η') < 0).
+        let d = map.slope(&g);
+        let gn = g - r / d;
+        Some(if gn.abs() <= FRAC_PI_2 { gn } else { g })
+    } else {
+        None
+    }
 }
 
 /// Safeguarded Newton for `map(γ) = y` on `[lo, hi]` where the map is monotone and brackets `y`.
