@@ -231,7 +231,11 @@ fn scan_with_commas_skip_columns_radians_and_channels() {
 fn scan_option_errors_say_what_is_missing() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "s.txt", "1 2 3\n");
-    let cases: [(LoadOptions, &str); 6] = [
+    let cases: [(LoadOptions, &str); 7] = [
+        (
+            scan_options("phi_r,theta_r,radiance", "theta_i=90,phi_i=0", &[]),
+            "|theta| must be below 90",
+        ),
         (
             scan_options("phi_r,theta_r,radiance", "theta_i=30", &[]),
             "phi_i",
@@ -409,4 +413,30 @@ fn format_is_detected_from_extension_and_overridable() {
     assert_eq!(detect_format(Path::new("a.txt"), &forced), Format::Csv);
     let scan = scan_options("phi_r,theta_r,radiance", "", &[]);
     assert_eq!(detect_format(Path::new("a.csv"), &scan), Format::Scan);
+}
+
+#[test]
+fn duplicates_match_signed_zeros_and_keep_channels_aligned() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "dup.csv",
+        "theta_i,phi_i,theta_r,phi_r,radiance_r,radiance_g,sigma_r,sigma_g\n\
+         0,0,10,20,1,2,0.1,0.2\n\
+         1,0,10,20,3,4,0.3,0.4\n\
+         -0,0,10,20,5,6,0.5,0.6\n\
+         0,-0,10,20,7,8,0.7,0.8\n\
+         2,0,10,20,9,10,0.9,1.0\n\
+         1,0,10,20,11,12,1.1,1.2\n",
+    );
+    let (ds, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(r.rejected[&Duplicate].first_lines, [4, 5, 7]);
+    assert_eq!(r.duplicate_of, [[4, 2], [5, 2], [7, 3]]);
+    assert_eq!(ds.source_line, [2, 3, 6]);
+    assert_eq!(ds.radiance, [1.0, 2.0, 3.0, 4.0, 9.0, 10.0]);
+    assert_eq!(
+        ds.sigma.as_deref(),
+        Some(&[0.1, 0.2, 0.3, 0.4, 0.9, 1.0][..])
+    );
 }

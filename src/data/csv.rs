@@ -335,15 +335,14 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
     if !cols.ignored.is_empty() {
         rows.note(format!("ignored columns: {}", cols.ignored.join(", ")));
     }
-    read_rows(
-        reader,
+    let file_len = reader.get_ref().metadata().map_or(0, |m| m.len());
+    let input = Input {
         path,
-        options,
-        &pre.header,
-        &cols,
+        header: &pre.header,
         header_line,
-        &mut rows,
-    )?;
+        file_len,
+    };
+    read_rows(reader, &input, options, &cols, &mut rows)?;
     if rows.rows_read() == 0 {
         return Err(Error::input(
             path,
@@ -425,16 +424,31 @@ impl<R: Read> Read for NewlineCounting<R> {
     }
 }
 
+/// Where the data rows come from.
+struct Input<'a> {
+    path: &'a Path,
+    header: &'a csv::StringRecord,
+    header_line: u64,
+    file_len: u64,
+}
+
+/// Rows after which the bytes per row so far size the reservation for the rest of the file.
+const SIZE_SAMPLE_ROWS: u64 = 4096;
+
 /// Stream the data rows after the header into `rows`.
 fn read_rows(
     reader: impl Read,
-    path: &Path,
+    input: &Input,
     options: &LoadOptions,
-    header: &csv::StringRecord,
     cols: &Columns,
-    header_line: u64,
     rows: &mut Rows,
 ) -> Result<()> {
+    let Input {
+        path,
+        header,
+        header_line,
+        file_len,
+    } = *input;
     let newlines = Rc::new(RefCell::new(Newlines::default()));
     let mut csv = csv::ReaderBuilder::new()
         .has_headers(false)
@@ -507,6 +521,12 @@ fn read_rows(
             }
         }
         rows.row(line, angles, &radiance, &sigma, &weight);
+        if rows.rows_read() == SIZE_SAMPLE_ROWS {
+            let per_row = end / SIZE_SAMPLE_ROWS + 1;
+            let rest = file_len.saturating_sub(end) / per_row;
+            // 10% headroom: row lengths vary a little through a file.
+            rows.reserve((rest + rest / 10) as usize);
+        }
     }
 }
 

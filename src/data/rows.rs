@@ -46,6 +46,32 @@ impl Rows {
         &mut self.ds.meta
     }
 
+    /// Reserve room for about `rows` more accepted samples (avoids repeated doubling, whose
+    /// copies and fresh page faults dominate large loads).
+    pub fn reserve(&mut self, rows: usize) {
+        let nc = self.ds.n_channels();
+        let ds = &mut self.ds;
+        for v in [
+            &mut ds.theta_i,
+            &mut ds.phi_i,
+            &mut ds.theta_r,
+            &mut ds.phi_r,
+        ] {
+            v.reserve(rows);
+        }
+        for v in [
+            Some(&mut ds.radiance),
+            ds.sigma.as_mut(),
+            ds.weight.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            v.reserve(rows * nc);
+        }
+        ds.source_line.reserve(rows);
+    }
+
     /// Number of rows seen so far.
     pub fn rows_read(&self) -> u64 {
         self.report.rows_read
@@ -146,6 +172,7 @@ impl Rows {
         remove_duplicates(&mut self.ds, &mut self.report);
         count_negative_kept(&self.ds, &mut self.report);
         self.report.accepted = self.ds.len() as u64;
+        shrink_if_loose(&mut self.ds);
         if self.report.negative_kept.count > 0 {
             self.report.notes.push(format!(
                 "{} accepted rows have a negative radiance (kept: dark-frame subtraction makes \
@@ -251,6 +278,33 @@ fn retain_samples(ds: &mut Dataset, keep: &[bool]) {
         i += 1;
         keep[i - 1]
     });
+}
+
+/// Give back reserved room when the estimate was well above the accepted count, so memory stays
+/// proportional to the accepted samples.
+fn shrink_if_loose(ds: &mut Dataset) {
+    let loose = |v: &Vec<f64>| v.capacity() > v.len() + v.len() / 8 + 1024;
+    if loose(&ds.theta_i) {
+        for v in [
+            &mut ds.theta_i,
+            &mut ds.phi_i,
+            &mut ds.theta_r,
+            &mut ds.phi_r,
+        ] {
+            v.shrink_to_fit();
+        }
+        for v in [
+            Some(&mut ds.radiance),
+            ds.sigma.as_mut(),
+            ds.weight.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            v.shrink_to_fit();
+        }
+        ds.source_line.shrink_to_fit();
+    }
 }
 
 /// Count accepted samples with a negative radiance in any channel.
