@@ -328,3 +328,58 @@ fn output_must_be_a_csv_and_params_must_exist() {
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("broken.json:2:"), "{err}");
 }
+
+#[test]
+fn sigma_column_is_the_noise_models_sigma_of_the_clean_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "p.json", PARAMS_1);
+    let csv = dir.path().join("n.csv");
+    let args = [
+        "synth",
+        "--params",
+        s(&p),
+        "--rig",
+        "azimuthal:incidences=30:steps=90",
+        "--noise",
+        "relative:0.05+floor:1e-3",
+        "--scale",
+        "4",
+        "--lobes",
+        "R,TT",
+        "--output",
+        s(&csv),
+    ];
+    ok(&hairfit(&args));
+    let (data, _) = load(&csv, &LoadOptions::default()).unwrap();
+    let params = ParamFile::from_json_str(PARAMS_1, "p.json")
+        .unwrap()
+        .to_params();
+    let config = ModelConfig {
+        mode: RootMode::Cubic,
+        effects: Effects {
+            lobes: Effects::parse_lobes("R,TT").unwrap(),
+            ..Effects::default()
+        },
+    };
+    let noise = Noise::parse("relative:0.05+floor:1e-3").unwrap();
+    let mut moved = 0;
+    for i in 0..data.len() {
+        let [theta_i, phi_i, theta_r, phi_r] = data.angles(i);
+        let mut s_model = [0.0];
+        let angles = Angles {
+            theta_i,
+            phi_i,
+            theta_r,
+            phi_r,
+        };
+        scattering(&params, &config, &angles, &mut s_model);
+        let clean = 4.0 * s_model[0];
+        // σ is computed from the clean value (R+TT only, scale 4), bit for bit.
+        assert_eq!(data.sigma_of(i, 0), Some(noise.sigma(clean)));
+        if data.value(i, 0) != clean {
+            moved += 1;
+        }
+    }
+    // Gaussian noise moves every value.
+    assert_eq!(moved, data.len());
+}
