@@ -3,7 +3,8 @@
 //! plus a `FILE.truth.json` sidecar ([`Truth`]) holding everything needed to check a fit.
 //!
 //! Reproducibility: every random number comes from ChaCha8 keyed by the seed with one stream
-//! per purpose (see [`random`]), so the same command gives the same bytes on any machine.
+//! per purpose (see [`random`]), so a seed gives the same draws on any machine and any future
+//! build; the model values themselves can differ in the last digit with the platform's `libm`.
 
 mod noise;
 pub mod random;
