@@ -7,7 +7,7 @@ use std::process::{Command, Output};
 use hairfit::data::{load, write_csv, LoadOptions};
 use hairfit::model::{scattering, Angles, Effects, ModelConfig, RootMode};
 use hairfit::params::{ParamFile, SigmaA};
-use hairfit::synth::{synthesize, truth_path, Noise, Rig, Truth};
+use hairfit::synth::{synthesize, synthesize_directions, truth_path, Noise, Rig, Truth};
 
 const PARAMS_3: &str = r#"{"eta": 1.55, "sigma_a": [0.2, 0.4, 0.8], "alpha_r_deg": -7,
   "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#;
@@ -382,4 +382,55 @@ fn sigma_column_is_the_noise_models_sigma_of_the_clean_value() {
     }
     // Gaussian noise moves every value.
     assert_eq!(moved, data.len());
+}
+
+#[test]
+fn explicit_directions_are_used_as_given() {
+    let params = ParamFile::from_json_str(PARAMS_3, "p.json")
+        .unwrap()
+        .to_params();
+    let dirs = [[-20.0, 0.0, 25.0, 30.0], [10.0, -40.0, -5.0, 170.0]];
+    let config = ModelConfig::default();
+    let (ds, truth) = synthesize_directions(
+        &params,
+        &config,
+        &dirs,
+        "demo scan",
+        &Noise::default(),
+        &[1.0, 2.0, 3.0],
+        0,
+    )
+    .unwrap();
+    assert_eq!(truth.rig, "demo scan");
+    assert_eq!(ds.len(), 2);
+    let mut s_model = [0.0; 3];
+    for (i, d) in dirs.iter().enumerate() {
+        assert_eq!(ds.angles(i), d.map(f64::to_radians));
+        let [theta_i, phi_i, theta_r, phi_r] = ds.angles(i);
+        let angles = Angles {
+            theta_i,
+            phi_i,
+            theta_r,
+            phi_r,
+        };
+        scattering(&params, &config, &angles, &mut s_model);
+        for (c, s_c) in s_model.iter().enumerate() {
+            assert_eq!(ds.value(i, c), (c + 1) as f64 * s_c);
+        }
+    }
+    let err = synthesize_directions(
+        &params,
+        &config,
+        &[[0.0, 0.0, 90.0, 0.0]],
+        "x",
+        &Noise::default(),
+        &[1.0; 3],
+        0,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("direction 0") && err.contains("|theta| < 90"),
+        "{err}"
+    );
 }

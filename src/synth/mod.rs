@@ -105,6 +105,39 @@ pub fn synthesize(
     scale: &[f64],
     seed: u64,
 ) -> Result<(Dataset, Truth)> {
+    let directions = rig.angles(&mut random::generator(seed, random::Stream::Angles));
+    synthesize_directions(
+        params,
+        config,
+        &directions,
+        &rig.to_string(),
+        noise,
+        scale,
+        seed,
+    )
+}
+
+/// [`synthesize`] at explicit directions `[θ_i, φ_i, θ_r, φ_r]` in degrees (for geometries no
+/// [`Rig`] describes, e.g. a demo's scan); `label` is recorded as the truth's `rig`. Each |θ|
+/// must be below 90° and every angle finite.
+pub fn synthesize_directions(
+    params: &Params<f64>,
+    config: &ModelConfig,
+    directions: &[[f64; 4]],
+    label: &str,
+    noise: &Noise,
+    scale: &[f64],
+    seed: u64,
+) -> Result<(Dataset, Truth)> {
+    if let Some((i, a)) = directions
+        .iter()
+        .enumerate()
+        .find(|(_, a)| !(a.iter().all(|x| x.is_finite()) && a[0].abs() < 90.0 && a[2].abs() < 90.0))
+    {
+        return Err(Error::Other(format!(
+            "direction {i} = {a:?} (degrees): angles must be finite and |theta| < 90"
+        )));
+    }
     params.validate()?;
     let nc = params.sigma_a.len();
     if scale.len() != nc {
@@ -118,7 +151,6 @@ pub fn synthesize(
             "--scale: {bad} is not a positive finite number"
         )));
     }
-    let directions = rig.angles(&mut random::generator(seed, random::Stream::Angles));
     let radians: Vec<[f64; 4]> = directions.iter().map(|a| a.map(f64::to_radians)).collect();
     let clean = clean_values(params, config, &radians, scale)?;
     let noisy = noise.apply(&clean, nc, seed);
@@ -151,7 +183,7 @@ pub fn synthesize(
             })
             .collect(),
         channels,
-        rig: rig.to_string(),
+        rig: label.to_string(),
         noise: noise.to_string(),
         sigma_written: dataset.sigma.is_some(),
         seed,
