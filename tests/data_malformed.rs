@@ -144,6 +144,17 @@ fn one_column_file_says_which_columns_are_required_and_found() {
 }
 
 #[test]
+fn semicolon_separated_header_gets_a_hint() {
+    let msg = expect_error(
+        "semi.csv",
+        b"theta_i;phi_i;theta_r;phi_r;radiance\n1;2;3;4;5\n",
+        1,
+        1,
+    );
+    assert!(msg.contains("uses commas"), "{msg}");
+}
+
+#[test]
 fn header_mistakes_name_the_column() {
     let msg = expect_error(
         "d.csv",

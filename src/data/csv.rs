@@ -38,8 +38,8 @@ struct Columns {
     ignored: Vec<String>,
 }
 
-/// Read the header line and the comment/blank lines before it. Returns the header fields, the
-/// unit directive if any (with its line), and the number of lines consumed.
+/// What comes before the data: the header fields, the unit directive if any (with its line),
+/// and the number of lines consumed (comments, blanks and the header).
 struct Preamble {
     header: csv::StringRecord,
     directive: Option<(AngleUnit, u64)>,
@@ -76,6 +76,7 @@ fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<Angle
     }
 }
 
+/// Read the comment/blank lines and the header line at the top of a CSV file.
 fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
     skip_bom(reader, path)?;
     let mut buf = Vec::new();
@@ -144,6 +145,17 @@ fn parse_header_line(line: &[u8], path: &Path, line_no: u64) -> Result<csv::Stri
 const HEADER_HELP: &str = "required: theta_i, phi_i, theta_r, phi_r and either `radiance` or \
      `radiance_<channel>` columns; optional: sigma[_<channel>], weight[_<channel>]";
 
+/// A hint when the header is one column that looks split by another separator.
+fn separator_hint(header: &csv::StringRecord) -> &'static str {
+    match header.iter().next() {
+        Some(h) if header.len() == 1 && (h.contains(';') || h.contains('\t')) => {
+            " (the file seems to use `;` or tabs between columns: hairfit CSV uses commas; \
+             for a headerless scan give --columns)"
+        }
+        _ => "",
+    }
+}
+
 /// Assign a role to every header column and check the set is complete and consistent.
 fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Result<Columns> {
     let err = |col: usize, msg: String| Error::input(path, line, col as u64 + 1, msg);
@@ -202,8 +214,9 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
             return Err(err(
                 0,
                 format!(
-                    "header has no `{angle}` column ({HEADER_HELP}); found: {}",
-                    found()
+                    "header has no `{angle}` column ({HEADER_HELP}); found: {}{}",
+                    found(),
+                    separator_hint(header)
                 ),
             ));
         }
@@ -283,7 +296,6 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
 
 /// Parse one cell: `None` when empty or the missing token, else a number (NaN/inf/1e999 parse
 /// to non-finite values, which validation rejects). Anything else is an input error.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn parse_cell(
     bytes: &[u8],
     missing: &str,
@@ -292,7 +304,7 @@ pub(crate) fn parse_cell(
     column: u64,
     name: &str,
 ) -> Result<Cell> {
-    let text = std::str::from_utf8(bytes).map_err(|_| {
+    let text = std::str::from_utf8(bytes.trim_ascii()).map_err(|_| {
         Error::input(
             path,
             line,
@@ -300,7 +312,6 @@ pub(crate) fn parse_cell(
             format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
         )
     })?;
-    let text = text.trim();
     if text.is_empty() || text == missing {
         return Ok(None);
     }
