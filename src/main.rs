@@ -103,6 +103,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 summary.csv.display(),
                 summary.truth.display()
             );
+            for note in &summary.notes {
+                eprintln!("hairfit: note: {note}");
+            }
         }
     }
     Ok(())

@@ -284,6 +284,8 @@ pub struct SynthSummary {
     pub truth: PathBuf,
     pub n_samples: usize,
     pub n_outliers: usize,
+    /// Choices made on the user's behalf (also in the truth file).
+    pub notes: Vec<String>,
 }
 
 /// The sidecar path: `FILE.csv` → `FILE.truth.json`.
@@ -342,6 +344,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
         truth: truth_file,
         n_samples: truth.n_samples,
         n_outliers: truth.outliers.len(),
+        notes: truth.notes,
     })
 }
 
