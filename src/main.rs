@@ -33,6 +33,8 @@ enum Command {
     Fit(FitCmdArgs),
     /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
     Demo(DemoArgs),
+    /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
+    Synth(hairfit::synth::SynthArgs),
 }
 
 #[derive(clap::Args)]
@@ -118,6 +120,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 "{}",
                 hairfit::data::load_command(&args.file, &args.options, args.json)?
             );
+        }
+        Command::Synth(args) => {
+            // argv[0] varies with the install; record the command as a user types it.
+            let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
+            let command_line = hairfit::synth::command_line_string(argv);
+            let summary = hairfit::synth::run(&args, Some(command_line))?;
+            eprintln!(
+                "hairfit: wrote {} samples ({} outliers) to {} and the truth to {}",
+                summary.n_samples,
+                summary.n_outliers,
+                summary.csv.display(),
+                summary.truth.display()
+            );
+            for note in &summary.notes {
+                eprintln!("hairfit: note: {note}");
+            }
         }
         Command::Fit(a) => {
             let cancel = Some(ctrl_c_flag());
