@@ -143,7 +143,7 @@ pub const FTOL: f64 = 1e-12;
 /// The local least-squares solver: Moré–MINPACK Levenberg–Marquardt (`crate::lm`).
 pub fn local_solver() -> crate::lm::LevenbergMarquardt {
     crate::lm::LevenbergMarquardt::new()
-        .with_tolerances(FTOL, crate::lm::DEFAULT_TOL, 0.0)
+        .with_tolerances(FTOL, crate::lm::DEFAULT_XTOL, 0.0)
         .unwrap_or_default()
 }
 
