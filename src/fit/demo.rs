@@ -97,11 +97,7 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
 
 /// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
 /// `data.csv` and `truth.json`, fit from the default start design, write, summarise.
-pub fn demo_command(
-    args: &FitArgs,
-    out: &Path,
-    cancel: Option<Arc<AtomicBool>>,
-) -> Result<String> {
+pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>) -> Result<String> {
     let opts = args.options(cancel)?;
     let truth = demo_truth();
     let config = ModelConfig {

@@ -103,3 +103,21 @@ pub fn data(truth: &Params<f64>, angles: &[Angles], noise: f64, seed: u64) -> Fi
         seed,
     )
 }
+
+/// A parameter set drawn from well beyond MODEL.md's typical ranges (the start design's box),
+/// where a single start is more likely to end in a wrong basin.
+pub fn wide_params(seed: u64, nc: usize) -> Params<f64> {
+    let mut r = SplitMix64::new(seed ^ 0xabcdef);
+    let mut u = |a: f64, b: f64| a + (b - a) * r.uniform();
+    Params {
+        eta: 1.55,
+        sigma_a: (0..nc).map(|_| u(0.02, 4.0)).collect(),
+        alpha_r: u(-14.0, -2.0).to_radians(),
+        beta_r: u(3.0, 14.0).to_radians(),
+        k_g: u(0.2, 8.0),
+        w_c: u(6.0, 35.0).to_radians(),
+        eccentricity: u(0.8, 0.99),
+        delta_eta_prime: 0.3,
+        delta_h_m: 0.5,
+    }
+}
