@@ -32,10 +32,15 @@ fn multistart_never_ends_worse_than_a_single_start() {
         global: Global::NelderMead,
         ..single.clone()
     };
+    let pso = FitOptions {
+        global: Global::Pso,
+        ..single.clone()
+    };
     let configs = [
         ("single start", single),
         ("single + Nelder-Mead", nm),
         ("16-start design", base()),
+        ("single + PSO", pso),
     ];
     let n_sets = 24;
     let mut costs = vec![Vec::new(); configs.len()];

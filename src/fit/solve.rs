@@ -271,3 +271,47 @@ pub fn nelder_mead<F: Forward>(
         Err(_) => (u0.to_vec(), start_cost, 0, history),
     }
 }
+
+/// argmin's particle swarm over the box `lower..upper` of internal coordinates, seeded (ChaCha8,
+/// so a seed means the same swarm on every platform); returns `(u, cost, iterations, history)`.
+/// argmin evaluates the swarm sequentially here; the cost itself is parallel over samples.
+pub fn particle_swarm<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    lower: &[f64],
+    upper: &[f64],
+    particles: usize,
+    max_iters: u64,
+    seed: u64,
+) -> (Vec<f64>, f64, u64, Vec<f64>) {
+    use rand_chacha::rand_core::SeedableRng;
+    let history = Arc::new(Mutex::new(Vec::new()));
+    let solver = argmin::solver::particleswarm::ParticleSwarm::new(
+        (
+            DVector::from_column_slice(lower),
+            DVector::from_column_slice(upper),
+        ),
+        particles,
+    )
+    .with_rng_generator(rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    let res = Executor::new(CostOnly { ev }, solver)
+        .configure(|s| s.max_iters(max_iters))
+        .add_observer(NmTrace(history.clone()), ObserverMode::Always)
+        .run();
+    let history = history.lock().map(|h| h.clone()).unwrap_or_default();
+    let mid: Vec<f64> = lower.iter().zip(upper).map(|(a, b)| 0.5 * (a + b)).collect();
+    match res {
+        Ok(r) => {
+            let st = r.state();
+            let u = st
+                .get_best_param()
+                .map(|p| p.position.as_slice().to_vec())
+                .unwrap_or(mid);
+            let c = ev.eval_internal(&u, false).cost();
+            (u, c, st.get_iter(), history)
+        }
+        Err(_) => {
+            let c = ev.eval_internal(&mid, false).cost();
+            (mid, c, 0, history)
+        }
+    }
+}
