@@ -320,8 +320,14 @@ pub fn fit(
     for (c, &k) in floored.count.iter().enumerate() {
         if k > 0 {
             warnings.push(format!(
-                "channel {}: {k} value(s) <= 0 cannot be logged; floored at {:.4e} (half the smallest positive value). Consider --space linear",
-                data.channels[c], floored.floor[c]
+                "channel {}: {k} value(s) not significantly positive (<= 0, or below {} sigma) cannot be logged; they are fitted as linear residuals (y - s*S)/sigma{} inside the log-space fit. Consider --space linear",
+                data.channels[c],
+                problem::LOG_MIN_SNR,
+                if data.sigma.is_some() {
+                    String::new()
+                } else {
+                    format!(" with sigma = {:.4e} (half the smallest positive value)", floored.floor[c])
+                }
             ));
         }
     }
