@@ -74,3 +74,22 @@ fn specular_cone_scan_cannot_fix_the_longitudinal_lobes() {
         }
     }
 }
+
+#[test]
+fn additive_floor_noise_sphere_in_exact_mode() {
+    // Synthesised in exact root mode with additive noise σ = 1e-3: half the readings are not
+    // significantly positive and must be fitted linearly inside the log fit.
+    let opts = FitOptions {
+        mode: hairfit::model::RootMode::Exact,
+        ..FitOptions::default()
+    };
+    let (out, truth) = fit_file("sphere_1ch", &opts);
+    assert_eq!(out.json.status, "converged");
+    let chi2 = out.json.residuals.reduced_chi2.unwrap();
+    // dof 393: χ²/dof scatters by √(2/393) ≈ 0.07; 0.3 is a generous but failing-capable bound.
+    assert!((chi2 - 1.0).abs() < 0.3, "reduced chi2 {chi2}");
+    for (name, v, se, status, want) in compare(&out, &truth) {
+        let se = se.unwrap_or_else(|| panic!("{name}: {status}, no standard error"));
+        assert!((v - want).abs() < 4.0 * se, "{name}: {v} ± {se}, truth {want}");
+    }
+}

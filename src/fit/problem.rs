@@ -278,7 +278,7 @@ pub struct Evaluator<'f, F: Forward> {
 
 /// A reading below this many σ is not significantly positive: its log is not approximately
 /// Gaussian (the log-normal approximation σ_log = σ/y needs y ≫ σ), so it is fitted linearly.
-pub const LOG_MIN_SNR: f64 = 2.0;
+pub const LOG_MIN_SNR: f64 = 5.0;
 
 /// Values a log-space fit cannot take the logarithm of, met when preparing the targets.
 #[derive(Debug, Clone, Default, Serialize)]
