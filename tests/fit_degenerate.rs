@@ -169,7 +169,9 @@ fn constant_phi_h_switches_eccentricity_off_under_auto_effects() {
     assert_eq!(status_of(&out, "eccentricity"), "fixed");
     let reasons = out.json.options["effects_reasons"].as_array().unwrap();
     assert!(
-        reasons.iter().any(|r| r.as_str().unwrap().starts_with("eccentricity off")),
+        reasons
+            .iter()
+            .any(|r| r.as_str().unwrap().starts_with("eccentricity off")),
         "{reasons:?}"
     );
     assert!(warned(&out, "eccentricity"));

@@ -28,7 +28,11 @@ fn compare(out: &FitOutcome, truth: &ParamFile) -> Vec<(String, f64, Option<f64>
     all_parameters(out.json.data.channels.len())
         .into_iter()
         .filter_map(|p| {
-            let e = out.json.parameters.iter().find(|e| e.name == p.json_name())?;
+            let e = out
+                .json
+                .parameters
+                .iter()
+                .find(|e| e.name == p.json_name())?;
             (e.status != "fixed").then(|| {
                 (
                     e.name.clone(),
@@ -54,7 +58,10 @@ fn photon_noise_longitudinal_scan_with_zero_readings() {
     for (name, v, se, status, want) in compare(&out, &truth) {
         let se = se.unwrap_or_else(|| panic!("{name}: {status}, no standard error"));
         // 4 SE: 11 parameters, so a 3-SE miss would happen now and then by chance alone.
-        assert!((v - want).abs() < 4.0 * se, "{name}: {v} ± {se}, truth {want}");
+        assert!(
+            (v - want).abs() < 4.0 * se,
+            "{name}: {v} ± {se}, truth {want}"
+        );
     }
 }
 
@@ -67,10 +74,17 @@ fn specular_cone_scan_cannot_fix_the_longitudinal_lobes() {
     for (name, v, _, status, want) in compare(&out, &truth) {
         if name == "alpha_r_deg" || name == "beta_r_deg" {
             assert_eq!(status, "undetermined", "{name}");
-            assert!(out.json.warnings.iter().any(|w| w.starts_with(&name) && w.contains("theta_h")));
+            assert!(out
+                .json
+                .warnings
+                .iter()
+                .any(|w| w.starts_with(&name) && w.contains("theta_h")));
         } else {
             // Noise-free: the determined parameters come back to rounding (1e-6 relative).
-            assert!((v - want).abs() <= 1e-6 * want.abs(), "{name}: {v} vs {want}");
+            assert!(
+                (v - want).abs() <= 1e-6 * want.abs(),
+                "{name}: {v} vs {want}"
+            );
         }
     }
 }
@@ -90,6 +104,9 @@ fn additive_floor_noise_sphere_in_exact_mode() {
     assert!((chi2 - 1.0).abs() < 0.3, "reduced chi2 {chi2}");
     for (name, v, se, status, want) in compare(&out, &truth) {
         let se = se.unwrap_or_else(|| panic!("{name}: {status}, no standard error"));
-        assert!((v - want).abs() < 4.0 * se, "{name}: {v} ± {se}, truth {want}");
+        assert!(
+            (v - want).abs() < 4.0 * se,
+            "{name}: {v} ± {se}, truth {want}"
+        );
     }
 }

@@ -6,6 +6,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::bounds::{get, report_factor, typical_range, Bound};
@@ -455,19 +456,25 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     };
 
     // Curves.
-    let mut curves = Vec::with_capacity(m);
-    let mut lobes = vec![[0.0; 3]; nc];
     let fwd = ModelForward { config };
+    // Per-lobe values in parallel, one Vec per sample, collected in sample order.
+    let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
+        .angles
+        .par_iter()
+        .map(|ang| {
+            let mut lobes = vec![[0.0; 3]; nc];
+            fwd.by_lobe(&params, ang, &mut lobes).then_some(lobes)
+        })
+        .collect();
+    let mut curves = Vec::with_capacity(m);
     for (i, ang) in data.angles.iter().enumerate() {
-        let have = fwd.by_lobe(&params, ang, &mut lobes);
         for c in 0..nc {
             let k = i * nc + c;
             let s = scale[c];
             let fit = s * e.model[k];
-            let (fr, ft, ftrt) = if have {
-                (s * lobes[c][0], s * lobes[c][1], s * lobes[c][2])
-            } else {
-                (f64::NAN, f64::NAN, f64::NAN)
+            let (fr, ft, ftrt) = match &lobes_all[i] {
+                Some(l) => (s * l[c][0], s * l[c][1], s * l[c][2]),
+                None => (f64::NAN, f64::NAN, f64::NAN),
             };
             curves.push(CurveRow {
                 sample: i,

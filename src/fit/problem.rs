@@ -330,8 +330,8 @@ impl<'f, F: Forward> Evaluator<'f, F> {
             let c = k % nc;
             let sigma = data.sigma.as_ref().map(|s| s[k]);
             let weight = data.weight.as_ref().map(|wt| wt[k].max(0.0).sqrt());
-            let fallback = space == Space::Log
-                && (y <= 0.0 || sigma.is_some_and(|s| y < LOG_MIN_SNR * s));
+            let fallback =
+                space == Space::Log && (y <= 0.0 || sigma.is_some_and(|s| y < LOG_MIN_SNR * s));
             let wk = match (space, fallback) {
                 (Space::Linear, _) | (Space::Log, true) => match (sigma, weight) {
                     (Some(s), _) => 1.0 / s,
