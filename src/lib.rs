@@ -9,6 +9,7 @@
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
+//! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
@@ -20,5 +21,6 @@ pub mod lm;
 pub mod model;
 pub mod nist;
 pub mod params;
+pub mod synth;
 
 pub use error::{Error, Result};

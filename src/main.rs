@@ -29,6 +29,8 @@ enum Command {
     Eval(EvalArgs),
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
+    /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
+    Synth(hairfit::synth::SynthArgs),
 }
 
 #[derive(clap::Args)]
@@ -88,10 +90,24 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Load(args) => {
-            print!(
-                "{}",
-                hairfit::data::load_command(&args.file, &args.options, args.json)?
+            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
+            print!("{text}");
+        }
+        Command::Synth(args) => {
+            // argv[0] varies with the install; record the command as a user types it.
+            let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
+            let command_line = hairfit::synth::command_line_string(argv);
+            let summary = hairfit::synth::run(&args, Some(command_line))?;
+            eprintln!(
+                "hairfit: wrote {} samples ({} outliers) to {} and the truth to {}",
+                summary.n_samples,
+                summary.n_outliers,
+                summary.csv.display(),
+                summary.truth.display()
             );
+            for note in &summary.notes {
+                eprintln!("hairfit: note: {note}");
+            }
         }
     }
     Ok(())
