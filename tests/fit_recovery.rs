@@ -217,6 +217,9 @@ fn freed_eta_is_recovered_from_noise_free_data() {
         let (got, _, status) = reported(&out, ParamName::Eta);
         assert_eq!(status, "free");
         // Same 1e-6 relative as every other noise-free recovery.
-        assert!((got - eta).abs() <= 1e-6 * eta, "set {set}: eta {got} want {eta}");
+        assert!(
+            (got - eta).abs() <= 1e-6 * eta,
+            "set {set}: eta {got} want {eta}"
+        );
     }
 }
