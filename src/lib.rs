@@ -8,6 +8,7 @@
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
+//! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
@@ -18,5 +19,6 @@ pub mod eval;
 pub mod lm;
 pub mod model;
 pub mod params;
+pub mod report;
 
 pub use error::{Error, Result};

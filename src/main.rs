@@ -36,6 +36,14 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
     },
+    /// Plot a fit: SVG/PNG figures and an offline index.html in the fit's directory.
+    Report {
+        /// The fit's directory (holds fit.json and curves.csv, written by `hairfit fit`).
+        dir: PathBuf,
+        /// Linear instead of logarithmic value axes.
+        #[arg(long)]
+        linear: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -71,6 +79,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     out.display()
                 );
             }
+        }
+        Command::Report { dir, linear } => {
+            let summary = hairfit::report::write_report_with(
+                &dir,
+                &hairfit::report::ReportOptions { linear },
+            )?;
+            for note in &summary.notes {
+                eprintln!("hairfit: note: {note}");
+            }
+            eprintln!(
+                "hairfit: wrote {} files; open {}",
+                summary.files.len(),
+                dir.join("index.html").display()
+            );
         }
     }
     Ok(())
