@@ -13,6 +13,26 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
+pub mod angles;
+pub mod azimuthal;
+pub mod bravais;
+pub mod eccentricity;
+pub mod exit_angle;
+pub mod fresnel;
+pub mod instrument;
+pub mod jacobian;
+pub mod longitudinal;
+pub mod roots;
+
+use angles::half_angles;
+use azimuthal::{add_r, add_root_sum, add_trt_with_glints, Sink};
+use bravais::bravais_indices;
+use eccentricity::eccentric_index;
+use exit_angle::ExitMap;
+use longitudinal::longitudinal;
+
+pub use jacobian::{param_value, scattering_jacobian, StaticJacobian};
+
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -48,6 +68,7 @@ impl fmt::Display for RootMode {
 
 /// Which lobes contribute to `S`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Lobes {
     pub r: bool,
     pub tt: bool,
@@ -66,6 +87,7 @@ impl Default for Lobes {
 
 /// Lobes and effects switched on; disabled ones are not computed at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Effects {
     pub lobes: Lobes,
     pub glints: bool,
@@ -140,6 +162,7 @@ impl Effects {
 
 /// Root mode and effect switches for one evaluation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct ModelConfig {
     pub mode: RootMode,
     pub effects: Effects,
@@ -262,6 +285,34 @@ pub struct Angles {
 }
 
 impl Angles {
+    /// Check `θ ∈ (−90°, 90°)` (|θ| = 90° puts the direction on the fiber axis) and all finite;
+    /// the error names the angle and its value in degrees.
+    pub fn validate(&self) -> Result<()> {
+        let check = |name: &str, v: f64, limit: Option<f64>| {
+            let ok = v.is_finite() && limit.is_none_or(|l| v.abs() < l);
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::Parameter {
+                    name: name.into(),
+                    value: v.to_degrees(),
+                    message: match limit {
+                        Some(_) => {
+                            "an inclination must be finite and strictly between -90 and 90 degrees"
+                                .into()
+                        }
+                        None => "an azimuth must be finite".into(),
+                    },
+                })
+            }
+        };
+        let half_pi = Some(std::f64::consts::FRAC_PI_2);
+        check("theta_i", self.theta_i, half_pi)?;
+        check("phi_i", self.phi_i, None)?;
+        check("theta_r", self.theta_r, half_pi)?;
+        check("phi_r", self.phi_r, None)
+    }
+
     /// Angles from degrees.
     pub fn from_degrees(theta_i: f64, phi_i: f64, theta_r: f64, phi_r: f64) -> Angles {
         Angles {
@@ -275,14 +326,21 @@ impl Angles {
 
 /// S for every colour channel (`out.len() == params.sigma_a.len()`); roots computed once, shared
 /// by channels.
+///
+/// `T` is `f64` or any num-dual number (`Dual64`, `DualSVec64<N>`, `DualDVec64`): the bound is just
+/// `DualNum<f64>` (Clone, not Copy). Panics if `out.len() != params.sigma_a.len()` (a programming
+/// error, not bad input). Parameters are assumed valid ([`Params::validate`]).
 pub fn scattering<T: DualNum<f64>>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
     out: &mut [T],
 ) {
-    let _ = (params, config, angles, out);
-    todo!()
+    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
+    for o in out.iter_mut() {
+        *o = T::from(0.0);
+    }
+    evaluate(params, config, angles, &mut Total(out));
 }
 
 /// Same, split per lobe: `out[c] = [R, TT, TRT]` contributions (each already divided by
@@ -293,6 +351,81 @@ pub fn scattering_by_lobe<T: DualNum<f64>>(
     angles: &Angles,
     out: &mut [[T; 3]],
 ) {
-    let _ = (params, config, angles, out);
-    todo!()
+    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
+    for o in out.iter_mut() {
+        *o = [T::from(0.0), T::from(0.0), T::from(0.0)];
+    }
+    evaluate(params, config, angles, &mut ByLobe(out));
+}
+
+/// Sum of the lobes per channel.
+struct Total<'a, T>(&'a mut [T]);
+impl<T: DualNum<f64>> Sink<T> for Total<'_, T> {
+    #[inline]
+    fn add(&mut self, channel: usize, _lobe: usize, value: T) {
+        self.0[channel] += value;
+    }
+}
+
+/// Lobes kept apart per channel.
+struct ByLobe<'a, T>(&'a mut [[T; 3]]);
+impl<T: DualNum<f64>> Sink<T> for ByLobe<'_, T> {
+    #[inline]
+    fn add(&mut self, channel: usize, lobe: usize, value: T) {
+        self.0[channel][lobe] += value;
+    }
+}
+
+/// `S = Σ_p M_p(θ_h)·N_p(θ_d, φ, φ_h)/cos²θ_d` over the enabled lobes; disabled lobes and effects
+/// are skipped before any of their work (roots, caustics, η*).
+fn evaluate<T: DualNum<f64>, S: Sink<T>>(
+    params: &Params<T>,
+    config: &ModelConfig,
+    angles: &Angles,
+    sink: &mut S,
+) {
+    let ha = half_angles(angles.theta_i, angles.phi_i, angles.theta_r, angles.phi_r);
+    let (sin_td, cos_td) = ha.theta_d.sin_cos();
+    let inv_cos2 = 1.0 / (cos_td * cos_td);
+    let lobes = config.effects.lobes;
+    let n = params.sigma_a.len();
+
+    if lobes.r || lobes.tt {
+        let br = bravais_indices(&params.eta, sin_td, cos_td);
+        if lobes.r {
+            let m = longitudinal(0, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            add_r(&br, ha.phi, n, &m, sink);
+        }
+        if lobes.tt {
+            let m = longitudinal(1, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            let map = ExitMap::new(config.mode, 1, br.eta_p.clone());
+            add_root_sum(1, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+        }
+    }
+    if lobes.trt {
+        let eta = if config.effects.eccentricity {
+            eccentric_index(&params.eta, &params.eccentricity, ha.phi_h)
+        } else {
+            params.eta.clone()
+        };
+        let br = bravais_indices(&eta, sin_td, cos_td);
+        let m = longitudinal(2, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+        let map = ExitMap::new(config.mode, 2, br.eta_p.clone());
+        if config.effects.glints {
+            add_trt_with_glints(
+                &map,
+                &br,
+                ha.phi,
+                &params.sigma_a,
+                &params.k_g,
+                &params.w_c,
+                &params.delta_eta_prime,
+                &params.delta_h_m,
+                &m,
+                sink,
+            );
+        } else {
+            add_root_sum(2, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+        }
+    }
 }
