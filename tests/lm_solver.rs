@@ -1,0 +1,192 @@
+//! Behaviour of the Levenberg–Marquardt solver through argmin's Executor.
+
+use argmin::core::observers::{Observe, ObserverMode};
+use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, KV};
+use hairfit::lm::{minimize, LevenbergMarquardt, LmOptions, LmState, LmTermination};
+use nalgebra::{DMatrix, DVector};
+use std::sync::{Arc, Mutex};
+
+/// Rosenbrock as residuals: r = (10 (x2 - x1²), 1 - x1), zero at (1, 1).
+struct Rosenbrock;
+
+impl Operator for Rosenbrock {
+    type Param = DVector<f64>;
+    type Output = DVector<f64>;
+    fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        Ok(DVector::from_vec(vec![
+            10.0 * (x[1] - x[0] * x[0]),
+            1.0 - x[0],
+        ]))
+    }
+}
+
+impl Jacobian for Rosenbrock {
+    type Param = DVector<f64>;
+    type Jacobian = DMatrix<f64>;
+    fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        Ok(DMatrix::from_row_slice(
+            2,
+            2,
+            &[-20.0 * x[0], 10.0, -1.0, 0.0],
+        ))
+    }
+}
+
+/// r(x) = ln x - ln 4: undefined for x ≤ 0, where a full Gauss–Newton step from x = 100 lands.
+struct Log;
+
+impl Operator for Log {
+    type Param = DVector<f64>;
+    type Output = DVector<f64>;
+    fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        Ok(DVector::from_vec(vec![x[0].ln() - 4f64.ln()]))
+    }
+}
+
+impl Jacobian for Log {
+    type Param = DVector<f64>;
+    type Jacobian = DMatrix<f64>;
+    fn jacobian(&self, x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        Ok(DMatrix::from_element(1, 1, 1.0 / x[0]))
+    }
+}
+
+/// Linear model r = A x - b: LM must land on the least-squares solution.
+struct Linear {
+    a: DMatrix<f64>,
+    b: DVector<f64>,
+}
+
+impl Operator for Linear {
+    type Param = DVector<f64>;
+    type Output = DVector<f64>;
+    fn apply(&self, x: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        Ok(&self.a * x - &self.b)
+    }
+}
+
+impl Jacobian for Linear {
+    type Param = DVector<f64>;
+    type Jacobian = DMatrix<f64>;
+    fn jacobian(&self, _x: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        Ok(self.a.clone())
+    }
+}
+
+/// Records every iteration's KV and cost.
+#[derive(Clone, Default)]
+struct Recorder(Arc<Mutex<Vec<(f64, KV)>>>);
+
+impl Observe<LmState> for Recorder {
+    fn observe_iter(&mut self, state: &LmState, kv: &KV) -> Result<(), ArgminError> {
+        self.0.lock().unwrap().push((state.get_cost(), kv.clone()));
+        Ok(())
+    }
+}
+
+#[test]
+fn rosenbrock_converges_to_its_zero_residual_minimum() {
+    let res = Executor::new(Rosenbrock, LevenbergMarquardt::new())
+        .configure(|s| s.param(DVector::from_vec(vec![-1.2, 1.0])).max_iters(200))
+        .run()
+        .unwrap();
+    let x = res.state().get_param().unwrap();
+    // Zero-residual problem: LM converges quadratically, so the iterate is exact to rounding.
+    assert!(
+        (x[0] - 1.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12,
+        "{x}"
+    );
+    assert!(res.solver().termination().is_some());
+    assert!(res.state().get_iter() < 200);
+}
+
+#[test]
+fn non_finite_residuals_are_rejected_steps_not_nans() {
+    let rec = Recorder::default();
+    let res = Executor::new(Log, LevenbergMarquardt::new())
+        .configure(|s| s.param(DVector::from_vec(vec![100.0])).max_iters(200))
+        .add_observer(rec.clone(), ObserverMode::Always)
+        .run()
+        .unwrap();
+    let x = res.state().get_param().unwrap()[0];
+    // One well-conditioned unknown: converged to rounding of ln.
+    assert!((x - 4.0).abs() < 1e-12, "{x}");
+    let log = rec.0.lock().unwrap();
+    assert!(log.iter().all(|(c, _)| c.is_finite()));
+    let rejected = log
+        .iter()
+        .filter(|(_, kv)| kv.get("accepted").and_then(|v| v.get_bool()) == Some(false))
+        .count();
+    assert!(rejected >= 1, "the first step from x = 100 reaches x ≤ 0");
+}
+
+#[test]
+fn observers_see_cost_lambda_step_and_gain_ratio() {
+    let rec = Recorder::default();
+    let res = Executor::new(Rosenbrock, LevenbergMarquardt::new())
+        .configure(|s| s.param(DVector::from_vec(vec![-1.2, 1.0])).max_iters(200))
+        .add_observer(rec.clone(), ObserverMode::Always)
+        .run()
+        .unwrap();
+    let log = rec.0.lock().unwrap();
+    assert_eq!(log.len() as u64, res.state().get_iter());
+    for (cost, kv) in log.iter() {
+        for key in ["cost", "lambda", "delta", "step_norm", "gain_ratio"] {
+            assert!(kv.get(key).and_then(|v| v.get_float()).is_some(), "{key}");
+        }
+        assert_eq!(kv.get("cost").unwrap().get_float().unwrap(), *cost);
+    }
+    // Accepted steps never increase the cost.
+    assert!(log.windows(2).all(|w| w[1].0 <= w[0].0));
+}
+
+#[test]
+fn cost_is_half_the_squared_residual_norm() {
+    let res = Executor::new(Rosenbrock, LevenbergMarquardt::new())
+        .configure(|s| s.param(DVector::from_vec(vec![-1.2, 1.0])).max_iters(0))
+        .run()
+        .unwrap();
+    // r(-1.2, 1) = (10 (1 - 1.44), 2.2) = (-4.4, 2.2): ½‖r‖² = 12.1.
+    assert!((res.state().get_cost() - 12.1).abs() < 1e-12);
+}
+
+#[test]
+fn linear_least_squares_matches_the_qr_solution() {
+    let a = DMatrix::from_row_slice(
+        5,
+        3,
+        &[
+            1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 2.0, 4.0, 1.0, 3.0, 9.0, 1.0, 4.0, 16.0,
+        ],
+    );
+    let b = DVector::from_vec(vec![1.0, 2.5, 2.9, 4.2, 7.1]);
+    let qr = a.clone().qr();
+    let exact = qr
+        .r()
+        .solve_upper_triangular(&(qr.q().transpose() * &b))
+        .unwrap();
+    let report = minimize(Linear { a, b }, DVector::zeros(3), LmOptions::default()).unwrap();
+    // cond(A) ≈ 50: the solution is determined to ~1e-14; 1e-11 is generous.
+    assert!((&report.param - &exact).abs().max() < 1e-11);
+    assert!(report.converged(), "{report:?}");
+    assert!(report.jacobian_evals >= 1);
+    assert_eq!(report.jacobian.shape(), (5, 3));
+}
+
+#[test]
+fn missing_start_is_an_error_not_a_panic() {
+    let res = Executor::new(Rosenbrock, LevenbergMarquardt::new()).run();
+    assert!(res.is_err());
+}
+
+#[test]
+fn zero_residual_start_stops_immediately() {
+    let report = minimize(
+        Rosenbrock,
+        DVector::from_vec(vec![1.0, 1.0]),
+        LmOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.termination, Some(LmTermination::ZeroResidual));
+    assert_eq!(report.iterations, 0);
+}
