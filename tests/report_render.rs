@@ -122,7 +122,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitResult {
     ];
     let entry = |i: usize, name: &str| ParameterEntry {
         name: name.into(),
-        value: [1.55, 0.4, -7.0, 8.0, 2.0, 15.0, 0.9][i],
+        value: Some([1.55, 0.4, -7.0, 8.0, 2.0, 15.0, 0.9][i]),
         std_error: match i {
             0 => None,
             5 => None,
@@ -180,7 +180,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitResult {
         scale: (0..n_ch)
             .map(|c| ScaleEntry {
                 channel: CHANNELS[c].into(),
-                value: SCALE[c],
+                value: Some(SCALE[c]),
                 std_error: Some(0.01),
             })
             .collect(),

@@ -81,9 +81,11 @@ impl FitArgs {
                 None => EffectsChoice::Auto,
                 Some(s) if s == "auto" => EffectsChoice::Auto,
                 Some(s) if s == "all" => EffectsChoice::All,
-                Some(s) => return Err(Error::Other(format!(
+                Some(s) => {
+                    return Err(Error::Other(format!(
                     "--effects `{s}`: use auto or all (or --lobes/--no-glints/--no-eccentricity)"
-                ))),
+                )))
+                }
             }
         };
         let mut free_eta = false;

@@ -64,7 +64,7 @@ impl YScale {
                     format!("1e{k}")
                 }
             }
-            YScale::Log => fmt_num(10f64.powf(v)),
+            YScale::Log => sig2(10f64.powf(v)),
             YScale::Linear => fmt_num(v),
         }
     }
@@ -108,6 +108,19 @@ pub fn fmt_num(v: f64) -> String {
         }
     } else {
         format!("{v:.2e}")
+    }
+}
+
+/// Two significant digits (tick labels between decades), never NaN text.
+pub fn sig2(v: f64) -> String {
+    if !v.is_finite() || v == 0.0 {
+        return fmt_num(v);
+    }
+    let p = 1 - v.abs().log10().floor() as i32;
+    if (0..=5).contains(&p) {
+        format!("{v:.*}", p as usize)
+    } else {
+        format!("{v:.1e}")
     }
 }
 
@@ -453,6 +466,36 @@ fn draw_curves_legend<DB: DrawingBackend>(
     Ok(())
 }
 
+/// A legend row for scatter figures: a dot per channel, and a cross for down-weighted points.
+fn draw_marker_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    channels: &[(String, RGBColor)],
+    y: i32,
+) -> Result<()> {
+    let style = (FONT, LABEL_PX)
+        .into_font()
+        .into_text_style(area)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let mut x = 20;
+    for (name, colour) in channels {
+        area.draw(&Circle::new((x + 6, y), 4, colour.filled()))
+            .map_err(de)?;
+        let label = format!("channel {name}");
+        area.draw(&Text::new(label.clone(), (x + 16, y), style.clone()))
+            .map_err(de)?;
+        x += 40 + 8 * label.chars().count() as i32;
+    }
+    area.draw(&Cross::new((x + 6, y), 5, BLACK.stroke_width(1)))
+        .map_err(de)?;
+    area.draw(&Text::new(
+        "down-weighted by the loss (weight < 1), in the channel's colour",
+        (x + 16, y),
+        style,
+    ))
+    .map_err(de)?;
+    Ok(())
+}
+
 /// Scattered data (no slices): measured value against fitted value, with the identity line.
 pub struct DataVsFitFigure {
     /// (fit, data, channel index, outlier)
@@ -573,11 +616,12 @@ impl Figure for ResidualsFigure {
         "Normalised residuals against φ and θh, and their distribution".into()
     }
     fn size(&self) -> (u32, u32) {
-        (1680, 560)
+        (1680, 590)
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
-        let (header, body) = root.split_vertically(HEADER_H);
+        let (header, body) = root.split_vertically(CURVES_HEADER_H);
         draw_header(&header, &self.title(), &self.subtitle)?;
+        draw_marker_legend(&header, &self.channels, CURVES_HEADER_H as i32 - 22)?;
         let areas = body.split_evenly((1, 3));
         let m = self.limit;
         for (k, (area, label)) in areas
@@ -619,36 +663,17 @@ impl Figure for ResidualsFigure {
             chart
                 .draw_series(LineSeries::new(vec![(x0, 0.0), (x1, 0.0)], BLACK.mix(0.5)))
                 .map_err(de)?;
-            for (ci, (name, colour)) in self.channels.iter().enumerate() {
+            for (ci, (_, colour)) in self.channels.iter().enumerate() {
                 let colour = *colour;
-                let s = chart
+                chart
                     .draw_series(self.points.iter().filter(|p| p.3 == ci && !p.4).map(|p| {
                         Circle::new((x_of(p), p.2.clamp(-m, m)), 2, colour.mix(0.7).filled())
                     }))
                     .map_err(de)?;
-                if k == 0 {
-                    s.label(format!("channel {name}"))
-                        .legend(move |(x, y)| Circle::new((x + 12, y), 3, colour.filled()));
-                }
-            }
-            let s = chart
-                .draw_series(
-                    self.points
-                        .iter()
-                        .filter(|p| p.4)
-                        .map(|p| Cross::new((x_of(p), p.2.clamp(-m, m)), 4, BLACK.stroke_width(2))),
-                )
-                .map_err(de)?;
-            if k == 0 {
-                s.label("down-weighted (weight < 1)")
-                    .legend(|(x, y)| Cross::new((x + 12, y), 5, BLACK.stroke_width(2)));
                 chart
-                    .configure_series_labels()
-                    .label_font((FONT, 12))
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK.mix(0.5))
-                    .position(SeriesLabelPosition::LowerLeft)
-                    .draw()
+                    .draw_series(self.points.iter().filter(|p| p.3 == ci && p.4).map(|p| {
+                        Cross::new((x_of(p), p.2.clamp(-m, m)), 3, colour.stroke_width(1))
+                    }))
                     .map_err(de)?;
             }
         }
@@ -727,6 +752,9 @@ impl Figure for ResidualsFigure {
     }
 }
 
+/// Decades shown on the log radius of the polar view.
+const POLAR_DECADES: f64 = 6.0;
+
 /// One azimuthal slice in polar form: radius = value (log: decades above a floor), angle = φ.
 pub struct PolarFigure {
     pub panel: SlicePanel,
@@ -746,8 +774,11 @@ impl PolarFigure {
         });
         match sc {
             YScale::Log => {
+                // At most POLAR_DECADES decades: deeper values sit at the centre, so a few
+                // near-zero samples do not shrink the lobes to a ring.
                 let (lo, hi) = range_of(vals, 0.0, (-1.0, 0.0));
-                (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
+                let top = hi.ceil().max(lo.floor() + 1.0);
+                (lo.floor().max(top - POLAR_DECADES), top)
             }
             YScale::Linear => {
                 let (_, hi) = range_of(vals, 0.0, (0.0, 1.0));
@@ -804,7 +835,7 @@ impl Figure for PolarFigure {
             if r > 0.0 {
                 chart
                     .draw_series(std::iter::once(Text::new(
-                        sc.label(ring, 0.0),
+                        sc.label(ring, POLAR_DECADES),
                         at(97.0, r),
                         label_style.clone(),
                     )))

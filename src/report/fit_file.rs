@@ -11,6 +11,27 @@ use crate::error::{Error, Result};
 use crate::model::ModelConfig;
 use crate::params::ParamFile;
 
+/// A number that may be missing (`null` in JSON, an empty CSV cell): read as NaN, so a
+/// non-finite value the fit wrote as "missing" is carried as non-finite, never an error.
+fn nan_if_missing<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// A non-finite number written as missing (`null` / an empty CSV cell), never `NaN` text.
+fn missing_if_nan<S: serde::Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
+    v.is_finite().then_some(*v).serialize(s)
+}
+
+/// [`nan_if_missing`] for every element of a list.
+fn nan_if_missing_vec<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Vec<f64>, D::Error> {
+    Ok(Vec::<Option<f64>>::deserialize(d)?
+        .into_iter()
+        .map(|v| v.unwrap_or(f64::NAN))
+        .collect())
+}
+
 /// How the fit ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -70,7 +91,8 @@ pub struct DataInfo {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ParameterEntry {
     pub name: String,
-    pub value: f64,
+    /// `null` when not finite.
+    pub value: Option<f64>,
     /// `null` when fixed or undetermined.
     pub std_error: Option<f64>,
     pub status: ParamStatus,
@@ -80,7 +102,7 @@ pub struct ParameterEntry {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScaleEntry {
     pub channel: String,
-    pub value: f64,
+    pub value: Option<f64>,
     pub std_error: Option<f64>,
 }
 
@@ -118,8 +140,10 @@ pub struct TraceStage {
     pub stage: String,
     pub iterations: u64,
     pub cost: Option<f64>,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub wall_s: f64,
-    #[serde(default)]
+    /// Cost per iteration (`null` entries read as NaN and are not drawn).
+    #[serde(default, deserialize_with = "nan_if_missing_vec")]
     pub history: Vec<f64>,
 }
 
@@ -144,6 +168,7 @@ pub struct FitResult {
     pub residuals: ResidualSummary,
     #[serde(default)]
     pub trace: Vec<TraceStage>,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub wall_time_s: f64,
 }
 
@@ -158,14 +183,21 @@ pub struct CurveRow {
     pub phi_i: f64,
     pub theta_r: f64,
     pub phi_r: f64,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub data: f64,
     /// Empty in the file when unknown.
     pub sigma: Option<f64>,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub fit: f64,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub fit_r: f64,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub fit_tt: f64,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub fit_trt: f64,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub residual: f64,
+    #[serde(deserialize_with = "nan_if_missing", serialize_with = "missing_if_nan")]
     pub weight: f64,
 }
 

@@ -168,7 +168,7 @@ fn parameter_table(h: &mut String, fit: &FitResult) {
             h,
             "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{err}</td><td>{unit}</td><td>{status}</td></tr>",
             escape(&p.name),
-            fmt_num(p.value)
+            opt(p.value)
         );
     }
     h.push_str("</table></section>\n");
@@ -186,7 +186,7 @@ fn scale_table(h: &mut String, fit: &FitResult) {
             h,
             "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
             escape(&s.channel),
-            fmt_num(s.value),
+            opt(s.value),
             opt(s.std_error)
         );
     }

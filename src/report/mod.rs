@@ -185,11 +185,25 @@ pub fn render_report(
             subtitle,
         };
         summary.figures.push(render(dir, &fig)?);
-        // Polar view of the best-sampled azimuthal slice.
+        // Polar view of the best-sampled azimuthal slice, the one nearest normal incidence
+        // and specular geometry among equals (the classic view of the lobes).
         if let Some(best) = slices
             .iter()
             .filter(|s| matches!(s.kind, SliceKind::Azimuthal { .. }))
-            .max_by_key(|s| s.samples.len())
+            .min_by(|a, b| {
+                let key = |s: &Slice| {
+                    let tr = match s.kind {
+                        SliceKind::Azimuthal { theta_r } => theta_r,
+                        SliceKind::Longitudinal { .. } => 0.0,
+                    };
+                    (
+                        std::cmp::Reverse(s.samples.len()),
+                        s.theta_i.abs() + (s.theta_i + tr).abs(),
+                    )
+                };
+                let (ka, kb) = (key(a), key(b));
+                ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+            })
         {
             let panel = ctx.slice_panel(best, &mut summary);
             summary.drawn_points += panel_points(&panel);
