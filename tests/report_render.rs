@@ -569,3 +569,30 @@ fn write_report_reads_the_fit_directory() {
     );
     assert!(dir.path().join("index.html").is_file());
 }
+
+#[test]
+fn report_of_a_real_model_fixture_matches_the_fit_column() {
+    // Fixture from the real model at the fitted parameters (as the fit writes it), read back
+    // through the files: the dense curves re-evaluated by the report must agree with the fit
+    // column to rounding (no calibration note), and every figure is written.
+    let dir = tempfile::tempdir().unwrap();
+    let fit = fixture_fit(measurement_angles().len(), 3);
+    let params = fit.params.to_params();
+    let config = fit.model;
+    let model = |a: &Angles, out: &mut [[f64; 3]]| {
+        hairfit::model::scattering_by_lobe(&params, &config, a, out)
+    };
+    let rows = fixture_rows(&measurement_angles(), &model, 3);
+    write_fit_json(&dir.path().join("fit.json"), &fit).unwrap();
+    write_curves_csv(&dir.path().join("curves.csv"), &rows).unwrap();
+    let summary = write_report_with(dir.path(), &ReportOptions::default()).unwrap();
+    assert!(
+        summary.notes.iter().all(|n| !n.contains("differs")),
+        "{:?}",
+        summary.notes
+    );
+    assert_eq!(summary.figures.len(), 6);
+    for f in &summary.files {
+        assert!(dir.path().join(f).is_file(), "{f} missing");
+    }
+}

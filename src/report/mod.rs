@@ -76,6 +76,8 @@ pub struct ReportSummary {
     pub panels: usize,
     /// Measured points drawn over all figures (after decimation).
     pub drawn_points: usize,
+    /// Slice series (one channel of one slice) whose points were decimated for drawing.
+    pub decimated_series: usize,
     /// Things the reader should know (decimation, points not drawable on log axes, ...).
     pub notes: Vec<String>,
 }
@@ -220,6 +222,13 @@ pub fn render_report(
         }
     }
 
+    if summary.decimated_series > 0 {
+        summary.notes.push(format!(
+            "{} slice series had more than {MAX_SLICE_POINTS} points per channel and were decimated evenly for drawing (the curves are not)",
+            summary.decimated_series
+        ));
+    }
+
     // Data against fit: every sample, the only view of scattered data.
     let fig = ctx.data_vs_fit(scale, slices.is_empty(), scattered.len());
     summary.drawn_points += fig.points.len();
@@ -345,12 +354,7 @@ impl Ctx<'_> {
                 continue;
             }
             if members.len() > MAX_SLICE_POINTS {
-                summary.notes.push(format!(
-                    "slice {} channel {name}: {} of {} points drawn (decimated evenly)",
-                    slice.title(),
-                    MAX_SLICE_POINTS,
-                    members.len()
-                ));
+                summary.decimated_series += 1;
             }
             let points: Vec<Point> = stride_indices(members.len(), MAX_SLICE_POINTS)
                 .into_iter()
