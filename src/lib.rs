@@ -11,10 +11,12 @@
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
+//! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
 pub mod cli;
+pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;

@@ -58,6 +58,15 @@ enum Command {
     },
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
+    /// Measure what each accuracy knob costs on this machine: cost.csv, cost.json, cost.svg/png.
+    Cost {
+        /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
+        #[arg(long)]
+        quick: bool,
+        /// Output directory.
+        #[arg(long, default_value = "fits/cost")]
+        out: PathBuf,
+    },
     /// Plot a fit: SVG/PNG figures and an offline index.html in the fit's directory.
     Report {
         /// The fit's directory (holds fit.json and curves.csv, written by `hairfit fit`).
@@ -135,6 +144,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     out.display()
                 );
             }
+        }
+        Command::Cost { quick, out } => {
+            let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
+            print!("{}", hairfit::cost::summary_text(&ledger));
+            eprintln!(
+                "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
+                out.display()
+            );
         }
         Command::Report { dir, linear } => {
             let summary = hairfit::report::write_report_with(

@@ -123,7 +123,6 @@ pub fn render_report(
     n_model: usize,
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
-    register_fonts()?;
     let scale = if options.linear {
         YScale::Linear
     } else {
@@ -596,7 +595,8 @@ fn register_fonts() -> Result<()> {
 }
 
 /// Draw `fig` to `stem.svg` (with a `<title>`) and `stem.png`, both written atomically.
-fn render<F: Figure>(dir: &Path, fig: &F) -> Result<FigureInfo> {
+pub fn render<F: Figure>(dir: &Path, fig: &F) -> Result<FigureInfo> {
+    register_fonts()?;
     let (w, h) = fig.size();
     let title = fig.title();
     let mut svg = String::new();
