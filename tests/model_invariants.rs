@@ -581,3 +581,28 @@ fn trt_root_counts() {
         assert_eq!(exit_roots(&past, 0.1).n, 1, "{mode}");
     }
 }
+
+#[test]
+fn roots_solve_the_map_to_machine_precision() {
+    for mode in MODES {
+        for p in [1, 2] {
+            for eta_p in [1.05, 1.3, 1.55, 1.99, 2.0, 2.2, 5.0, 1e4] {
+                let map = ExitMap::new(mode, p, eta_p);
+                for i in 0..=720 {
+                    let phi = hairfit::model::angles::wrap(-PI + i as f64 * PI / 360.0 + 1e-7);
+                    let r = exit_roots(&map, phi);
+                    for k in 0..r.n {
+                        let g = r.gamma[k];
+                        let miss = map.value(&g) - r.target[k];
+                        // Φ is evaluated with a few ulps of error (|Φ| ≤ 3π): 1e-13 absolute.
+                        assert!(
+                            miss.abs() <= 1e-13 && g.abs() <= std::f64::consts::FRAC_PI_2,
+                            "{mode} p={p} η'={eta_p} φ={phi}: root {g} misses by {miss}"
+                        );
+                        assert!(hairfit::model::angles::wrap(r.target[k] - phi).abs() < 1e-12);
+                    }
+                }
+            }
+        }
+    }
+}
