@@ -10,6 +10,7 @@
 //! - [`fit`]: `hairfit fit` / `hairfit demo`: least squares with exact Jacobians and uncertainties.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
+//! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //! - [`error`]: the error type shared by the library.
@@ -25,6 +26,7 @@ pub mod lm;
 pub mod model;
 pub mod nist;
 pub mod params;
+pub mod synth;
 pub mod report;
 
 pub use error::{Error, Result};

@@ -174,9 +174,34 @@ fn linear_least_squares_matches_the_qr_solution() {
 }
 
 #[test]
-fn missing_start_is_an_error_not_a_panic() {
+fn missing_or_empty_start_is_an_error_not_a_panic() {
     let res = Executor::new(Rosenbrock, LevenbergMarquardt::new()).run();
     assert!(res.is_err());
+    let empty = minimize(Rosenbrock, DVector::zeros(0), LmOptions::default());
+    assert!(empty.is_err());
+}
+
+#[test]
+fn non_finite_start_is_an_error_not_a_panic() {
+    let res = minimize(Log, DVector::from_vec(vec![-1.0]), LmOptions::default());
+    let msg = res.unwrap_err().to_string();
+    assert!(msg.contains("not finite"), "{msg}");
+}
+
+#[test]
+fn no_observations_is_a_zero_residual_fit() {
+    let no_data = Linear {
+        a: DMatrix::zeros(0, 2),
+        b: DVector::zeros(0),
+    };
+    let report = minimize(
+        no_data,
+        DVector::from_vec(vec![1.0, 2.0]),
+        LmOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(report.termination, Some(LmTermination::ZeroResidual));
+    assert_eq!(report.param.as_slice(), &[1.0, 2.0]);
 }
 
 #[test]
@@ -189,4 +214,38 @@ fn zero_residual_start_stops_immediately() {
     .unwrap();
     assert_eq!(report.termination, Some(LmTermination::ZeroResidual));
     assert_eq!(report.iterations, 0);
+}
+
+#[test]
+fn rank_deficient_and_underdetermined_problems_still_converge() {
+    // Columns 2 and 3 are equal: only x1 + x2 is determined; the minimum SS is still reached.
+    let a = DMatrix::from_row_slice(
+        4,
+        3,
+        &[1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 2.0, 2.0, 1.0, 3.0, 3.0],
+    );
+    let b = DVector::from_vec(vec![0.9, 3.1, 5.0, 7.1]);
+    let report = minimize(Linear { a, b }, DVector::zeros(3), LmOptions::default()).unwrap();
+    // Straight-line fit of b on t = 0..3: slope 10.25/5 = 2.05, intercept 4.025 - 1.5·2.05 = 0.95.
+    // The determined part has condition ~5, so rounding is ~1e-15; 1e-10 is generous.
+    let x = &report.param;
+    assert!(
+        (x[0] - 0.95).abs() < 1e-10 && (x[1] + x[2] - 2.05).abs() < 1e-10,
+        "{x}"
+    );
+    assert!(report.param.iter().all(|v| v.is_finite()));
+
+    // One equation, two unknowns: any point on x0 + x1 = 2 is a zero-residual solution.
+    let under = Linear {
+        a: DMatrix::from_row_slice(1, 2, &[1.0, 1.0]),
+        b: DVector::from_vec(vec![2.0]),
+    };
+    let report = minimize(
+        under,
+        DVector::from_vec(vec![5.0, -1.0]),
+        LmOptions::default(),
+    )
+    .unwrap();
+    // Linear and consistent: the residual reaches rounding level of the inputs.
+    assert!(report.cost < 1e-28, "{}", report.cost);
 }

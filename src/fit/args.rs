@@ -30,7 +30,7 @@ pub struct FitArgs {
     /// Seed of the start design and the subsample.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Global stage between multi-start and polish: none or nelder-mead.
+    /// Global stage between multi-start and polish: none, pso or nelder-mead.
     #[arg(long, default_value = "none")]
     pub global: Global,
     /// Fix a parameter, NAME=VALUE (MODEL.md names, degrees for *_deg); repeatable.

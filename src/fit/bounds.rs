@@ -26,7 +26,11 @@ impl Bound {
     pub fn of(name: ParamName) -> Bound {
         match name {
             ParamName::Eta => Bound::Both(1.0 + OPEN_MARGIN, 2.5),
-            ParamName::SigmaA(_) | ParamName::KG => Bound::Lower(0.0),
+            // Upper limits far beyond MODEL.md's typical ranges (σ_a = 50 already removes all
+            // transmitted light): they only stop a direction the data leave flat from running
+            // away, so the solver converges and the covariance names the parameter.
+            ParamName::SigmaA(_) => Bound::Both(0.0, 50.0),
+            ParamName::KG => Bound::Both(0.0, 100.0),
             ParamName::AlphaR => Bound::Free,
             ParamName::BetaR => Bound::Both(TINY_ANGLE, 30f64.to_radians()),
             ParamName::WC => Bound::Both(TINY_ANGLE, 60f64.to_radians()),
