@@ -340,15 +340,20 @@ fn fit_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>> {
         };
         settings.push(("starts", format!("{s} starts"), o, 1));
     }
-    settings.push((
-        "global stage",
-        "Nelder-Mead global stage".into(),
-        FitOptions {
-            global: crate::fit::Global::NelderMead,
-            ..base.clone()
-        },
-        1,
-    ));
+    for (name, global) in [
+        ("Nelder-Mead", crate::fit::Global::NelderMead),
+        ("particle swarm", crate::fit::Global::Pso),
+    ] {
+        settings.push((
+            "global stage",
+            format!("{name} global stage"),
+            FitOptions {
+                global,
+                ..base.clone()
+            },
+            1,
+        ));
+    }
     let strides: &[usize] = if quick { &[4] } else { &[8, 4, 2] };
     for &k in strides {
         settings.push(("samples", format!("1/{k} of the samples"), base.clone(), k));

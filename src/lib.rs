@@ -26,7 +26,7 @@ pub mod lm;
 pub mod model;
 pub mod nist;
 pub mod params;
-pub mod synth;
 pub mod report;
+pub mod synth;
 
 pub use error::{Error, Result};
