@@ -596,3 +596,27 @@ fn report_of_a_real_model_fixture_matches_the_fit_column() {
         assert!(dir.path().join(f).is_file(), "{f} missing");
     }
 }
+
+#[test]
+fn a_failed_fit_with_no_rows_still_renders() {
+    // A failed fit may write an empty curves.csv and no trace or correlation.
+    let dir = tempfile::tempdir().unwrap();
+    let mut fit = fixture_fit(0, 3);
+    fit.status = FitStatus::Failed;
+    fit.trace.clear();
+    fit.correlation = Correlation::default();
+    let summary = render_report(
+        dir.path(),
+        &fit,
+        &[],
+        Some(&toy_model),
+        3,
+        &ReportOptions::default(),
+    )
+    .unwrap();
+    let stems: Vec<&str> = summary.figures.iter().map(|f| f.stem.as_str()).collect();
+    assert_eq!(stems, ["data_vs_fit", "residuals"]);
+    let html = std::fs::read_to_string(dir.path().join("index.html")).unwrap();
+    assert!(html.contains("failed"));
+    assert!(!has_nan_text(&html));
+}
