@@ -32,6 +32,9 @@ pub fn de<E: std::fmt::Display>(e: E) -> Error {
     Error::Other(format!("drawing the report failed: {e}"))
 }
 
+/// Log axes spanning at least this many decades label decades only.
+const DECADES_ONLY: f64 = 2.5;
+
 /// Log or linear vertical scale; log plots log10(y) on linear axes with 10^k tick labels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum YScale {
@@ -51,10 +54,10 @@ impl YScale {
     }
 
     /// Tick label for a plot coordinate on an axis spanning `span`: on a log axis spanning more
-    /// than a decade and a half only decades are labelled (other grid lines stay unlabelled).
+    /// than [`DECADES_ONLY`] decades only decades are labelled (other grid lines stay unlabelled).
     pub fn label(self, v: f64, span: f64) -> String {
         match self {
-            YScale::Log if span >= 1.5 => {
+            YScale::Log if span >= DECADES_ONLY => {
                 let k = v.round();
                 if (v - k).abs() > 1e-6 {
                     String::new()
@@ -73,7 +76,8 @@ impl YScale {
     /// decade, so ticks fall on decades).
     pub fn ticks(self, span: f64) -> usize {
         match self {
-            YScale::Log => (span.ceil() as usize + 1).clamp(3, 16),
+            YScale::Log if span >= DECADES_ONLY => (span.ceil() as usize + 1).clamp(3, 16),
+            YScale::Log => 6,
             YScale::Linear => 10,
         }
     }
