@@ -370,6 +370,7 @@ fn index_html_is_offline_and_links_only_existing_local_files() {
         "undetermined",
         "fixed",
         "alpha_r_deg",
+        "sigma_a[0] (r)",
         "reduced χ²",
         "k_g: no sample near the glint",
     ] {

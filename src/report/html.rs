@@ -167,11 +167,24 @@ fn parameter_table(h: &mut String, fit: &FitResult) {
         let _ = writeln!(
             h,
             "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{err}</td><td>{unit}</td><td>{status}</td></tr>",
-            escape(&p.name),
+            escape(&with_channel(&p.name, &fit.data.channels)),
             opt(p.value)
         );
     }
     h.push_str("</table></section>\n");
+}
+
+/// `sigma_a[1]` → `sigma_a[1] (g)`: name the channel of a per-channel parameter.
+fn with_channel(name: &str, channels: &[String]) -> String {
+    let channel = name
+        .strip_prefix("sigma_a[")
+        .and_then(|r| r.strip_suffix(']'))
+        .and_then(|i| i.parse::<usize>().ok())
+        .and_then(|i| channels.get(i));
+    match channel {
+        Some(c) => format!("{name} ({c})"),
+        None => name.to_string(),
+    }
 }
 
 fn scale_table(h: &mut String, fit: &FitResult) {
