@@ -133,10 +133,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Load(args) => {
-            print!(
-                "{}",
-                hairfit::data::load_command(&args.file, &args.options, args.json)?
-            );
+            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
+            print!("{text}");
         }
         Command::Synth(args) => {
             // argv[0] varies with the install; record the command as a user types it.
