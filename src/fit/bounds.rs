@@ -31,7 +31,9 @@ impl Bound {
             // away, so the solver converges and the covariance names the parameter.
             ParamName::SigmaA(_) => Bound::Both(0.0, 50.0),
             ParamName::KG => Bound::Both(0.0, 100.0),
-            ParamName::AlphaR => Bound::Free,
+            // A cuticle tilt beyond ±30° is not hair (MODEL.md: −10° to −5°); unbounded, a flat
+            // direction let α_R wander to −1434° on a scan that does not span θ_h.
+            ParamName::AlphaR => Bound::Both(-(30f64.to_radians()), 30f64.to_radians()),
             ParamName::BetaR => Bound::Both(TINY_ANGLE, 30f64.to_radians()),
             ParamName::WC => Bound::Both(TINY_ANGLE, 60f64.to_radians()),
             ParamName::Eccentricity => Bound::Both(FRAC_1_SQRT_2 + OPEN_MARGIN, 1.0),
