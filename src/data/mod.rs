@@ -152,8 +152,8 @@ pub fn round_trip_degrees(radians: f64) -> f64 {
     let mut candidates = [nearest; 7];
     let (mut down, mut up) = (nearest, nearest);
     for k in 1..=3 {
-        down = down.next_down();
-        up = up.next_up();
+        down = next_f64(down, false);
+        up = next_f64(up, true);
         candidates[2 * k - 1] = down;
         candidates[2 * k] = up;
     }
@@ -178,6 +178,18 @@ pub fn round_trip_degrees(radians: f64) -> f64 {
             })
             .unwrap_or(nearest),
     }
+}
+
+/// The neighbouring f64 of a finite `x`, above or below (`f64::next_up`/`next_down`, which are
+/// newer than the crate's minimum Rust version).
+fn next_f64(x: f64, up: bool) -> f64 {
+    if x == 0.0 {
+        let tiny = f64::from_bits(1);
+        return if up { tiny } else { -tiny };
+    }
+    // Bits order magnitudes: one more is one ulp further from zero.
+    let bits = x.to_bits();
+    f64::from_bits(if (x > 0.0) == up { bits + 1 } else { bits - 1 })
 }
 
 /// The file formats [`load`] reads.
