@@ -3,9 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
+use proptest::prelude::*;
+
 use hairfit::data::{
-    load, write_csv, write_json, AngleUnit, Dataset, Format, LoadOptions, LoadReport,
-    RejectReason::*,
+    load, round_trip_degrees, write_csv, write_json, AngleUnit, Dataset, Format, LoadOptions,
+    LoadReport, RejectReason::*,
 };
 
 fn fixture(name: &str) -> PathBuf {
@@ -342,8 +344,14 @@ fn sample_dataset() -> Dataset {
     ds
 }
 
+/// Distance in units in the last place between two finite f64 of the same sign.
+fn ulps(a: f64, b: f64) -> u64 {
+    assert_eq!(a.is_sign_negative(), b.is_sign_negative(), "{a} vs {b}");
+    a.to_bits().abs_diff(b.to_bits())
+}
+
 #[test]
-fn csv_write_then_load_is_bit_exact() {
+fn csv_write_then_load_keeps_values_exactly_and_radians_within_one_ulp() {
     let ds = sample_dataset();
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path().join("out.csv");
@@ -352,19 +360,126 @@ fn csv_write_then_load_is_bit_exact() {
     assert_eq!(r.accepted, 200);
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(back.channels, ds.channels);
+    // Values are written in shortest round-trip form and parsed correctly rounded: bit-exact.
     for (a, b) in [
-        (&back.theta_i, &ds.theta_i),
-        (&back.phi_i, &ds.phi_i),
-        (&back.theta_r, &ds.theta_r),
-        (&back.phi_r, &ds.phi_r),
         (&back.radiance, &ds.radiance),
         (back.sigma.as_ref().unwrap(), ds.sigma.as_ref().unwrap()),
         (back.weight.as_ref().unwrap(), ds.weight.as_ref().unwrap()),
     ] {
         assert_eq!(bits(a), bits(b));
     }
+    // These radians are arbitrary 53-bit values, not images of degrees. The file holds degrees
+    // d with d.to_radians() as close as any f64 gets: to_radians multiplies by ~2^-6·1.117, so
+    // the radian values it reaches are at most 2 ulp apart and a skipped one is 1 ulp from a
+    // reached one. Hence 1 ulp, and exact for most (the -0.0 of sample 0 keeps its sign).
+    let mut exact = 0;
+    for i in 0..ds.len() {
+        for (a, b) in back.angles(i).into_iter().zip(ds.angles(i)) {
+            let d = ulps(a, b);
+            assert!(d <= 1, "sample {i}: {a:?} vs {b:?} ({d} ulp)");
+            exact += usize::from(d == 0);
+        }
+    }
+    assert!(exact >= 600, "only {exact} of 800 angles exact");
     // Two comment lines and the header come first.
     assert_eq!(back.source_line[0], 4);
+}
+
+#[test]
+fn csv_holds_degrees_and_angles_that_began_as_degrees_round_trip_exactly() {
+    let mut ds = Dataset::with_channels(vec!["radiance".into()], false, false);
+    let mut x = 0.413_217_5_f64;
+    let mut degrees = vec![[15.0, 0.0, -15.0, -177.0], [-0.0, 179.5, 89.0, 1e-20]];
+    for _ in 0..500 {
+        // Full-mantissa degrees, like the sphere rig's asin(z).to_degrees().
+        x = (x * 3.917_345_123 + 0.271_828_182_845).fract();
+        degrees.push([
+            (x - 0.5) * 178.0,
+            (x * 7.0).fract() * 360.0 - 180.0,
+            x,
+            -x * 1e-3,
+        ]);
+    }
+    for (k, d) in degrees.iter().enumerate() {
+        ds.push(d.map(f64::to_radians), &[k as f64], None, None, 0);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("deg.csv");
+    write_csv(&ds, &p).unwrap();
+    let text = std::fs::read_to_string(&p).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("# written by hairfit; angles in degrees")
+    );
+    assert_eq!(lines.next(), Some("# angles: deg"));
+    assert_eq!(lines.next(), Some("theta_i,phi_i,theta_r,phi_r,radiance"));
+    // A person reads the degrees that were meant, not 15.000000000000002.
+    assert_eq!(lines.next(), Some("15.0,0.0,-15.0,-177.0,0"));
+    assert_eq!(lines.next(), Some("-0.0,179.5,89.0,1e-20,1"));
+    let (back, _) = load(&p, &LoadOptions::default()).unwrap();
+    for i in 0..ds.len() {
+        let (a, b) = (back.angles(i), ds.angles(i));
+        assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "sample {i}");
+    }
+    // --angles rad contradicts the file's own directive: an error, not a misreading.
+    let rad = LoadOptions {
+        angles: Some(AngleUnit::Rad),
+        ..LoadOptions::default()
+    };
+    let msg = load(&p, &rad).unwrap_err().to_string();
+    assert!(msg.contains("deg.csv:2:1"), "{msg}");
+}
+
+proptest! {
+    // Cheap (a few multiplications per case), so many cases over every magnitude.
+    #![proptest_config(ProptestConfig::with_cases(4000))]
+
+    /// Degrees → radians → round_trip_degrees → radians is the identity, and the degrees
+    /// written are never longer text than the ones that were meant.
+    #[test]
+    fn degrees_come_back_exactly(m in -1.0f64..1.0, e in -300i32..300) {
+        let d = m * 10f64.powi(e);
+        let r = d.to_radians();
+        prop_assume!(r.is_normal());
+        let w = round_trip_degrees(r);
+        prop_assert_eq!(w.to_radians().to_bits(), r.to_bits(), "{:?} -> {:?}", d, w);
+        prop_assert!(format!("{w:?}").len() <= format!("{d:?}").len(), "{:?} -> {:?}", d, w);
+    }
+
+    /// Any normal radian value comes back within 1 ulp (see the CSV round-trip test for why).
+    #[test]
+    fn arbitrary_radians_come_back_within_one_ulp(bits in any::<u64>()) {
+        let r = f64::from_bits(bits);
+        prop_assume!(r.is_normal() && r.to_degrees().is_finite());
+        let back = round_trip_degrees(r).to_radians();
+        prop_assert!(ulps(back, r) <= 1, "{:?} -> {:?}", r, back);
+    }
+}
+
+#[test]
+fn whole_degrees_are_written_as_themselves() {
+    for k in -3600..=3600 {
+        let d = f64::from(k) / 10.0;
+        assert_eq!(round_trip_degrees(d.to_radians()), d, "{d}");
+    }
+}
+
+#[test]
+fn csv_files_in_radians_still_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "old.csv",
+        "# written by hairfit; angles in radians\n# angles: rad\n\
+         theta_i,phi_i,theta_r,phi_r,radiance\n0.2617993877991494,0,-0.2617993877991494,-3,1\n",
+    );
+    let (ds, _) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(
+        ds.angles(0),
+        [0.2617993877991494, 0.0, -0.2617993877991494, -3.0]
+    );
+    assert_eq!(ds.source_line, [4]);
 }
 
 #[test]
@@ -380,13 +495,12 @@ fn json_write_then_load_round_trips() {
     // One sample per line after the 4 header lines.
     assert_eq!(back.source_line[0], 5);
     assert_eq!(back.source_line[199], 204);
-    // Angles go through degrees: two rounded products with two rounded constants (180/π, π/180),
-    // each ≤ ε/2 relative, so ≤ 2ε to first order; 3ε covers the second-order terms. The
-    // decimal text itself round-trips exactly (serde_json's float_roundtrip parser).
-    let close = |a: f64, b: f64| (a - b).abs() <= 3.0 * f64::EPSILON * a.abs().max(b.abs());
+    // Angles are written as the degrees that map back nearest (as in the CSV test): the
+    // decimal text round-trips exactly (serde_json's float_roundtrip parser), and the degrees
+    // come back within 1 ulp of these arbitrary radians.
     for i in 0..ds.len() {
-        for (a, b) in back.angles(i).iter().zip(ds.angles(i)) {
-            assert!(close(*a, b), "sample {i}: {a} vs {b}");
+        for (a, b) in back.angles(i).into_iter().zip(ds.angles(i)) {
+            assert!(ulps(a, b) <= 1, "sample {i}: {a:?} vs {b:?}");
         }
     }
     // Values are written in shortest round-trip form and parsed correctly rounded: bit-exact.

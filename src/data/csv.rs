@@ -1,7 +1,7 @@
 //! The header CSV format (`theta_i,phi_i,theta_r,phi_r,radiance[_<ch>]...,[sigma...],[weight...]`)
 //! reader and writer. Streaming with one reused `ByteRecord`, so memory is the accepted samples.
-//! Comment lines before the header may carry the unit directive `# angles: rad` (what
-//! [`write_csv`] writes, so that a write→load round trip is bit-exact).
+//! Comment lines before the header may carry the unit directive `# angles: deg|rad`;
+//! [`write_csv`] writes degrees and says so.
 
 use std::io::{BufRead, Read};
 use std::path::Path;
@@ -506,8 +506,13 @@ fn channel_column(prefix: &str, channels: &[String], c: usize) -> String {
     }
 }
 
-/// Write `dataset` as header CSV with angles in radians (marked by `# angles: rad`), every value
-/// in Rust's shortest round-trip form, so loading the file gives back the same bits.
+/// Write `dataset` as header CSV with angles in degrees (marked by `# angles: deg`, so a stray
+/// `--angles rad` is an error rather than a silent misreading), every number in Rust's shortest
+/// round-trip form. Angles go through
+/// [`round_trip_degrees`](super::round_trip_degrees), so loading gives back the same
+/// radians bit for bit whenever some degree value maps to them (always for angles that began
+/// as degrees, e.g. everything the synthesizer makes), else within 1 ulp; the other values
+/// come back bit for bit.
 pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
     if let Some(bad) = dataset
         .channels
@@ -534,15 +539,16 @@ pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
     }
     write_atomically(path, |w| {
         let io = |e| Error::io(path, e);
-        writeln!(w, "# written by hairfit; angles in radians").map_err(io)?;
-        writeln!(w, "# angles: rad").map_err(io)?;
+        writeln!(w, "# written by hairfit; angles in degrees").map_err(io)?;
+        writeln!(w, "# angles: deg").map_err(io)?;
         writeln!(w, "{}", header.join(",")).map_err(io)?;
         let mut line = String::new();
         for i in 0..dataset.len() {
             use std::fmt::Write as _;
             line.clear();
-            let a = dataset.angles(i);
-            let _ = write!(line, "{},{},{},{}", a[0], a[1], a[2], a[3]);
+            let a = dataset.angles_deg(i);
+            // `{:?}`: exponent form for tiny or huge angles instead of hundreds of digits.
+            let _ = write!(line, "{:?},{:?},{:?},{:?}", a[0], a[1], a[2], a[3]);
             let row = i * nc..(i + 1) * nc;
             for v in &dataset.radiance[row.clone()] {
                 let _ = write!(line, ",{v}");

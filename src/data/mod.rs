@@ -100,9 +100,10 @@ impl Dataset {
         ]
     }
 
-    /// The four angles of sample `i` in degrees: `[θ_i, φ_i, θ_r, φ_r]`.
+    /// The four angles of sample `i` in degrees, `[θ_i, φ_i, θ_r, φ_r]`, as
+    /// [`round_trip_degrees`] gives them (what the writers put in files).
     pub fn angles_deg(&self, i: usize) -> [f64; 4] {
-        self.angles(i).map(f64::to_degrees)
+        self.angles(i).map(round_trip_degrees)
     }
 
     /// Append one sample (angles in radians; `radiance`, `sigma`, `weight` one per channel).
@@ -129,6 +130,66 @@ impl Dataset {
         }
         self.source_line.push(source_line);
     }
+}
+
+/// Radians → degrees such that the loader's `f64::to_radians` gives back exactly `radians`,
+/// choosing the shortest text among such degrees; when no degree value maps back exactly, the
+/// one that maps back nearest (1 ulp off).
+///
+/// Why: `radians.to_degrees()` alone can come back 1 ulp off, so a file in degrees would not
+/// reload bit-exactly even for angles that began as degrees. `to_radians` is monotone, so the
+/// degrees that map back to `radians` are a run of at most two neighbouring f64s (measured over
+/// 2·10⁷ random angles), and `to_degrees` lands within one ulp of them: searching ±3 ulp is
+/// ample. Every `d.to_radians()` round-trips exactly (`d` itself is a candidate); about 9% of
+/// arbitrary normal radian values have no exact preimage (`to_radians` scales by less than one
+/// and skips them) and come back 1 ulp off. Non-finite values are `to_degrees` unchanged.
+pub fn round_trip_degrees(radians: f64) -> f64 {
+    let nearest = radians.to_degrees();
+    if !nearest.is_finite() {
+        return nearest;
+    }
+    // Candidates from the nearest outwards: 0, −1, +1, −2, +2, −3, +3 ulp.
+    let mut candidates = [nearest; 7];
+    let (mut down, mut up) = (nearest, nearest);
+    for k in 1..=3 {
+        down = next_f64(down, false);
+        up = next_f64(up, true);
+        candidates[2 * k - 1] = down;
+        candidates[2 * k] = up;
+    }
+    let maps_back = |d: &f64| d.to_radians().to_bits() == radians.to_bits();
+    let mut exact = candidates.iter().copied().filter(maps_back);
+    match (exact.next(), exact.next()) {
+        // Two exact candidates: the shorter text (the nearer when equally long).
+        (Some(a), Some(b)) => {
+            if format!("{b:?}").len() < format!("{a:?}").len() {
+                b
+            } else {
+                a
+            }
+        }
+        (Some(a), None) => a,
+        // min_by keeps the first (nearest) of equal misses.
+        _ => candidates
+            .into_iter()
+            .min_by(|a, b| {
+                let miss = |d: f64| (d.to_radians() - radians).abs();
+                miss(*a).total_cmp(&miss(*b))
+            })
+            .unwrap_or(nearest),
+    }
+}
+
+/// The neighbouring f64 of a finite `x`, above or below (`f64::next_up`/`next_down`, which are
+/// newer than the crate's minimum Rust version).
+fn next_f64(x: f64, up: bool) -> f64 {
+    if x == 0.0 {
+        let tiny = f64::from_bits(1);
+        return if up { tiny } else { -tiny };
+    }
+    // Bits order magnitudes: one more is one ulp further from zero.
+    let bits = x.to_bits();
+    f64::from_bits(if (x > 0.0) == up { bits + 1 } else { bits - 1 })
 }
 
 /// The file formats [`load`] reads.

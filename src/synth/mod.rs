@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomically;
 use crate::cli::ModelArgs;
-use crate::data::{write_csv, Dataset};
+use crate::data::{round_trip_degrees, write_csv, Dataset};
 use crate::error::{Error, Result};
 use crate::model::{scattering, Angles, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
@@ -92,10 +92,11 @@ pub fn channel_names(n: usize) -> Vec<String> {
 }
 
 /// Synthesize a dataset: the rig's directions (degrees, converted to radians once with
-/// `to_radians`), value = `scale[c] · S_c` from [`scattering`] under `config`, then `noise`
-/// seeded by `seed`. One channel per `params.sigma_a` entry; `scale` has one positive entry
-/// per channel. With `Noise::default()` the values are exactly `scale[c] * S_c` at the stored
-/// radians, so a written and reloaded dataset reproduces the model bit for bit.
+/// `to_radians`, as the loader does), value = `scale[c] · S_c` from [`scattering`] under
+/// `config`, then `noise` seeded by `seed`. One channel per `params.sigma_a` entry; `scale` has
+/// one positive entry per channel. With `Noise::default()` the values are exactly
+/// `scale[c] * S_c` at the stored radians, which are the radians the loader makes of the degrees
+/// [`write_csv`] writes, so a written and reloaded dataset reproduces the model bit for bit.
 /// `Truth::params` is `ParamFile::from_params(params)` and `command_line` is `None`.
 pub fn synthesize(
     params: &Params<f64>,
@@ -151,7 +152,13 @@ pub fn synthesize_directions(
             "--scale: {bad} is not a positive finite number"
         )));
     }
-    let radians: Vec<[f64; 4]> = directions.iter().map(|a| a.map(f64::to_radians)).collect();
+    // Evaluate at the radians the loader will make of the degree text the writer will write.
+    // `round_trip_degrees` guarantees that is `d.to_radians()` itself; going through it anyway
+    // keeps the bit-exact round trip from resting on that proof.
+    let radians: Vec<[f64; 4]> = directions
+        .iter()
+        .map(|a| a.map(|d| round_trip_degrees(d.to_radians()).to_radians()))
+        .collect();
     let clean = clean_values(params, config, &radians, scale)?;
     let noisy = noise.apply(&clean, nc, seed);
 
@@ -232,7 +239,7 @@ fn clean_values(
             }
         });
     if let Some(j) = values.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-        let a = radians[j / nc].map(f64::to_degrees);
+        let a = radians[j / nc].map(round_trip_degrees);
         return Err(Error::Other(format!(
             "the model returned {} at theta_i={}, phi_i={}, theta_r={}, phi_r={} (degrees): \
              a model bug, please report it",
