@@ -3,25 +3,15 @@
 mod model_common;
 
 use hairfit::model::{
-    param_value, scattering, scattering_jacobian, Angles, Lobes, ModelConfig, ParamName, Params,
-    RootMode, StaticJacobian,
+    scattering, scattering_jacobian, Angles, Lobes, ModelConfig, ParamName, Params, RootMode,
+    StaticJacobian,
 };
 use model_common::*;
 use num_dual::DualSVec64;
 
 fn with_value(params: &Params<f64>, name: ParamName, v: f64) -> Params<f64> {
     let mut p = params.clone();
-    match name {
-        ParamName::Eta => p.eta = v,
-        ParamName::SigmaA(c) => p.sigma_a[c] = v,
-        ParamName::AlphaR => p.alpha_r = v,
-        ParamName::BetaR => p.beta_r = v,
-        ParamName::KG => p.k_g = v,
-        ParamName::WC => p.w_c = v,
-        ParamName::Eccentricity => p.eccentricity = v,
-        ParamName::DeltaEtaPrime => p.delta_eta_prime = v,
-        ParamName::DeltaHM => p.delta_h_m = v,
-    }
+    p.set(name, v);
     p
 }
 
@@ -68,7 +58,7 @@ fn ad_matches_central_differences() {
                 assert!(jac[0][8] != 0.0 && jac[0][9] != 0.0, "{mode}: {:?}", jac[0]);
             }
             for (j, &name) in ALL.iter().enumerate() {
-                let x = param_value(&params, name);
+                let x = params.get(name);
                 let h = 1e-6 * x.abs().max(1e-2);
                 let mut plus = [0.0; 2];
                 let mut minus = [0.0; 2];

@@ -120,51 +120,6 @@ pub fn report_factor(name: ParamName) -> f64 {
     }
 }
 
-/// Read parameter `name` from `p`.
-pub fn get<T: Clone>(p: &Params<T>, name: ParamName) -> T {
-    match name {
-        ParamName::Eta => p.eta.clone(),
-        ParamName::SigmaA(c) => p.sigma_a[c].clone(),
-        ParamName::AlphaR => p.alpha_r.clone(),
-        ParamName::BetaR => p.beta_r.clone(),
-        ParamName::KG => p.k_g.clone(),
-        ParamName::WC => p.w_c.clone(),
-        ParamName::Eccentricity => p.eccentricity.clone(),
-        ParamName::DeltaEtaPrime => p.delta_eta_prime.clone(),
-        ParamName::DeltaHM => p.delta_h_m.clone(),
-    }
-}
-
-/// Set parameter `name` in `p`.
-pub fn set<T>(p: &mut Params<T>, name: ParamName, v: T) {
-    match name {
-        ParamName::Eta => p.eta = v,
-        ParamName::SigmaA(c) => p.sigma_a[c] = v,
-        ParamName::AlphaR => p.alpha_r = v,
-        ParamName::BetaR => p.beta_r = v,
-        ParamName::KG => p.k_g = v,
-        ParamName::WC => p.w_c = v,
-        ParamName::Eccentricity => p.eccentricity = v,
-        ParamName::DeltaEtaPrime => p.delta_eta_prime = v,
-        ParamName::DeltaHM => p.delta_h_m = v,
-    }
-}
-
-/// Map `f` over every field of a parameter set (e.g. lift f64 to a dual number type).
-pub fn map_params<T, U>(p: &Params<T>, f: impl Fn(&T) -> U) -> Params<U> {
-    Params {
-        eta: f(&p.eta),
-        sigma_a: p.sigma_a.iter().map(&f).collect(),
-        alpha_r: f(&p.alpha_r),
-        beta_r: f(&p.beta_r),
-        k_g: f(&p.k_g),
-        w_c: f(&p.w_c),
-        eccentricity: f(&p.eccentricity),
-        delta_eta_prime: f(&p.delta_eta_prime),
-        delta_h_m: f(&p.delta_h_m),
-    }
-}
-
 /// The midpoint of every typical range: a neutral reference parameter set with `n` channels.
 pub fn reference_params(n_channels: usize) -> Params<f64> {
     let mid = |n: ParamName| {

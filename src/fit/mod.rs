@@ -32,7 +32,7 @@ pub use solve::RunStatus;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::model::{Effects, ModelConfig, ParamName, Params, RootMode};
-use bounds::{get, report_factor, set, typical_range, Bound};
+use bounds::{report_factor, typical_range, Bound};
 use solve::{is_cancelled, run_local, LocalRun};
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
@@ -296,7 +296,7 @@ pub fn fit(
     let fixes = parse_fixes(&opts.fix, nc)?;
     let mut base = bounds::reference_params(nc);
     for &(p, x) in &fixes {
-        set(&mut base, p, x);
+        base.set(p, x);
     }
     let free: Vec<ParamName> = free_parameters(&effects, nc, opts.free_eta)
         .into_iter()
@@ -536,5 +536,5 @@ fn progress_bar(opts: &FitOptions, len: usize) -> indicatif::ProgressBar {
 
 /// `get` re-exported for callers that index parameters by name.
 pub fn param(p: &Params<f64>, name: ParamName) -> f64 {
-    get(p, name)
+    p.get(name)
 }

@@ -9,7 +9,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::bounds::{get, report_factor, typical_range, Bound};
+use super::bounds::{report_factor, typical_range, Bound};
 
 /// A standard error above this fraction of the typical range earns a "poorly determined" warning.
 pub const POORLY_DETERMINED: f64 = 0.2;
@@ -288,8 +288,8 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     let mut params = ev.params_at(&x);
     // Transforms keep x inside; clamp anyway so rounding can never leave the domain.
     for &p in &ev.free {
-        let v = get(&params, p);
-        super::bounds::set(&mut params, p, Bound::of(p).clamp(v));
+        let v = params.get(p);
+        params.set(p, Bound::of(p).clamp(v));
     }
     let e = ev.eval_internal(u, false);
     let scale = e.scale.clone();
@@ -331,7 +331,7 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     let mut parameters = Vec::new();
     for p in all_parameters(nc) {
         let f = report_factor(p);
-        let value = get(&params, p) * f;
+        let value = params.get(p) * f;
         let entry = match ev.free.iter().position(|q| *q == p) {
             Some(j) => {
                 let se = std_of(j);
@@ -364,7 +364,7 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
                         }
                     ));
                     "undetermined"
-                } else if Bound::of(p).at_bound(get(&params, p)) {
+                } else if Bound::of(p).at_bound(params.get(p)) {
                     warnings.push(format!(
                         "{}: at its bound {:.6} (the data push it there; its standard error is one-sided; {})",
                         p.json_name(),

@@ -17,7 +17,7 @@ use num_dual::{Derivative, DualNum, DualVec64};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::bounds::{get, map_params, set, Bound};
+use super::bounds::Bound;
 use super::loss::Loss;
 use crate::model::{scattering, scattering_by_lobe, Angles, ModelConfig, ParamName, Params};
 
@@ -189,10 +189,10 @@ fn gradients_dim<D: Dim>(
 {
     let nf = free.len();
     let nc = p.sigma_a.len();
-    let mut pd: Params<DualVec64<D>> = map_params(p, |&v| DualVec64::from_re(v));
+    let mut pd: Params<DualVec64<D>> = p.map(|&v| DualVec64::from_re(v));
     for (j, &name) in free.iter().enumerate() {
         let seed = Derivative::derivative_generic(dim, U1, j);
-        set(&mut pd, name, DualVec64::new(get(p, name), seed));
+        pd.set(name, DualVec64::new(p.get(name), seed));
     }
     let mut o: Vec<DualVec64<D>> = vec![DualVec64::from_re(0.0); nc];
     for (k, a) in angles.iter().enumerate() {
@@ -420,7 +420,7 @@ impl<'f, F: Forward> Evaluator<'f, F> {
     pub fn params_at(&self, x: &[f64]) -> Params<f64> {
         let mut p = self.base.clone();
         for (&n, &v) in self.free.iter().zip(x) {
-            set(&mut p, n, v);
+            p.set(n, v);
         }
         p
     }

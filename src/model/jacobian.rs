@@ -23,23 +23,11 @@ fn seeded<D: DualNum<f64>>(
             assert!(*c < params.sigma_a.len(), "sigma_a[{c}] does not exist");
         }
     }
-    let s = |name: ParamName, v: f64| seed(v, which.iter().position(|w| *w == name));
-    Params {
-        eta: s(ParamName::Eta, params.eta),
-        sigma_a: params
-            .sigma_a
-            .iter()
-            .enumerate()
-            .map(|(c, &v)| s(ParamName::SigmaA(c), v))
-            .collect(),
-        alpha_r: s(ParamName::AlphaR, params.alpha_r),
-        beta_r: s(ParamName::BetaR, params.beta_r),
-        k_g: s(ParamName::KG, params.k_g),
-        w_c: s(ParamName::WC, params.w_c),
-        eccentricity: s(ParamName::Eccentricity, params.eccentricity),
-        delta_eta_prime: s(ParamName::DeltaEtaPrime, params.delta_eta_prime),
-        delta_h_m: s(ParamName::DeltaHM, params.delta_h_m),
+    let mut dual = params.map(|&v| seed(v, None));
+    for (j, &name) in which.iter().enumerate() {
+        dual.set(name, seed(params.get(name), Some(j)));
     }
+    dual
 }
 
 /// Jacobian of S for `N` parameters known at compile time, reusable across samples.
@@ -76,21 +64,6 @@ impl<const N: usize> StaticJacobian<N> {
             let eps = d.eps.unwrap_generic(Const::<N>, U1);
             j.copy_from_slice(eps.as_slice());
         }
-    }
-}
-
-/// The value of one parameter in `params` (radians for angles).
-pub fn param_value(params: &Params<f64>, name: ParamName) -> f64 {
-    match name {
-        ParamName::Eta => params.eta,
-        ParamName::SigmaA(c) => params.sigma_a[c],
-        ParamName::AlphaR => params.alpha_r,
-        ParamName::BetaR => params.beta_r,
-        ParamName::KG => params.k_g,
-        ParamName::WC => params.w_c,
-        ParamName::Eccentricity => params.eccentricity,
-        ParamName::DeltaEtaPrime => params.delta_eta_prime,
-        ParamName::DeltaHM => params.delta_h_m,
     }
 }
 

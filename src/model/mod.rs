@@ -31,7 +31,7 @@ use eccentricity::eccentric_index;
 use exit_angle::ExitMap;
 use longitudinal::longitudinal;
 
-pub use jacobian::{param_value, scattering_jacobian, StaticJacobian};
+pub use jacobian::{scattering_jacobian, StaticJacobian};
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -217,6 +217,55 @@ pub struct Params<T> {
     pub eccentricity: T,
     pub delta_eta_prime: T,
     pub delta_h_m: T,
+}
+
+impl<T: Clone> Params<T> {
+    /// The value of parameter `name` (radians for angles).
+    pub fn get(&self, name: ParamName) -> T {
+        match name {
+            ParamName::Eta => self.eta.clone(),
+            ParamName::SigmaA(c) => self.sigma_a[c].clone(),
+            ParamName::AlphaR => self.alpha_r.clone(),
+            ParamName::BetaR => self.beta_r.clone(),
+            ParamName::KG => self.k_g.clone(),
+            ParamName::WC => self.w_c.clone(),
+            ParamName::Eccentricity => self.eccentricity.clone(),
+            ParamName::DeltaEtaPrime => self.delta_eta_prime.clone(),
+            ParamName::DeltaHM => self.delta_h_m.clone(),
+        }
+    }
+}
+
+impl<T> Params<T> {
+    /// Set parameter `name` to `value` (radians for angles).
+    pub fn set(&mut self, name: ParamName, value: T) {
+        match name {
+            ParamName::Eta => self.eta = value,
+            ParamName::SigmaA(c) => self.sigma_a[c] = value,
+            ParamName::AlphaR => self.alpha_r = value,
+            ParamName::BetaR => self.beta_r = value,
+            ParamName::KG => self.k_g = value,
+            ParamName::WC => self.w_c = value,
+            ParamName::Eccentricity => self.eccentricity = value,
+            ParamName::DeltaEtaPrime => self.delta_eta_prime = value,
+            ParamName::DeltaHM => self.delta_h_m = value,
+        }
+    }
+
+    /// Map `f` over every parameter (e.g. lift f64 to a dual number type).
+    pub fn map<U>(&self, f: impl Fn(&T) -> U) -> Params<U> {
+        Params {
+            eta: f(&self.eta),
+            sigma_a: self.sigma_a.iter().map(&f).collect(),
+            alpha_r: f(&self.alpha_r),
+            beta_r: f(&self.beta_r),
+            k_g: f(&self.k_g),
+            w_c: f(&self.w_c),
+            eccentricity: f(&self.eccentricity),
+            delta_eta_prime: f(&self.delta_eta_prime),
+            delta_h_m: f(&self.delta_h_m),
+        }
+    }
 }
 
 impl Params<f64> {
