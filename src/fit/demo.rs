@@ -1,17 +1,16 @@
 //! `hairfit demo`: a realistic 3-channel dataset from the project's synthesizer (2% relative
 //! noise, a goniometer-style scan), fitted from the default start design, written to `fits/demo/`.
-//! [`synthesize`] is a small in-memory twin used by the fit tests and benchmark.
+//! [`synthesize`] gives the fit's tests and benchmark the same synthesizer in memory.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use super::args::FitArgs;
-use super::design::SplitMix64;
 use super::problem::FitData;
 use super::{fit, output};
 use crate::error::Result;
-use crate::model::{scattering, Angles, ModelConfig, Params};
+use crate::model::{Angles, ModelConfig, Params};
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
 pub fn demo_truth() -> Params<f64> {
@@ -49,7 +48,9 @@ pub fn demo_geometry() -> Vec<Angles> {
     v
 }
 
-/// Synthesize `scale_c · S · (1 + noise·N(0,1))` with sigma = noise·scale·S (true), seeded.
+/// In-memory data for the fit's tests and benchmark: the project's synthesizer at `angles` with
+/// relative Gaussian noise (`noise = 0`: none, unweighted), as the fit sees a loaded file.
+/// Panics on inputs the synthesizer rejects (invalid parameters or |θ| ≥ 90°): a caller's bug.
 pub fn synthesize(
     truth: &Params<f64>,
     config: &ModelConfig,
@@ -58,31 +59,27 @@ pub fn synthesize(
     noise: f64,
     seed: u64,
 ) -> FitData {
-    let nc = truth.sigma_a.len();
-    let mut rng = SplitMix64::new(seed);
-    let mut values = Vec::with_capacity(angles.len() * nc);
-    let mut sigma = Vec::with_capacity(angles.len() * nc);
-    let mut s = vec![0.0; nc];
-    for a in angles {
-        scattering(truth, config, a, &mut s);
-        for c in 0..nc {
-            let clean = scale[c] * s[c];
-            values.push(clean * (1.0 + noise * rng.normal()));
-            sigma.push(if noise > 0.0 { noise * clean } else { 1.0 });
-        }
+    let directions: Vec<[f64; 4]> = angles
+        .iter()
+        .map(|a| [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees))
+        .collect();
+    let noise = if noise > 0.0 {
+        crate::synth::Noise::parse(&format!("relative:{noise}"))
+    } else {
+        crate::synth::Noise::parse("none")
     }
-    let channels = match nc {
-        3 => vec!["r".into(), "g".into(), "b".into()],
-        _ => (0..nc).map(|c| format!("c{c}")).collect(),
-    };
-    FitData {
-        channels,
-        angles: angles.to_vec(),
-        values,
-        sigma: (noise > 0.0).then_some(sigma),
-        weight: None,
-        line: (2..angles.len() as u64 + 2).collect(),
-    }
+    .expect("a relative noise level parses");
+    let (dataset, _) = crate::synth::synthesize_directions(
+        truth,
+        config,
+        &directions,
+        "in-memory test data",
+        &noise,
+        scale,
+        seed,
+    )
+    .expect("valid synthetic inputs");
+    super::fit_data(&dataset)
 }
 
 /// The demo geometry as `[θ_i, φ_i, θ_r, φ_r]` in degrees (for the synthesizer).
