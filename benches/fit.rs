@@ -1,7 +1,8 @@
 //! Fit wall time vs sample count, every effect on, 3 channels, 2% noise, default start design
 //! (multi-start on a 2000-sample subsample, polish on all data).
 //!
-//! `cargo bench --bench fit` runs 1k, 10k and 100k samples; set `HAIRFIT_BENCH_1M=1` to add 1M.
+//! `cargo bench --bench fit` runs 1k, 10k and 100k samples with 1 and 2 rayon threads; set
+//! `HAIRFIT_BENCH_1M=1` to add 1M.
 //! Target (task): 100k samples < 5 s wall on the 2-core machine.
 
 use std::time::Duration;
@@ -68,13 +69,22 @@ fn bench_fit(c: &mut Criterion) {
             effects: EffectsChoice::All,
             ..FitOptions::default()
         };
-        g.bench_with_input(BenchmarkId::from_parameter(n), &data, |b, d| {
-            b.iter(|| {
-                let out = fit(d, "bench", serde_json::Value::Null, &opts).unwrap();
-                assert_eq!(out.json.status, "converged");
-                out
-            })
-        });
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a rayon pool");
+            let id = BenchmarkId::new(format!("{threads}_threads"), n);
+            g.bench_with_input(id, &data, |b, d| {
+                b.iter(|| {
+                    pool.install(|| {
+                        let out = fit(d, "bench", serde_json::Value::Null, &opts).unwrap();
+                        assert_eq!(out.json.status, "converged");
+                        out
+                    })
+                })
+            });
+        }
     }
     g.finish();
 }
