@@ -112,6 +112,7 @@ pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>)
         "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
         &noise,
         &DEMO_SCALE,
+        opts.measurement,
         opts.seed,
     )?;
     std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;

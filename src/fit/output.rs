@@ -456,7 +456,8 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     };
 
     // Curves.
-    let fwd = ModelForward { config };
+    // The evaluator's forward: the curves carry its measurement factor too.
+    let fwd = *ev.forward;
     // Per-lobe values in parallel, one Vec per sample, collected in sample order.
     let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
         .angles
