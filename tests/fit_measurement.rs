@@ -49,7 +49,7 @@ fn synth_radiance(dir: &Path) -> std::path::PathBuf {
 }
 
 fn fit(csv: &Path, out: &Path, measurement: &str) -> hairfit::report::FitResult {
-    hairfit(&[
+    let summary = hairfit(&[
         "fit",
         path(csv),
         "--measurement",
@@ -58,6 +58,12 @@ fn fit(csv: &Path, out: &Path, measurement: &str) -> hairfit::report::FitResult 
         "--out",
         path(out),
     ]);
+    // The one-screen summary says when the model was multiplied by cos θ_i.
+    assert_eq!(
+        summary.contains("measurement: radiance"),
+        measurement == "radiance",
+        "{summary}"
+    );
     read_fit_json(&out.join("fit.json")).unwrap()
 }
 

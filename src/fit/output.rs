@@ -646,6 +646,9 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         },
         j.options["effects_choice"].as_str().unwrap_or("?")
     );
+    if j.options["measurement"] == "radiance" {
+        s += "measurement: radiance, the model times cos theta_i (--measurement radiance)\n";
+    }
     if let Some(reasons) = j.options["effects_reasons"].as_array() {
         for r in reasons {
             s += &format!("  {}\n", r.as_str().unwrap_or(""));
