@@ -1,7 +1,7 @@
 //! Samples per second of `synthesize` (rig + model + noise, in memory) and of the noise alone.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use hairfit::model::ModelConfig;
+use hairfit::model::{Measurement, ModelConfig};
 use hairfit::params::ParamFile;
 use hairfit::synth::{synthesize, Noise, Rig};
 
@@ -21,7 +21,18 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("synth");
     g.throughput(Throughput::Elements(N as u64));
     g.bench_function("synthesize_sphere_rgb_all_noise", |b| {
-        b.iter(|| synthesize(&params, &config, &rig, &noise, &[1.0; 3], black_box(7)).unwrap())
+        b.iter(|| {
+            synthesize(
+                &params,
+                &config,
+                &rig,
+                &noise,
+                &[1.0; 3],
+                Measurement::S,
+                black_box(7),
+            )
+            .unwrap()
+        })
     });
     let clean: Vec<f64> = (0..3 * N).map(|j| 0.01 + (j % 100) as f64 * 0.02).collect();
     g.bench_function("noise_only_rgb_all_terms", |b| {

@@ -4,7 +4,7 @@
 use clap::Args;
 
 use crate::error::Result;
-use crate::model::{Effects, ModelConfig, RootMode};
+use crate::model::{Effects, Measurement, ModelConfig, RootMode};
 
 /// The model's accuracy knob and effect switches (`--mode`, `--lobes`, `--no-glints`,
 /// `--no-eccentricity`).
@@ -22,6 +22,14 @@ pub struct ModelArgs {
     /// Do not simulate eccentricity: TRT sees a circular cross-section.
     #[arg(long)]
     pub no_eccentricity: bool,
+}
+
+/// What the data file's values are (`--measurement`): `fit` and `demo` fit it, `synth` makes it.
+#[derive(Debug, Clone, Args)]
+pub struct MeasurementArgs {
+    /// The values are `s` (scale·S) or `radiance` under a collimated source (scale·S·cos θ_i).
+    #[arg(long, default_value = "s")]
+    pub measurement: Measurement,
 }
 
 fn parse_mode(s: &str) -> std::result::Result<RootMode, String> {

@@ -20,7 +20,9 @@ use crate::fit::{
     fit, free_parameters, param, EffectsChoice, Evaluator, FitData, FitOptions, Loss, ModelForward,
     Space,
 };
-use crate::model::{scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
+use crate::model::{
+    scattering, Angles, Effects, Lobes, Measurement, ModelConfig, Params, RootMode,
+};
 use crate::report::figures::{de, fmt_num, Figure, YScale, FONT};
 use crate::report::{render, FigureInfo};
 
@@ -242,6 +244,7 @@ fn jacobian_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>> {
     let free = free_parameters(&Effects::default(), nc, false);
     let forward = ModelForward {
         config: ModelConfig::default(),
+        measurement: Measurement::S,
     };
     let (ev, _) = Evaluator::new(
         &forward,

@@ -5,14 +5,21 @@ mod fit_support;
 
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, Space};
-use hairfit::model::{Effects, ModelConfig, RootMode};
+use hairfit::model::{Effects, Measurement, ModelConfig, RootMode};
 
 fn check(space: Space, loss: Loss, mode: RootMode, seed: u64) {
-    check_with(space, loss, mode, seed, false)
+    check_with(space, loss, mode, seed, false, Measurement::S)
 }
 
 /// `zeros`: every 7th value is 0 and every 11th negative, so log space has linear-fallback rows.
-fn check_with(space: Space, loss: Loss, mode: RootMode, seed: u64, zeros: bool) {
+fn check_with(
+    space: Space,
+    loss: Loss,
+    mode: RootMode,
+    seed: u64,
+    zeros: bool,
+    measurement: Measurement,
+) {
     let truth = fit_support::random_params(seed, 3);
     let angles = fit_support::random_sphere(60, seed);
     let mut data = fit_support::data(&truth, &angles, 0.05, seed);
@@ -30,6 +37,7 @@ fn check_with(space: Space, loss: Loss, mode: RootMode, seed: u64, zeros: bool) 
             mode,
             effects: Effects::default(),
         },
+        measurement,
     };
     let free = free_parameters(&Effects::default(), 3, true);
     let (ev, _) = Evaluator::new(&fwd, &data, space, loss, 0.5, reference_params(3), free).unwrap();
@@ -97,6 +105,30 @@ fn jacobian_matches_finite_differences_with_robust_losses_and_explicit_scale() {
 
 #[test]
 fn jacobian_matches_finite_differences_with_linear_fallback_rows_in_log_space() {
-    check_with(Space::Log, Loss::L2, RootMode::Cubic, 7, true);
-    check_with(Space::Log, Loss::Huber, RootMode::Exact, 8, true);
+    check_with(
+        Space::Log,
+        Loss::L2,
+        RootMode::Cubic,
+        7,
+        true,
+        Measurement::S,
+    );
+    check_with(
+        Space::Log,
+        Loss::Huber,
+        RootMode::Exact,
+        8,
+        true,
+        Measurement::S,
+    );
+}
+
+#[test]
+fn jacobian_matches_finite_differences_for_radiance_data() {
+    // The cos θ_i factor rides on values and gradients alike (|θ_i| up to 85°: factors down to
+    // 0.09), through the projection, a robust loss and linear-fallback rows.
+    let r = Measurement::Radiance;
+    check_with(Space::Log, Loss::L2, RootMode::Cubic, 9, false, r);
+    check_with(Space::Linear, Loss::L2, RootMode::Cubic, 10, false, r);
+    check_with(Space::Log, Loss::Cauchy, RootMode::Cubic, 11, true, r);
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use hairfit::data::{load, write_csv, LoadOptions};
-use hairfit::model::{scattering, Angles, Effects, ModelConfig, RootMode};
+use hairfit::model::{scattering, Angles, Effects, Measurement, ModelConfig, RootMode};
 use hairfit::params::{ParamFile, SigmaA};
 use hairfit::synth::{synthesize, synthesize_directions, truth_path, Noise, Rig, Truth};
 
@@ -141,8 +141,16 @@ fn library_dataset_equals_its_reloaded_file() {
         .to_params();
     let rig = Rig::parse("azimuthal:incidences=20,40:steps=36").unwrap();
     let noise = Noise::parse("relative:0.03+outliers:0.1").unwrap();
-    let (ds, truth) =
-        synthesize(&params, &ModelConfig::default(), &rig, &noise, &[1.5], 9).unwrap();
+    let (ds, truth) = synthesize(
+        &params,
+        &ModelConfig::default(),
+        &rig,
+        &noise,
+        &[1.5],
+        Measurement::S,
+        9,
+    )
+    .unwrap();
     assert_eq!(truth.n_samples, 72);
     assert_eq!(ds.channels, ["radiance"]);
     let dir = tempfile::tempdir().unwrap();
@@ -163,6 +171,7 @@ fn library_dataset_equals_its_reloaded_file() {
         &rig,
         &Noise::default(),
         &[1.0],
+        Measurement::S,
         4,
     )
     .unwrap();
@@ -415,11 +424,26 @@ fn explicit_directions_are_used_as_given() {
         "demo scan",
         &Noise::default(),
         &[1.0, 2.0, 3.0],
+        Measurement::S,
         0,
     )
     .unwrap();
     assert_eq!(truth.rig, "demo scan");
+    assert_eq!(truth.measurement, Measurement::S);
     assert_eq!(ds.len(), 2);
+    // The same directions as radiance under a collimated source.
+    let (radiance, truth) = synthesize_directions(
+        &params,
+        &config,
+        &dirs,
+        "demo scan",
+        &Noise::default(),
+        &[1.0, 2.0, 3.0],
+        Measurement::Radiance,
+        0,
+    )
+    .unwrap();
+    assert_eq!(truth.measurement, Measurement::Radiance);
     let mut s_model = [0.0; 3];
     for (i, d) in dirs.iter().enumerate() {
         assert_eq!(ds.angles(i), d.map(f64::to_radians));
@@ -433,6 +457,9 @@ fn explicit_directions_are_used_as_given() {
         scattering(&params, &config, &angles, &mut s_model);
         for (c, s_c) in s_model.iter().enumerate() {
             assert_eq!(ds.value(i, c), (c + 1) as f64 * s_c);
+            // S · (scale · cos θ_i), in the synthesizer's order: bit for bit.
+            let cos_i = theta_i.cos();
+            assert_eq!(radiance.value(i, c), s_c * ((c + 1) as f64 * cos_i));
         }
     }
     let err = synthesize_directions(
@@ -442,6 +469,7 @@ fn explicit_directions_are_used_as_given() {
         "x",
         &Noise::default(),
         &[1.0; 3],
+        Measurement::S,
         0,
     )
     .unwrap_err()

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use clap::Args;
 
 use super::{fit, fit_data, output, EffectsChoice, FitOptions, Global, Loss, Space};
-use crate::cli::ModelArgs;
+use crate::cli::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
 
@@ -60,6 +60,8 @@ pub struct FitArgs {
     pub no_progress: bool,
     #[command(flatten)]
     pub model: ModelArgs,
+    #[command(flatten)]
+    pub measurement: MeasurementArgs,
 }
 
 impl FitArgs {
@@ -116,6 +118,7 @@ impl FitArgs {
             free_eta,
             effects,
             mode: cfg.mode,
+            measurement: self.measurement.measurement,
             subsample: self.subsample.max(1),
             polish: self.polish.max(1),
             start_iters: self.start_iters,

@@ -76,6 +76,7 @@ pub fn synthesize(
         "in-memory test data",
         &noise,
         scale,
+        crate::model::Measurement::S,
         seed,
     )
     .expect("valid synthetic inputs");
@@ -109,6 +110,7 @@ pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>)
         "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
         &noise,
         &DEMO_SCALE,
+        opts.measurement,
         opts.seed,
     )?;
     std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;

@@ -31,7 +31,7 @@ pub use solve::RunStatus;
 
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::model::{Effects, ModelConfig, ParamName, Params, RootMode};
+use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
 use bounds::{report_factor, typical_range, Bound};
 use solve::{is_cancelled, run_local, LocalRun};
 
@@ -93,6 +93,8 @@ pub struct FitOptions {
     pub free_eta: bool,
     pub effects: EffectsChoice,
     pub mode: RootMode,
+    /// What the values are: `scale·S`, or radiance `scale·S·cos θ_i`.
+    pub measurement: Measurement,
     /// Samples used by the multi-start stage (all when the data has fewer).
     pub subsample: usize,
     /// How many of the best multi-start results are polished on all data.
@@ -119,6 +121,7 @@ impl Default for FitOptions {
             free_eta: false,
             effects: EffectsChoice::Auto,
             mode: RootMode::Cubic,
+            measurement: Measurement::S,
             subsample: 2000,
             polish: 2,
             start_iters: 40,
@@ -290,7 +293,10 @@ pub fn fit(
         mode: opts.mode,
         effects,
     };
-    let forward = ModelForward { config };
+    let forward = ModelForward {
+        config,
+        measurement: opts.measurement,
+    };
 
     // Free parameters and the base (fixed) values.
     let fixes = parse_fixes(&opts.fix, nc)?;
@@ -498,6 +504,7 @@ pub fn fit(
         "start_iters": opts.start_iters,
         "polish_iters": opts.polish_iters,
         "mode": opts.mode,
+        "measurement": opts.measurement,
         "fixed": fixes.iter().map(|(p, x)| (p.json_name(), serde_json::json!(x * report_factor(*p)))).collect::<serde_json::Map<_, _>>(),
         "freed": if opts.free_eta { vec!["eta"] } else { vec![] },
         "free_parameters": free.iter().map(|p| p.json_name()).collect::<Vec<_>>(),

@@ -456,7 +456,8 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     };
 
     // Curves.
-    let fwd = ModelForward { config };
+    // The evaluator's forward: the curves carry its measurement factor too.
+    let fwd = *ev.forward;
     // Per-lobe values in parallel, one Vec per sample, collected in sample order.
     let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
         .angles
@@ -645,6 +646,9 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         },
         j.options["effects_choice"].as_str().unwrap_or("?")
     );
+    if j.options["measurement"] == "radiance" {
+        s += "measurement: radiance, the model times cos theta_i (--measurement radiance)\n";
+    }
     if let Some(reasons) = j.options["effects_reasons"].as_array() {
         for r in reasons {
             s += &format!("  {}\n", r.as_str().unwrap_or(""));

@@ -19,7 +19,9 @@ use serde::Serialize;
 
 use super::bounds::Bound;
 use super::loss::Loss;
-use crate::model::{scattering, scattering_by_lobe, Angles, ModelConfig, ParamName, Params};
+use crate::model::{
+    scattering, scattering_by_lobe, Angles, Measurement, ModelConfig, ParamName, Params,
+};
 
 /// Samples per parallel work item and per partial sum (fixed: part of the result's bit pattern).
 pub const CHUNK: usize = 256;
@@ -132,10 +134,26 @@ pub trait Forward: Sync {
     }
 }
 
-/// The Marschner model of [`crate::model`] under one configuration.
+/// The Marschner model of [`crate::model`] under one configuration, as the data measure it:
+/// `S`, or `S · cos θ_i` for radiance ([`Measurement`]).
 #[derive(Debug, Clone, Copy)]
 pub struct ModelForward {
     pub config: ModelConfig,
+    pub measurement: Measurement,
+}
+
+impl ModelForward {
+    /// Multiply each sample's `width` consecutive numbers in `rows` by its measurement factor.
+    /// The factor depends on θ_i only, so values and gradients scale alike (exact Jacobian).
+    fn apply_measurement(&self, angles: &[Angles], rows: &mut [f64], width: usize) {
+        if self.measurement == Measurement::S || width == 0 {
+            return;
+        }
+        for (a, row) in angles.iter().zip(rows.chunks_mut(width)) {
+            let f = self.measurement.factor(a);
+            row.iter_mut().for_each(|v| *v *= f);
+        }
+    }
 }
 
 impl Forward for ModelForward {
@@ -144,6 +162,7 @@ impl Forward for ModelForward {
         for (a, o) in angles.iter().zip(out.chunks_mut(nc)) {
             scattering(p, &self.config, a, o);
         }
+        self.apply_measurement(angles, out, nc);
     }
 
     fn gradients(
@@ -165,11 +184,16 @@ impl Forward for ModelForward {
         }
         // Static dual sizes avoid a heap allocation per arithmetic operation; every realistic
         // free-parameter count (≤ η + 3σ_a + 5 shape = 9, plus headroom) has one.
-        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12)
+        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12);
+        let nc = p.sigma_a.len();
+        self.apply_measurement(angles, out, nc);
+        self.apply_measurement(angles, grad, nc * free.len());
     }
 
     fn by_lobe(&self, p: &Params<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
         scattering_by_lobe(p, &self.config, angles, out);
+        let f = self.measurement.factor(angles);
+        out.iter_mut().flatten().for_each(|v| *v *= f);
         true
     }
 }
@@ -226,7 +250,7 @@ pub struct Evaluation {
     pub raw: Vec<f64>,
     /// Final robust-loss weights `ρ′` (1 = not down-weighted).
     pub robust_weight: Vec<f64>,
-    /// Model values `S` (without scale).
+    /// Model values `S` (times `cos θ_i` for radiance; without scale).
     pub model: Vec<f64>,
     /// Per-channel scale `s_c`.
     pub scale: Vec<f64>,

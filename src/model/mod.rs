@@ -22,6 +22,7 @@ pub mod fresnel;
 pub mod instrument;
 pub mod jacobian;
 pub mod longitudinal;
+pub mod measurement;
 pub mod roots;
 
 use angles::half_angles;
@@ -32,6 +33,7 @@ use exit_angle::ExitMap;
 use longitudinal::longitudinal;
 
 pub use jacobian::{scattering_jacobian, StaticJacobian};
+pub use measurement::Measurement;
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

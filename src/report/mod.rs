@@ -17,7 +17,7 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::model::{scattering_by_lobe, Angles, ModelConfig};
+use crate::model::{scattering_by_lobe, Angles, Measurement, ModelConfig};
 
 pub use fit_file::{
     read_curves_csv, read_fit_json, write_curves_csv, write_fit_json, ChannelResiduals,
@@ -88,15 +88,19 @@ pub fn write_report(dir: &Path) -> Result<ReportSummary> {
 }
 
 /// Write the report of the fit in `dir`: reads fit.json and curves.csv, evaluates the model with
-/// the fitted parameters for the dense curves.
+/// the fitted parameters for the dense curves, as the data measure it (`options.measurement`).
 pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSummary> {
     let fit = read_fit_json(&dir.join("fit.json"))?;
     let rows = read_curves_csv(&dir.join("curves.csv"))?;
     let params = fit.params.to_params();
     let config: ModelConfig = fit.model;
     let mut pre_notes = Vec::new();
-    let model =
-        move |a: &Angles, out: &mut [[f64; 3]]| scattering_by_lobe(&params, &config, a, out);
+    let measurement = measurement_of(&fit, &mut pre_notes);
+    let model = move |a: &Angles, out: &mut [[f64; 3]]| {
+        scattering_by_lobe(&params, &config, a, out);
+        let f = measurement.factor(a);
+        out.iter_mut().flatten().for_each(|v| *v *= f);
+    };
     let usable = match fit.params.validate() {
         Ok(()) => true,
         Err(e) => {
@@ -111,6 +115,20 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
     let mut summary = render_report(dir, &fit, &rows, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
+}
+
+/// What the fit's values were (fit.json `options.measurement`); fits written before the option
+/// existed fitted S itself.
+fn measurement_of(fit: &FitResult, notes: &mut Vec<String>) -> Measurement {
+    match fit.options.get("measurement") {
+        None => Measurement::S,
+        Some(v) => serde_json::from_value(v.clone()).unwrap_or_else(|_| {
+            notes.push(format!(
+                "fit.json options.measurement is {v}, not \"s\" or \"radiance\"; curves assume s"
+            ));
+            Measurement::S
+        }),
+    }
 }
 
 /// Render the report of `fit` and its `rows` into `dir`, evaluating `model` (with `n_model`
@@ -414,8 +432,10 @@ impl Ctx<'_> {
         }
     }
 
-    /// The factor from the model's S to the fit column in a slice: the median ratio over a
-    /// sample of its rows; a spread beyond rounding is reported as a note.
+    /// The factor from the model to the fit column in a slice: the median ratio over a sample
+    /// of its rows. A spread beyond rounding, or a factor that is not fit.json's scale of the
+    /// channel (a constant the model did not reproduce, e.g. cos θ_i of a radiance fit), is
+    /// reported as a note.
     fn calibration(
         &self,
         members: &[(f64, usize)],
@@ -450,6 +470,21 @@ impl Ctx<'_> {
                 slice.title(),
                 self.colours[channel].0,
                 spread
+            ));
+        }
+        let fitted = self
+            .fit
+            .scale
+            .iter()
+            .find(|s| s.channel == self.colours[channel].0)
+            .and_then(|s| s.value)
+            .filter(|s| s.is_finite() && *s > 0.0);
+        if let Some(s) = fitted.filter(|s| (k / s - 1.0).abs() > CALIBRATION_TOLERANCE) {
+            summary.notes.push(format!(
+                "slice {} channel {}: the re-evaluated model differs from curves.csv's fit column by a factor {k:.6e} where fit.json's scale is {s:.6e} ({:.2e} relative); the fit may have used other settings than fit.json records",
+                slice.title(),
+                self.colours[channel].0,
+                k / s - 1.0
             ));
         }
         Some(k)

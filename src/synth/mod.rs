@@ -16,10 +16,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomically;
-use crate::cli::ModelArgs;
+use crate::cli::{MeasurementArgs, ModelArgs};
 use crate::data::{round_trip_degrees, write_csv, Dataset};
 use crate::error::{Error, Result};
-use crate::model::{scattering, Angles, ModelConfig, Params};
+use crate::model::{scattering, Angles, Measurement, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
 
 pub use self::noise::{Noise, Noisy, OUTLIER_FACTOR};
@@ -47,8 +47,12 @@ pub struct Truth {
     /// The exact parameters (a parameter file: degrees, MODEL.md names).
     pub params: ParamFile,
     pub channels: Vec<String>,
-    /// Measured value = scale × S, per channel.
+    /// Measured value = scale × S (× cos θ_i for `radiance`, see `measurement`), per channel.
     pub scale: Vec<ChannelScale>,
+    /// `s` (values are scale × S) or `radiance` (scale × S × cos θ_i); files written before
+    /// the option existed hold S, hence the default.
+    #[serde(default)]
+    pub measurement: Measurement,
     /// Canonical rig spec with every option spelled out.
     pub rig: String,
     /// Canonical noise spec.
@@ -93,7 +97,7 @@ pub fn channel_names(n: usize) -> Vec<String> {
 
 /// Synthesize a dataset: the rig's directions (degrees, converted to radians once with
 /// `to_radians`, as the loader does), value = `scale[c] · S_c` from [`scattering`] under
-/// `config`, then `noise` seeded by `seed`. One channel per `params.sigma_a` entry; `scale` has
+/// `config` (times `cos θ_i` when `measurement` is radiance), then `noise` seeded by `seed`. One channel per `params.sigma_a` entry; `scale` has
 /// one positive entry per channel. With `Noise::default()` the values are exactly
 /// `scale[c] * S_c` at the stored radians, which are the radians the loader makes of the degrees
 /// [`write_csv`] writes, so a written and reloaded dataset reproduces the model bit for bit.
@@ -104,6 +108,7 @@ pub fn synthesize(
     rig: &Rig,
     noise: &Noise,
     scale: &[f64],
+    measurement: Measurement,
     seed: u64,
 ) -> Result<(Dataset, Truth)> {
     let directions = rig.angles(&mut random::generator(seed, random::Stream::Angles));
@@ -114,6 +119,7 @@ pub fn synthesize(
         &rig.to_string(),
         noise,
         scale,
+        measurement,
         seed,
     )
 }
@@ -121,6 +127,7 @@ pub fn synthesize(
 /// [`synthesize`] at explicit directions `[θ_i, φ_i, θ_r, φ_r]` in degrees (for geometries no
 /// [`Rig`] describes, e.g. a demo's scan); `label` is recorded as the truth's `rig`. Each |θ|
 /// must be below 90° and every angle finite.
+#[allow(clippy::too_many_arguments)]
 pub fn synthesize_directions(
     params: &Params<f64>,
     config: &ModelConfig,
@@ -128,6 +135,7 @@ pub fn synthesize_directions(
     label: &str,
     noise: &Noise,
     scale: &[f64],
+    measurement: Measurement,
     seed: u64,
 ) -> Result<(Dataset, Truth)> {
     if let Some((i, a)) = directions
@@ -159,7 +167,7 @@ pub fn synthesize_directions(
         .iter()
         .map(|a| a.map(|d| round_trip_degrees(d.to_radians()).to_radians()))
         .collect();
-    let clean = clean_values(params, config, &radians, scale)?;
+    let clean = clean_values(params, config, &radians, scale, measurement)?;
     let noisy = noise.apply(&clean, nc, seed);
 
     let channels = channel_names(nc);
@@ -189,6 +197,7 @@ pub fn synthesize_directions(
                 value: v,
             })
             .collect(),
+        measurement,
         channels,
         rig: label.to_string(),
         noise: noise.to_string(),
@@ -213,13 +222,14 @@ fn record_truth(dataset: &mut Dataset, truth: &Truth) -> Result<()> {
     Ok(())
 }
 
-/// `scale[c] · S_c` at every direction (row-major), evaluated in parallel; a value that is not
-/// finite and ≥ 0 is a model bug and reported with its angles.
+/// `scale[c] · S_c` (times the measurement factor) at every direction (row-major), evaluated in
+/// parallel; a value that is not finite and ≥ 0 is a model bug and reported with its angles.
 fn clean_values(
     params: &Params<f64>,
     config: &ModelConfig,
     radians: &[[f64; 4]],
     scale: &[f64],
+    measurement: Measurement,
 ) -> Result<Vec<f64>> {
     let nc = scale.len();
     let mut values = vec![0.0; radians.len() * nc];
@@ -234,8 +244,9 @@ fn clean_values(
                 phi_r: a[3],
             };
             scattering(params, config, &angles, out);
+            let f = measurement.factor(&angles);
             for (v, s) in out.iter_mut().zip(scale) {
-                *v *= s;
+                *v *= s * f;
             }
         });
     if let Some(j) = values.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
@@ -282,6 +293,8 @@ pub struct SynthArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub model: ModelArgs,
+    #[command(flatten)]
+    pub measurement: MeasurementArgs,
 }
 
 /// What `hairfit synth` wrote.
@@ -333,8 +346,15 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
             )))
         }
     };
-    let (mut dataset, mut truth) =
-        synthesize(&file.to_params(), &config, &rig, &noise, &scale, args.seed)?;
+    let (mut dataset, mut truth) = synthesize(
+        &file.to_params(),
+        &config,
+        &rig,
+        &noise,
+        &scale,
+        args.measurement.measurement,
+        args.seed,
+    )?;
     truth.params = file;
     truth.notes = notes;
     truth.command_line = command_line;
