@@ -13,6 +13,26 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
+pub mod angles;
+pub mod azimuthal;
+pub mod bravais;
+pub mod eccentricity;
+pub mod exit_angle;
+pub mod fresnel;
+pub mod instrument;
+pub mod jacobian;
+pub mod longitudinal;
+pub mod roots;
+
+use angles::half_angles;
+use azimuthal::{add_r, add_root_sum, add_trt_with_glints, Sink};
+use bravais::bravais_indices;
+use eccentricity::eccentric_index;
+use exit_angle::ExitMap;
+use longitudinal::longitudinal;
+
+pub use jacobian::{param_value, scattering_jacobian, StaticJacobian};
+
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -275,14 +295,21 @@ impl Angles {
 
 /// S for every colour channel (`out.len() == params.sigma_a.len()`); roots computed once, shared
 /// by channels.
+///
+/// `T` is `f64` or any num-dual number (`Dual64`, `DualSVec64<N>`, `DualDVec64`): the bound is just
+/// `DualNum<f64>` (Clone, not Copy). Panics if `out.len() != params.sigma_a.len()` (a programming
+/// error, not bad input). Parameters are assumed valid ([`Params::validate`]).
 pub fn scattering<T: DualNum<f64>>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
     out: &mut [T],
 ) {
-    let _ = (params, config, angles, out);
-    todo!()
+    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
+    for o in out.iter_mut() {
+        *o = T::from(0.0);
+    }
+    evaluate(params, config, angles, &mut Total(out));
 }
 
 /// Same, split per lobe: `out[c] = [R, TT, TRT]` contributions (each already divided by
@@ -293,6 +320,81 @@ pub fn scattering_by_lobe<T: DualNum<f64>>(
     angles: &Angles,
     out: &mut [[T; 3]],
 ) {
-    let _ = (params, config, angles, out);
-    todo!()
+    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
+    for o in out.iter_mut() {
+        *o = [T::from(0.0), T::from(0.0), T::from(0.0)];
+    }
+    evaluate(params, config, angles, &mut ByLobe(out));
+}
+
+/// Sum of the lobes per channel.
+struct Total<'a, T>(&'a mut [T]);
+impl<T: DualNum<f64>> Sink<T> for Total<'_, T> {
+    #[inline]
+    fn add(&mut self, channel: usize, _lobe: usize, value: T) {
+        self.0[channel] += value;
+    }
+}
+
+/// Lobes kept apart per channel.
+struct ByLobe<'a, T>(&'a mut [[T; 3]]);
+impl<T: DualNum<f64>> Sink<T> for ByLobe<'_, T> {
+    #[inline]
+    fn add(&mut self, channel: usize, lobe: usize, value: T) {
+        self.0[channel][lobe] += value;
+    }
+}
+
+/// `S = Σ_p M_p(θ_h)·N_p(θ_d, φ, φ_h)/cos²θ_d` over the enabled lobes; disabled lobes and effects
+/// are skipped before any of their work (roots, caustics, η*).
+fn evaluate<T: DualNum<f64>, S: Sink<T>>(
+    params: &Params<T>,
+    config: &ModelConfig,
+    angles: &Angles,
+    sink: &mut S,
+) {
+    let ha = half_angles(angles.theta_i, angles.phi_i, angles.theta_r, angles.phi_r);
+    let (sin_td, cos_td) = ha.theta_d.sin_cos();
+    let inv_cos2 = 1.0 / (cos_td * cos_td);
+    let lobes = config.effects.lobes;
+    let n = params.sigma_a.len();
+
+    if lobes.r || lobes.tt {
+        let br = bravais_indices(&params.eta, sin_td, cos_td);
+        if lobes.r {
+            let m = longitudinal(0, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            add_r(&br, ha.phi, n, &m, sink);
+        }
+        if lobes.tt {
+            let m = longitudinal(1, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            let map = ExitMap::new(config.mode, 1, br.eta_p.clone());
+            add_root_sum(1, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+        }
+    }
+    if lobes.trt {
+        let eta = if config.effects.eccentricity {
+            eccentric_index(&params.eta, &params.eccentricity, ha.phi_h)
+        } else {
+            params.eta.clone()
+        };
+        let br = bravais_indices(&eta, sin_td, cos_td);
+        let m = longitudinal(2, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+        let map = ExitMap::new(config.mode, 2, br.eta_p.clone());
+        if config.effects.glints {
+            add_trt_with_glints(
+                &map,
+                &br,
+                ha.phi,
+                &params.sigma_a,
+                &params.k_g,
+                &params.w_c,
+                &params.delta_eta_prime,
+                &params.delta_h_m,
+                &m,
+                sink,
+            );
+        } else {
+            add_root_sum(2, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+        }
+    }
 }

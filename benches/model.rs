@@ -1,0 +1,123 @@
+//! Evaluations per second of S for each root mode and effect set, and of the Jacobian.
+//! Each iteration evaluates one batch of `BATCH` angle sets, so throughput = BATCH / time.
+
+use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use hairfit::model::{
+    scattering, scattering_jacobian, Angles, Effects, Lobes, ModelConfig, ParamName, Params,
+    RootMode, StaticJacobian,
+};
+
+const BATCH: usize = 1024;
+
+fn params() -> Params<f64> {
+    Params {
+        eta: 1.55,
+        sigma_a: vec![0.4],
+        alpha_r: (-7.0f64).to_radians(),
+        beta_r: 8.0f64.to_radians(),
+        k_g: 2.0,
+        w_c: 15.0f64.to_radians(),
+        eccentricity: 0.9,
+        delta_eta_prime: 0.3,
+        delta_h_m: 0.5,
+    }
+}
+
+/// Deterministic spread of angles over the whole domain (θ in (−85°, 85°), φ any).
+fn angle_set() -> Vec<Angles> {
+    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..BATCH)
+        .map(|_| {
+            Angles::from_degrees(
+                next() * 170.0 - 85.0,
+                next() * 360.0 - 180.0,
+                next() * 170.0 - 85.0,
+                next() * 360.0 - 180.0,
+            )
+        })
+        .collect()
+}
+
+fn effect_sets() -> Vec<(&'static str, Effects)> {
+    let lobes = |r, tt, trt| Lobes { r, tt, trt };
+    let plain = |l| Effects {
+        lobes: l,
+        glints: false,
+        eccentricity: false,
+    };
+    vec![
+        ("R", plain(lobes(true, false, false))),
+        ("R+TT", plain(lobes(true, true, false))),
+        ("all-lobes", plain(lobes(true, true, true))),
+        ("all+glints+ecc", Effects::default()),
+    ]
+}
+
+fn bench_model(c: &mut Criterion) {
+    let p = params();
+    let angles = angle_set();
+    let mut group = c.benchmark_group("scattering");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    for mode in [RootMode::Cubic, RootMode::Exact] {
+        for (name, effects) in effect_sets() {
+            let config = ModelConfig { mode, effects };
+            group.bench_with_input(
+                BenchmarkId::new(mode.to_string(), name),
+                &config,
+                |b, cfg| {
+                    let mut out = [0.0];
+                    b.iter(|| {
+                        let mut acc = 0.0;
+                        for a in &angles {
+                            scattering(black_box(&p), cfg, a, &mut out);
+                            acc += out[0];
+                        }
+                        acc
+                    })
+                },
+            );
+        }
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("jacobian");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    let which = [
+        ParamName::Eta,
+        ParamName::SigmaA(0),
+        ParamName::AlphaR,
+        ParamName::BetaR,
+        ParamName::KG,
+        ParamName::WC,
+        ParamName::Eccentricity,
+    ];
+    for mode in [RootMode::Cubic, RootMode::Exact] {
+        let config = ModelConfig {
+            mode,
+            effects: Effects::default(),
+        };
+        group.bench_with_input(
+            BenchmarkId::new(mode.to_string(), "7 params"),
+            &config,
+            |b, cfg| {
+                b.iter(|| {
+                    let mut acc = 0.0;
+                    for a in &angles {
+                        acc += scattering_jacobian(black_box(&p), cfg, a, &which).0[0];
+                    }
+                    acc
+                })
+            },
+        );
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_model);
+criterion_main!(benches);

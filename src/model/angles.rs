@@ -1,0 +1,43 @@
+//! Angle bookkeeping of MODEL.md "Geometry and angles": wrapping and the half/difference angles.
+
+use num_dual::DualNum;
+use std::f64::consts::{PI, TAU};
+
+/// `wrap`: map an angle to `(−π, π]`.
+#[inline]
+pub fn wrap(x: f64) -> f64 {
+    let y = x.rem_euclid(TAU);
+    if y > PI {
+        y - TAU
+    } else {
+        y
+    }
+}
+
+/// `wrap` for a (dual) number: shift by the multiple of 2π found on the real part.
+#[inline]
+pub fn wrap_t<T: DualNum<f64>>(x: T) -> T {
+    let r = x.re();
+    let shift = wrap(r) - r;
+    x + shift
+}
+
+/// Derived angles `θ_h, θ_d, φ, φ_h` (radians).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HalfAngles {
+    pub theta_h: f64,
+    pub theta_d: f64,
+    pub phi: f64,
+    pub phi_h: f64,
+}
+
+/// `θ_h = (θ_i+θ_r)/2, θ_d = (θ_r−θ_i)/2, φ = wrap(φ_r−φ_i), φ_h = (φ_i+φ_r)/2`.
+#[inline]
+pub fn half_angles(theta_i: f64, phi_i: f64, theta_r: f64, phi_r: f64) -> HalfAngles {
+    HalfAngles {
+        theta_h: 0.5 * (theta_i + theta_r),
+        theta_d: 0.5 * (theta_r - theta_i),
+        phi: wrap(phi_r - phi_i),
+        phi_h: 0.5 * (phi_i + phi_r),
+    }
+}

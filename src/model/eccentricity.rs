@@ -1,0 +1,18 @@
+//! Eccentric cross-section: the effective index `η*(φ_h)` that TRT alone sees.
+
+use num_dual::DualNum;
+
+use super::instrument;
+
+/// `η* = ((η*_1 + η*_2) + cos(2φ_h)(η*_1 − η*_2))/2` with `η*_1 = 2(η−1)a² − η + 2`,
+/// `η*_2 = 2(η−1)a⁻² − η + 2`; equals η for a = 1.
+#[inline]
+pub fn eccentric_index<T: DualNum<f64>>(eta: &T, a: &T, phi_h: f64) -> T {
+    instrument::count_eccentricity();
+    let a2 = a.clone() * a.clone();
+    let k = (eta.clone() - 1.0) * 2.0;
+    let base = -eta.clone() + 2.0;
+    let e1 = k.clone() * a2.clone() + base.clone();
+    let e2 = k / a2 + base;
+    ((e1.clone() + e2.clone()) + (e1 - e2) * (2.0 * phi_h).cos()) * 0.5
+}

@@ -1,0 +1,49 @@
+//! Fresnel reflectance with the Bravais indices, and the attenuation `A(p, h)`.
+
+use num_dual::DualNum;
+
+/// Fresnel `F(γ_i)` for `h = sin γ_i` with `cos γ_i` and `cos γ_t = sqrt(1 − h²/η'²)` given:
+/// `(r_s² + r_p²)/2`. The internal reflection `F(1/η', 1/η'', γ_t)` is the same value.
+#[inline]
+pub fn fresnel<T: DualNum<f64>>(eta_p: &T, eta_pp: &T, cos_gi: &T, cos_gt: &T) -> T {
+    let a = eta_p.clone() * cos_gt.clone();
+    let rs = (cos_gi.clone() - a.clone()) / (cos_gi.clone() + a);
+    let b = eta_pp.clone() * cos_gi.clone();
+    let rp = (b.clone() - cos_gt.clone()) / (b + cos_gt.clone());
+    (rs.clone() * rs + rp.clone() * rp) * 0.5
+}
+
+/// `cos γ_t = sqrt(1 − (h/η')²)`, the exact refracted angle (used in both root modes).
+#[inline]
+pub fn cos_gamma_t<T: DualNum<f64>>(h: &T, eta_p: &T) -> T {
+    let x = h.clone() / eta_p.clone();
+    (-(x.clone() * x) + 1.0).sqrt()
+}
+
+/// Fresnel part of the attenuation: `F` for p = 0, `(1 − F)² F^{p−1}` for p ≥ 1.
+#[inline]
+pub fn fresnel_attenuation<T: DualNum<f64>>(p: usize, f: T) -> T {
+    match p {
+        0 => f,
+        1 => {
+            let t = -f + 1.0;
+            t.clone() * t
+        }
+        _ => {
+            let t = -f.clone() + 1.0;
+            t.clone() * t * f.powi(p as i32 - 1)
+        }
+    }
+}
+
+/// Absorption `T(h)^p = exp(−2 p σ_a cos γ_t / cos θ_t)` (corrected chord `2 cos γ_t`).
+#[inline]
+pub fn absorption<T: DualNum<f64>>(p: usize, sigma_a: &T, chord_over_cos_tt: &T) -> T {
+    (sigma_a.clone() * chord_over_cos_tt.clone() * (-(p as f64))).exp()
+}
+
+/// `2 cos γ_t / cos θ_t`: the path length through the fiber per unit radius, per internal segment.
+#[inline]
+pub fn chord<T: DualNum<f64>>(cos_gt: &T, cos_theta_t: &T) -> T {
+    cos_gt.clone() * 2.0 / cos_theta_t.clone()
+}

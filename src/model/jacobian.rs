@@ -1,0 +1,118 @@
+//! Exact Jacobians of S by forward-mode AD, one dual direction per chosen parameter.
+//!
+//! Derivatives are per unit of [`Params`], i.e. per RADIAN for α_R, β_R and w_c (multiply by
+//! π/180 for per degree). Two entry points:
+//! - [`scattering_jacobian`]: any parameter list, `DualDVec64` (heap per call; simple).
+//! - [`StaticJacobian`]: `N` parameters fixed at compile time, `DualSVec64<N>`; build it once per
+//!   parameter vector and call [`StaticJacobian::eval`] per sample with no allocation (fast path
+//!   for a fit).
+
+use nalgebra::{Const, Dyn, U1};
+use num_dual::{DualDVec64, DualNum, DualSVec64};
+
+use super::{scattering, Angles, ModelConfig, ParamName, Params};
+
+/// `params` as dual numbers, parameter `which[j]` seeded as direction j.
+fn seeded<D: DualNum<f64>>(
+    params: &Params<f64>,
+    which: &[ParamName],
+    seed: impl Fn(f64, Option<usize>) -> D,
+) -> Params<D> {
+    for w in which {
+        if let ParamName::SigmaA(c) = w {
+            assert!(*c < params.sigma_a.len(), "sigma_a[{c}] does not exist");
+        }
+    }
+    let s = |name: ParamName, v: f64| seed(v, which.iter().position(|w| *w == name));
+    Params {
+        eta: s(ParamName::Eta, params.eta),
+        sigma_a: params
+            .sigma_a
+            .iter()
+            .enumerate()
+            .map(|(c, &v)| s(ParamName::SigmaA(c), v))
+            .collect(),
+        alpha_r: s(ParamName::AlphaR, params.alpha_r),
+        beta_r: s(ParamName::BetaR, params.beta_r),
+        k_g: s(ParamName::KG, params.k_g),
+        w_c: s(ParamName::WC, params.w_c),
+        eccentricity: s(ParamName::Eccentricity, params.eccentricity),
+        delta_eta_prime: s(ParamName::DeltaEtaPrime, params.delta_eta_prime),
+        delta_h_m: s(ParamName::DeltaHM, params.delta_h_m),
+    }
+}
+
+/// Jacobian of S for `N` parameters known at compile time, reusable across samples.
+#[derive(Debug, Clone)]
+pub struct StaticJacobian<const N: usize> {
+    params: Params<DualSVec64<N>>,
+    out: Vec<DualSVec64<N>>,
+}
+
+impl<const N: usize> StaticJacobian<N> {
+    /// Seed `params` with one direction per entry of `which`.
+    /// Panics if `which` names a channel `SigmaA(c)` that `params` does not have.
+    pub fn new(params: &Params<f64>, which: &[ParamName; N]) -> Self {
+        let dual = seeded(params, which, |v, j| match j {
+            Some(j) => DualSVec64::<N>::from_re(v).derivative(j),
+            None => DualSVec64::<N>::from_re(v),
+        });
+        let out = vec![DualSVec64::<N>::from_re(0.0); params.sigma_a.len()];
+        StaticJacobian { params: dual, out }
+    }
+
+    /// S per channel into `values` and `jac[c][j] = ∂S_c/∂which[j]`; both have one entry per
+    /// channel (panics otherwise).
+    pub fn eval(
+        &mut self,
+        config: &ModelConfig,
+        angles: &Angles,
+        values: &mut [f64],
+        jac: &mut [[f64; N]],
+    ) {
+        scattering(&self.params, config, angles, &mut self.out);
+        for ((d, v), j) in self.out.iter().zip(values.iter_mut()).zip(jac.iter_mut()) {
+            *v = d.re;
+            let eps = d.eps.unwrap_generic(Const::<N>, U1);
+            j.copy_from_slice(eps.as_slice());
+        }
+    }
+}
+
+/// The value of one parameter in `params` (radians for angles).
+pub fn param_value(params: &Params<f64>, name: ParamName) -> f64 {
+    match name {
+        ParamName::Eta => params.eta,
+        ParamName::SigmaA(c) => params.sigma_a[c],
+        ParamName::AlphaR => params.alpha_r,
+        ParamName::BetaR => params.beta_r,
+        ParamName::KG => params.k_g,
+        ParamName::WC => params.w_c,
+        ParamName::Eccentricity => params.eccentricity,
+        ParamName::DeltaEtaPrime => params.delta_eta_prime,
+        ParamName::DeltaHM => params.delta_h_m,
+    }
+}
+
+/// S per channel and `jac[c][j] = ∂S_c/∂which[j]` (per radian for angular parameters).
+/// Panics if `which` names a channel `SigmaA(c)` that `params` does not have.
+pub fn scattering_jacobian(
+    params: &Params<f64>,
+    config: &ModelConfig,
+    angles: &Angles,
+    which: &[ParamName],
+) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let n = which.len();
+    let dual = seeded(params, which, |v, j| match j {
+        Some(j) => DualDVec64::from_re(v).derivative(n, j),
+        None => DualDVec64::from_re(v),
+    });
+    let mut out = vec![DualDVec64::from_re(0.0); params.sigma_a.len()];
+    scattering(&dual, config, angles, &mut out);
+    let values = out.iter().map(|d| d.re).collect();
+    let jac = out
+        .into_iter()
+        .map(|d| d.eps.unwrap_generic(Dyn(n), U1).iter().copied().collect())
+        .collect();
+    (values, jac)
+}

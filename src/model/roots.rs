@@ -1,0 +1,152 @@
+//! Roots of `Φ(p, γ) ≡ φ (mod 2π)` on `γ ∈ [−π/2, π/2]`: bracketing on the monotone pieces between
+//! the caustics, then safeguarded Newton, in f64; then one Newton step in the dual number type at
+//! the converged root (implicit-function theorem: exact first derivatives).
+
+use num_dual::DualNum;
+use std::f64::consts::{FRAC_PI_2, TAU};
+
+use super::angles::wrap;
+use super::exit_angle::ExitMap;
+use super::instrument;
+use super::RootMode;
+
+/// At most this many roots per lobe (TRT has 1 or 3; the cubic near η' → 1 may add wrapped ones).
+pub const MAX_ROOTS: usize = 8;
+
+/// Roots `γ` of one lobe and the unwrapped target `φ + 2πk` each one solves.
+#[derive(Debug, Clone, Copy)]
+pub struct Roots {
+    pub gamma: [f64; MAX_ROOTS],
+    pub target: [f64; MAX_ROOTS],
+    pub n: usize,
+}
+
+/// Every root of `map(γ) = φ + 2πk` over all k, `γ ∈ [−π/2, π/2]`.
+pub fn exit_roots(map: &ExitMap<f64>, phi: f64) -> Roots {
+    instrument::count_root_solve(map.p);
+    let mut roots = Roots {
+        gamma: [0.0; MAX_ROOTS],
+        target: [0.0; MAX_ROOTS],
+        n: 0,
+    };
+    if map.mode == RootMode::Exact && map.p == 1 {
+        if let Some(g) = tt_closed_form(map, phi) {
+            roots.gamma[0] = g;
+            roots.target[0] = phi + TAU * ((map.value(&g) - phi) / TAU).round();
+            roots.n = 1;
+            return roots;
+        }
+    }
+    let mut bounds = [-FRAC_PI_2, 0.0, 0.0, FRAC_PI_2];
+    let n_pieces = match map.caustic() {
+        Some(gc) if gc > 0.0 => {
+            bounds = [-FRAC_PI_2, -gc, gc, FRAC_PI_2];
+            3
+        }
+        _ => {
+            bounds[1] = FRAC_PI_2;
+            1
+        }
+    };
+    let mut f_lo = map.value(&bounds[0]);
+    for i in 0..n_pieces {
+        let (lo, hi) = (bounds[i], bounds[i + 1]);
+        let f_hi = map.value(&hi);
+        let (vmin, vmax) = if f_lo <= f_hi {
+            (f_lo, f_hi)
+        } else {
+            (f_hi, f_lo)
+        };
+        let k_min = ((vmin - phi) / TAU).ceil() as i64;
+        let k_max = ((vmax - phi) / TAU).floor() as i64;
+        for k in k_min..=k_max {
+            let y = phi + TAU * k as f64;
+            // A root exactly on a shared boundary belongs to the previous piece.
+            if i > 0 && y == f_lo {
+                continue;
+            }
+            if roots.n < MAX_ROOTS {
+                roots.gamma[roots.n] = solve_monotone(map, lo, hi, f_lo, f_hi, y);
+                roots.target[roots.n] = y;
+                roots.n += 1;
+            }
+        }
+        f_lo = f_hi;
+    }
+    roots
+}
+
+/// Exact TT root from MODEL.md's closed form `h = s·cos(φ/2)/sqrt(1 + a² − 2as·sin(φ/2))`,
+/// `a = 1/η'`, `s = sign φ`, accepted only where `Φ(1, h)` indeed returns φ (else `None`: the
+/// bracketing solver decides, normally finding no root since |φ| < 2·asin(1/η')).
+fn tt_closed_form(map: &ExitMap<f64>, phi: f64) -> Option<f64> {
+    let a = 1.0 / map.eta_p;
+    let s = if phi < 0.0 { -1.0 } else { 1.0 };
+    let (sh, ch) = (0.5 * phi).sin_cos();
+    let h = s * ch / (1.0 + a * a - 2.0 * a * s * sh).sqrt();
+    if h.is_nan() || h.abs() > 1.0 {
+        return None;
+    }
+    let g = h.asin();
+    let r = wrap(map.value(&g) - phi);
+    // The closed form is exact up to rounding where valid; elsewhere it misses by O(1).
+    if r.abs() < 1e-9 {
+        // One Newton step polishes the last bits (the map's slope is ≤ −2·(1 − 1/η') < 0).
+        let d = map.slope(&g);
+        let gn = g - r / d;
+        Some(if gn.abs() <= FRAC_PI_2 { gn } else { g })
+    } else {
+        None
+    }
+}
+
+/// Safeguarded Newton for `map(γ) = y` on `[lo, hi]` where the map is monotone and brackets `y`.
+fn solve_monotone(map: &ExitMap<f64>, lo: f64, hi: f64, f_lo: f64, f_hi: f64, y: f64) -> f64 {
+    if y == f_lo {
+        return lo;
+    }
+    if y == f_hi {
+        return hi;
+    }
+    let increasing = f_hi > f_lo;
+    let (mut a, mut b) = (lo, hi);
+    // Start from the secant through the piece's ends.
+    let mut x = lo + (y - f_lo) / (f_hi - f_lo) * (hi - lo);
+    if !(x > lo && x < hi) {
+        x = 0.5 * (lo + hi);
+    }
+    for _ in 0..100 {
+        let fx = map.value(&x) - y;
+        if fx == 0.0 {
+            return x;
+        }
+        if (fx > 0.0) == increasing {
+            b = x;
+        } else {
+            a = x;
+        }
+        let d = map.slope(&x);
+        let mut xn = x - fx / d;
+        if !(xn > a && xn < b) {
+            xn = 0.5 * (a + b);
+        }
+        let step = (xn - x).abs();
+        x = xn;
+        if step <= 2.0 * f64::EPSILON * x.abs().max(1e-3) || b - a <= 4.0 * f64::EPSILON {
+            break;
+        }
+    }
+    x
+}
+
+/// Lift a converged f64 root into `T`: one Newton step `γ − (Φ_T(γ) − y)/Φ'(γ)` whose dual part is
+/// the implicit-function derivative `−∂Φ/∂θ / Φ'`. For plain f64 (`NDERIV == 0`) it is the root.
+#[inline]
+pub fn lift_root<T: DualNum<f64>>(map_t: &ExitMap<T>, gamma: f64, target: f64, slope: f64) -> T {
+    if T::NDERIV == 0 || slope.abs() < 1e-300 {
+        return T::from(gamma);
+    }
+    let g = T::from(gamma);
+    let residual = map_t.value(&g) - target;
+    g - residual / slope
+}

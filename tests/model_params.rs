@@ -1,0 +1,132 @@
+//! The parameter file: names, defaults, unknown keys, positions in errors, domain, round trip.
+
+use hairfit::model::{Effects, ParamName};
+use hairfit::params::ParamFile;
+use hairfit::Error;
+
+const FULL: &str =
+    r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15}"#;
+
+#[test]
+fn defaults_and_conversion() {
+    let f = ParamFile::from_json_str(FULL, "p.json").unwrap();
+    assert!(f.sigma_a_is_scalar());
+    let p = f.to_params();
+    assert_eq!(
+        (p.eta, p.eccentricity, p.delta_eta_prime, p.delta_h_m),
+        (1.55, 1.0, 0.3, 0.5)
+    );
+    assert_eq!(p.sigma_a, vec![0.4]);
+    // Degrees → radians, exactly as f64::to_radians does.
+    assert_eq!(p.alpha_r, (-7.0f64).to_radians());
+    assert_eq!(p.w_c, 15.0f64.to_radians());
+}
+
+#[test]
+fn per_channel_sigma_and_round_trip() {
+    let text = r#"{"eta": 1.5, "sigma_a": [0.2, 0.4, 0.8], "alpha_r_deg": -6, "beta_r_deg": 7,
+                   "k_g": 1, "w_c_deg": 20, "eccentricity": 0.9}"#;
+    let f = ParamFile::from_json_str(text, "p.json").unwrap();
+    assert!(!f.sigma_a_is_scalar());
+    let p = f.to_params();
+    assert_eq!(p.sigma_a.len(), 3);
+    let back = ParamFile::from_params(&p);
+    let json = serde_json::to_string(&back).unwrap();
+    let again = ParamFile::from_json_str(&json, "back.json")
+        .unwrap()
+        .to_params();
+    // Degrees → radians → degrees may move the last bit.
+    assert!((again.alpha_r - p.alpha_r).abs() < 1e-15);
+    assert_eq!(again.sigma_a, p.sigma_a);
+    assert_eq!(again.eccentricity, 0.9);
+}
+
+#[test]
+fn unknown_key_is_an_error_with_position() {
+    let text = "{\n  \"sigma_a\": 0.4, \"alpha_r_deg\": -7, \"beta_r_deg\": 8,\n  \"k_g\": 2, \"w_c_deg\": 15, \"colour\": 1\n}";
+    match ParamFile::from_json_str(text, "bad.json") {
+        Err(Error::Input {
+            file,
+            line,
+            column,
+            message,
+        }) => {
+            assert_eq!(file.to_str(), Some("bad.json"));
+            assert_eq!(line, 3);
+            assert!(column > 1);
+            assert!(message.contains("colour"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn missing_required_key_is_an_error() {
+    let text = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2}"#;
+    match ParamFile::from_json_str(text, "p.json") {
+        Err(Error::Input { message, .. }) => assert!(message.contains("w_c_deg"), "{message}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn domain_errors_name_the_parameter() {
+    for (patch, name) in [
+        (r#""eccentricity": 0.5"#, "eccentricity"),
+        (r#""eta": 0.9"#, "eta"),
+        (r#""delta_eta_prime": 0"#, "delta_eta_prime"),
+    ] {
+        let text = FULL.replace('}', &format!(", {patch}}}"));
+        match ParamFile::from_json_str(&text, "p.json") {
+            Err(Error::Parameter { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{patch}: {other:?}"),
+        }
+    }
+    let neg = FULL.replace("\"sigma_a\": 0.4", "\"sigma_a\": [0.4, -1]");
+    assert!(matches!(
+        ParamFile::from_json_str(&neg, "p.json"),
+        Err(Error::Parameter { name, .. }) if name == "sigma_a[1]"
+    ));
+    let empty = FULL.replace("\"sigma_a\": 0.4", "\"sigma_a\": []");
+    assert!(matches!(
+        ParamFile::from_json_str(&empty, "p.json"),
+        Err(Error::Parameter { .. })
+    ));
+}
+
+#[test]
+fn load_reports_missing_file() {
+    assert!(matches!(
+        ParamFile::load("/nonexistent/params.json"),
+        Err(Error::Io { .. })
+    ));
+}
+
+#[test]
+fn json_names_and_lobe_parsing() {
+    assert_eq!(ParamName::SigmaA(1).json_name(), "sigma_a[1]");
+    assert_eq!(ParamName::AlphaR.json_name(), "alpha_r_deg");
+    let l = Effects::parse_lobes("r, Tt").unwrap();
+    assert!(l.r && l.tt && !l.trt);
+    assert!(Effects::parse_lobes("R,TRX").is_err());
+    assert!(Effects::parse_lobes("").is_err());
+    assert_eq!(
+        "EXACT"
+            .parse::<hairfit::model::RootMode>()
+            .unwrap()
+            .to_string(),
+        "exact"
+    );
+    // Disabled lobes drop their parameters.
+    let e = Effects {
+        lobes: Effects::parse_lobes("R").unwrap(),
+        glints: true,
+        eccentricity: true,
+    };
+    assert_eq!(
+        e.parameters(3),
+        vec![ParamName::Eta, ParamName::AlphaR, ParamName::BetaR]
+    );
+    // η, σ_a[0], σ_a[1], α_R, β_R, k_G, w_c, a, Δη', Δh_M.
+    assert_eq!(Effects::default().parameters(2).len(), 10);
+}
