@@ -7,6 +7,7 @@
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
+//! - [`fit`]: `hairfit fit` / `hairfit demo`: least squares with exact Jacobians and uncertainties.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
 //! - [`error`]: the error type shared by the library.
@@ -16,6 +17,7 @@ pub mod cli;
 pub mod data;
 pub mod error;
 pub mod eval;
+pub mod fit;
 pub mod lm;
 pub mod model;
 pub mod nist;

@@ -36,6 +36,39 @@ enum Command {
         #[command(flatten)]
         model: ModelArgs,
     },
+    /// Fit the model to a data file; writes fit.json, params.json and curves.csv into --out.
+    Fit {
+        /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+        data: PathBuf,
+        #[command(flatten)]
+        load: hairfit::data::LoadOptions,
+        #[command(flatten)]
+        fit: hairfit::fit::args::FitArgs,
+        /// Output directory (e.g. fits/NAME).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
+    Demo {
+        #[command(flatten)]
+        fit: hairfit::fit::args::FitArgs,
+        /// Output directory.
+        #[arg(long, default_value = "fits/demo")]
+        out: PathBuf,
+    },
+    /// Load a data file and report what happened to every row (accepted or why rejected).
+    Load(LoadArgs),
+}
+
+#[derive(clap::Args)]
+struct LoadArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    file: PathBuf,
+    #[command(flatten)]
+    options: hairfit::data::LoadOptions,
+    /// Print the report as JSON instead of a summary.
+    #[arg(long)]
+    json: bool,
 }
 
 fn main() -> ExitCode {
@@ -51,6 +84,29 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Fit {
+            data,
+            load,
+            fit,
+            out,
+        } => {
+            let cancel = ctrl_c_flag();
+            print!(
+                "{}",
+                hairfit::fit::args::fit_command(&data, &load, &fit, &out, Some(cancel))?
+            );
+        }
+        Command::Demo { fit, out } => {
+            let cancel = ctrl_c_flag();
+            print!(
+                "{}",
+                hairfit::fit::demo::demo_command(&fit, &out, Some(cancel))?
+            );
+        }
+        Command::Load(args) => {
+            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
+            print!("{text}");
+        }
         Command::Eval {
             params,
             input,
@@ -74,6 +130,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far.
+fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let f = flag.clone();
+    if let Err(e) = ctrlc::set_handler(move || f.store(true, std::sync::atomic::Ordering::SeqCst)) {
+        eprintln!("hairfit: warning: Ctrl-C will not stop the fit cleanly: {e}");
+    }
+    flag
 }
 
 /// Domain errors come from the values, not a position in the file: say which file they are in.

@@ -1,1 +1,289 @@
-//! Loading samples from measured or synthetic files (filled in by the data work).
+//! Loading measured or synthetic samples: owns the [`Dataset`] (struct of arrays, angles in
+//! radians) that the fit and the synthesizer use, the three file formats (header CSV, headerless
+//! fixed-angle goniometer scans, JSON), and the [`LoadReport`] that accounts for every row.
+//!
+//! A malformed file is an [`Error::Input`] naming file, line and column; a well-formed row with
+//! a bad value is a rejection counted in the report, never silently dropped.
+
+mod csv;
+mod expr;
+mod json;
+mod report;
+mod rows;
+mod scan;
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+pub use self::csv::write_csv;
+pub use self::expr::Linear;
+pub use self::json::write_json;
+pub use self::report::{LineTally, LoadReport, RejectReason, FIRST_LINES};
+
+/// Samples in struct-of-arrays form; memory is proportional to the accepted samples.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Dataset {
+    /// Channel names, e.g. `["radiance"]` or `["r", "g", "b"]` (from `radiance_<name>`).
+    pub channels: Vec<String>,
+    /// Incident inclination, radians.
+    pub theta_i: Vec<f64>,
+    /// Incident azimuth, radians.
+    pub phi_i: Vec<f64>,
+    /// Outgoing inclination, radians.
+    pub theta_r: Vec<f64>,
+    /// Outgoing azimuth, radians.
+    pub phi_r: Vec<f64>,
+    /// Row-major: `radiance[i * n_channels + c]`.
+    pub radiance: Vec<f64>,
+    /// Per sample per channel, same layout as `radiance` (an unsuffixed column is broadcast).
+    pub sigma: Option<Vec<f64>>,
+    /// Per sample per channel, same layout as `radiance`.
+    pub weight: Option<Vec<f64>>,
+    /// 1-based line in the source file of each accepted sample.
+    pub source_line: Vec<u64>,
+    /// Free-form metadata (from JSON datasets or the synthesizer).
+    pub meta: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Dataset {
+    /// An empty dataset with these channels (and sigma/weight arrays when asked for).
+    pub fn with_channels(channels: Vec<String>, sigma: bool, weight: bool) -> Self {
+        Dataset {
+            channels,
+            sigma: sigma.then(Vec::new),
+            weight: weight.then(Vec::new),
+            ..Dataset::default()
+        }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.theta_i.len()
+    }
+
+    /// True when there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.theta_i.is_empty()
+    }
+
+    /// Number of colour channels.
+    pub fn n_channels(&self) -> usize {
+        self.channels.len()
+    }
+
+    /// Radiance of sample `i` in channel `c`.
+    pub fn value(&self, i: usize, c: usize) -> f64 {
+        self.radiance[i * self.n_channels() + c]
+    }
+
+    /// Sigma of sample `i` in channel `c`, if the dataset has sigmas.
+    pub fn sigma_of(&self, i: usize, c: usize) -> Option<f64> {
+        let n = self.n_channels();
+        self.sigma.as_ref().map(|s| s[i * n + c])
+    }
+
+    /// Weight of sample `i` in channel `c`, if the dataset has weights.
+    pub fn weight_of(&self, i: usize, c: usize) -> Option<f64> {
+        let n = self.n_channels();
+        self.weight.as_ref().map(|w| w[i * n + c])
+    }
+
+    /// The four angles of sample `i` in radians: `[θ_i, φ_i, θ_r, φ_r]`.
+    pub fn angles(&self, i: usize) -> [f64; 4] {
+        [
+            self.theta_i[i],
+            self.phi_i[i],
+            self.theta_r[i],
+            self.phi_r[i],
+        ]
+    }
+
+    /// The four angles of sample `i` in degrees: `[θ_i, φ_i, θ_r, φ_r]`.
+    pub fn angles_deg(&self, i: usize) -> [f64; 4] {
+        self.angles(i).map(f64::to_degrees)
+    }
+
+    /// Append one sample (angles in radians; `radiance`, `sigma`, `weight` one per channel).
+    /// Panics if the slices do not match the dataset's channels (a programming error).
+    pub fn push(
+        &mut self,
+        angles: [f64; 4],
+        radiance: &[f64],
+        sigma: Option<&[f64]>,
+        weight: Option<&[f64]>,
+        source_line: u64,
+    ) {
+        assert_eq!(radiance.len(), self.n_channels(), "radiance per channel");
+        self.theta_i.push(angles[0]);
+        self.phi_i.push(angles[1]);
+        self.theta_r.push(angles[2]);
+        self.phi_r.push(angles[3]);
+        self.radiance.extend_from_slice(radiance);
+        if let Some(s) = self.sigma.as_mut() {
+            s.extend_from_slice(sigma.expect("dataset has sigma"));
+        }
+        if let Some(w) = self.weight.as_mut() {
+            w.extend_from_slice(weight.expect("dataset has weight"));
+        }
+        self.source_line.push(source_line);
+    }
+}
+
+/// The file formats [`load`] reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// CSV with a header row (`theta_i,phi_i,theta_r,phi_r,radiance...`).
+    Csv,
+    /// Headerless goniometer scan; columns given by `--columns`, fixed angles by `--fixed`.
+    Scan,
+    /// JSON dataset as written by hairfit.
+    Json,
+}
+
+impl Format {
+    /// Lower-case name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Csv => "csv",
+            Format::Scan => "scan",
+            Format::Json => "json",
+        }
+    }
+}
+
+/// Unit of the angles in CSV and scan files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AngleUnit {
+    Deg,
+    Rad,
+}
+
+/// Options for [`load`]; every command that reads data flattens these into its arguments.
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct LoadOptions {
+    /// Input format (default: from the extension: .csv, .json, anything else = scan).
+    #[arg(long, value_enum)]
+    pub format: Option<Format>,
+    /// Unit of the angles in CSV/scan files [default: deg, or what a `# angles: rad` line says].
+    #[arg(long, value_enum)]
+    pub angles: Option<AngleUnit>,
+    /// Scan columns in order, e.g. `phi_r,theta_r,radiance` (`_` or `skip` ignores a column).
+    /// Implies --format scan unless --format is given.
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Vec<String>,
+    /// Angles a scan holds fixed, e.g. `theta_i=30,phi_i=0` (in the --angles unit).
+    #[arg(long, value_delimiter = ',')]
+    pub fixed: Vec<String>,
+    /// Map a scan column through a linear expression in x, e.g. `theta_r=90-x` (repeatable).
+    #[arg(long = "map")]
+    pub maps: Vec<String>,
+    /// Token meaning "not measured" (empty cells are always missing).
+    #[arg(long, default_value = "?")]
+    pub missing: String,
+    /// Reject rows whose radiance is below -TOL in any channel [default: keep all negatives].
+    #[arg(long)]
+    pub negative_tolerance: Option<f64>,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            format: None,
+            angles: None,
+            columns: Vec::new(),
+            fixed: Vec::new(),
+            maps: Vec::new(),
+            missing: "?".into(),
+            negative_tolerance: None,
+        }
+    }
+}
+
+/// The format of `path`: `--format`, else `--columns` means scan, else the extension.
+pub fn detect_format(path: &Path, options: &LoadOptions) -> Format {
+    if let Some(f) = options.format {
+        return f;
+    }
+    if !options.columns.is_empty() {
+        return Format::Scan;
+    }
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("csv") => Format::Csv,
+        Some("json") => Format::Json,
+        _ => Format::Scan,
+    }
+}
+
+/// Load samples from `path`, returning the accepted samples and a report on every row.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
+    let format = detect_format(path, options);
+    check_options_fit_format(path, format, options)?;
+    if let Some(t) = options.negative_tolerance {
+        if !(t >= 0.0) {
+            return Err(Error::Other(format!(
+                "--negative-tolerance must be a number >= 0 (got {t})"
+            )));
+        }
+    }
+    let (dataset, mut report) = match format {
+        Format::Csv => csv::load_csv(path, options)?,
+        Format::Scan => scan::load_scan(path, options)?,
+        Format::Json => json::load_json(path, options)?,
+    };
+    report.file = path.display().to_string();
+    report.format = format.name().into();
+    debug_assert_eq!(report.rows_read, report.accepted + report.rejected_total());
+    Ok((dataset, report))
+}
+
+/// Scan-only options on another format are a mistake worth an error, not a silent no-op.
+fn check_options_fit_format(path: &Path, format: Format, options: &LoadOptions) -> Result<()> {
+    let scan_only = [
+        ("--columns", !options.columns.is_empty()),
+        ("--fixed", !options.fixed.is_empty()),
+        ("--map", !options.maps.is_empty()),
+    ];
+    if format != Format::Scan {
+        if let Some((name, _)) = scan_only.iter().find(|(_, given)| *given) {
+            return Err(Error::Other(format!(
+                "{}: {name} applies to headerless scan files only; this file is read as {} \
+                 (use --format scan to read it as a scan)",
+                path.display(),
+                format.name()
+            )));
+        }
+    }
+    if format == Format::Json && options.angles == Some(AngleUnit::Rad) {
+        return Err(Error::Other(format!(
+            "{}: JSON datasets are always in degrees; drop --angles rad",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Open `path` for buffered reading.
+fn open(path: &Path) -> Result<std::io::BufReader<std::fs::File>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    Ok(std::io::BufReader::with_capacity(1 << 16, file))
+}
+
+/// `hairfit load`: load `path` and return the report as text (a summary, or JSON when `json`).
+pub fn load_command(path: &Path, options: &LoadOptions, json: bool) -> Result<String> {
+    let (_, report) = load(path, options)?;
+    if json {
+        let mut text = serde_json::to_string_pretty(&report)
+            .map_err(|e| Error::Other(format!("cannot serialize the report: {e}")))?;
+        text.push('\n');
+        Ok(text)
+    } else {
+        Ok(report.to_string())
+    }
+}

@@ -1,0 +1,574 @@
+//! The header CSV format (`theta_i,phi_i,theta_r,phi_r,radiance[_<ch>]...,[sigma...],[weight...]`)
+//! reader and writer. Streaming with one reused `ByteRecord`, so memory is the accepted samples.
+//! Comment lines before the header may carry the unit directive `# angles: rad` (what
+//! [`write_csv`] writes, so that a write→load round trip is bit-exact).
+
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::io::{BufRead, Read};
+use std::path::Path;
+use std::rc::Rc;
+
+use super::rows::{Cell, Rows};
+use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
+use crate::atomic::write_atomically;
+use crate::error::{Error, Result};
+
+const ANGLE_NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+
+/// What one CSV column holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Role {
+    Angle(usize),
+    /// Radiance of channel k.
+    Radiance(usize),
+    /// Sigma of channel k, or of every channel (`None`, broadcast).
+    Sigma(Option<usize>),
+    Weight(Option<usize>),
+    Ignored,
+}
+
+/// The columns of a CSV file, from its header.
+#[derive(Debug)]
+struct Columns {
+    roles: Vec<Role>,
+    channels: Vec<String>,
+    has_sigma: bool,
+    has_weight: bool,
+    ignored: Vec<String>,
+}
+
+/// Read the header line and the comment/blank lines before it. Returns the header fields, the
+/// unit directive if any (with its line), and the number of lines consumed.
+struct Preamble {
+    header: csv::StringRecord,
+    directive: Option<(AngleUnit, u64)>,
+    lines: u64,
+}
+
+/// Strip a UTF-8 byte-order mark at the start of the stream.
+fn skip_bom(reader: &mut impl BufRead, path: &Path) -> Result<()> {
+    let buf = reader.fill_buf().map_err(|e| Error::io(path, e))?;
+    if buf.starts_with(b"\xEF\xBB\xBF") {
+        reader.consume(3);
+    }
+    Ok(())
+}
+
+/// The `# angles: rad|deg` directive in a comment line, if the comment is one.
+fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<AngleUnit>> {
+    let body = comment.trim_start_matches('#').trim();
+    let Some(rest) = body
+        .strip_prefix("angles:")
+        .or_else(|| body.strip_prefix("angles :"))
+    else {
+        return Ok(None);
+    };
+    match rest.trim() {
+        "deg" => Ok(Some(AngleUnit::Deg)),
+        "rad" => Ok(Some(AngleUnit::Rad)),
+        other => Err(Error::input(
+            path,
+            line,
+            1,
+            format!("unit directive `angles: {other}`: write `# angles: deg` or `# angles: rad`"),
+        )),
+    }
+}
+
+fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
+    skip_bom(reader, path)?;
+    let mut buf = Vec::new();
+    let mut lines = 0u64;
+    let mut directive = None;
+    loop {
+        buf.clear();
+        let n = reader
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            return Err(Error::input(
+                path,
+                lines.max(1),
+                1,
+                "no data rows: the file has no header line \
+                 (expected `theta_i,phi_i,theta_r,phi_r,radiance`)",
+            ));
+        }
+        lines += 1;
+        let text = String::from_utf8_lossy(&buf);
+        let t = text.trim();
+        if t.is_empty() {
+            continue;
+        }
+        if t.starts_with('#') {
+            if let Some(unit) = angle_directive(t, path, lines)? {
+                directive = Some((unit, lines));
+            }
+            continue;
+        }
+        let header = parse_header_line(&buf, path, lines)?;
+        return Ok(Preamble {
+            header,
+            directive,
+            lines,
+        });
+    }
+}
+
+/// Split the header line into trimmed UTF-8 names.
+fn parse_header_line(line: &[u8], path: &Path, line_no: u64) -> Result<csv::StringRecord> {
+    let mut r = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .trim(csv::Trim::All)
+        .from_reader(line);
+    let mut rec = csv::ByteRecord::new();
+    r.read_byte_record(&mut rec)
+        .map_err(|e| Error::input(path, line_no, 1, format!("unreadable header: {e}")))?;
+    let mut out = csv::StringRecord::new();
+    for (k, field) in rec.iter().enumerate() {
+        let name = std::str::from_utf8(field).map_err(|_| {
+            Error::input(
+                path,
+                line_no,
+                k as u64 + 1,
+                "header is not UTF-8 text (is this a CSV file?)",
+            )
+        })?;
+        out.push_field(name);
+    }
+    Ok(out)
+}
+
+/// What the header should look like, for error messages.
+const HEADER_HELP: &str = "required: theta_i, phi_i, theta_r, phi_r and either `radiance` or \
+     `radiance_<channel>` columns; optional: sigma[_<channel>], weight[_<channel>]";
+
+/// Assign a role to every header column and check the set is complete and consistent.
+fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Result<Columns> {
+    let err = |col: usize, msg: String| Error::input(path, line, col as u64 + 1, msg);
+    let found = || {
+        header
+            .iter()
+            .map(|h| format!("`{h}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut roles = vec![Role::Ignored; header.len()];
+    let mut channels: Vec<String> = Vec::new();
+    let mut plain_radiance = false;
+    // (column, channel name or None) for sigma and weight, resolved once channels are known.
+    let mut sigma_cols: Vec<(usize, Option<String>)> = Vec::new();
+    let mut weight_cols: Vec<(usize, Option<String>)> = Vec::new();
+    let mut ignored = Vec::new();
+    let mut seen: Vec<String> = Vec::new();
+    for (k, name) in header.iter().enumerate() {
+        let lower = name.to_ascii_lowercase();
+        if seen.contains(&lower) {
+            return Err(err(
+                k,
+                format!("column `{name}` appears twice in the header"),
+            ));
+        }
+        seen.push(lower.clone());
+        let suffix = |prefix: &str| {
+            lower
+                .strip_prefix(prefix)
+                .map(|_| name[prefix.len()..].to_string())
+        };
+        if let Some(a) = ANGLE_NAMES.iter().position(|&n| n == lower) {
+            roles[k] = Role::Angle(a);
+        } else if lower == "radiance" {
+            plain_radiance = true;
+            roles[k] = Role::Radiance(channels.len());
+            channels.push("radiance".into());
+        } else if let Some(ch) = suffix("radiance_") {
+            roles[k] = Role::Radiance(channels.len());
+            channels.push(ch);
+        } else if lower == "sigma" {
+            sigma_cols.push((k, None));
+        } else if let Some(ch) = suffix("sigma_") {
+            sigma_cols.push((k, Some(ch)));
+        } else if lower == "weight" {
+            weight_cols.push((k, None));
+        } else if let Some(ch) = suffix("weight_") {
+            weight_cols.push((k, Some(ch)));
+        } else {
+            ignored.push(name.to_string());
+        }
+    }
+    for (a, angle) in ANGLE_NAMES.iter().enumerate() {
+        if !roles.contains(&Role::Angle(a)) {
+            return Err(err(
+                0,
+                format!(
+                    "header has no `{angle}` column ({HEADER_HELP}); found: {}",
+                    found()
+                ),
+            ));
+        }
+    }
+    if channels.is_empty() {
+        return Err(err(
+            0,
+            format!(
+                "header has no radiance column ({HEADER_HELP}); found: {}",
+                found()
+            ),
+        ));
+    }
+    if plain_radiance && channels.len() > 1 {
+        return Err(err(
+            0,
+            "header mixes `radiance` with `radiance_<channel>` columns: use one form".into(),
+        ));
+    }
+    let has_sigma = !sigma_cols.is_empty();
+    let has_weight = !weight_cols.is_empty();
+    for (cols, what) in [(&sigma_cols, "sigma"), (&weight_cols, "weight")] {
+        let mut covered = vec![false; channels.len()];
+        let broadcast = cols.iter().any(|(_, ch)| ch.is_none());
+        if broadcast && cols.len() > 1 {
+            return Err(err(
+                cols[1].0,
+                format!("header mixes `{what}` with `{what}_<channel>`: use one form"),
+            ));
+        }
+        for (k, ch) in cols.iter() {
+            let role_ch = match ch {
+                None => None,
+                Some(name) => {
+                    let c = channels.iter().position(|c| c == name).ok_or_else(|| {
+                        err(
+                            *k,
+                            format!(
+                                "`{what}_{name}` has no matching `radiance_{name}` column \
+                                 (channels: {})",
+                                channels.join(", ")
+                            ),
+                        )
+                    })?;
+                    covered[c] = true;
+                    Some(c)
+                }
+            };
+            roles[*k] = if what == "sigma" {
+                Role::Sigma(role_ch)
+            } else {
+                Role::Weight(role_ch)
+            };
+        }
+        if !broadcast {
+            if let Some(c) = covered.iter().position(|&c| !c) {
+                if !cols.is_empty() {
+                    return Err(err(
+                        0,
+                        format!(
+                            "header has `{what}_<channel>` columns but none for channel `{}`",
+                            channels[c]
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(Columns {
+        roles,
+        channels,
+        has_sigma,
+        has_weight,
+        ignored,
+    })
+}
+
+/// Parse one cell: `None` when empty or the missing token, else a number (NaN/inf/1e999 parse
+/// to non-finite values, which validation rejects). Anything else is an input error.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn parse_cell(
+    bytes: &[u8],
+    missing: &str,
+    path: &Path,
+    line: u64,
+    column: u64,
+    name: &str,
+) -> Result<Cell> {
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        Error::input(
+            path,
+            line,
+            column,
+            format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
+        )
+    })?;
+    let text = text.trim();
+    if text.is_empty() || text == missing {
+        return Ok(None);
+    }
+    text.parse::<f64>().map(Some).map_err(|_| {
+        Error::input(
+            path,
+            line,
+            column,
+            format!(
+                "column `{name}`: `{}` is not a number (write `{missing}` or leave the cell \
+                 empty for a value that was not measured)",
+                text.chars().take(40).collect::<String>()
+            ),
+        )
+    })
+}
+
+/// Load a header CSV file.
+pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
+    let mut reader = super::open(path)?;
+    let pre = read_preamble(&mut reader, path)?;
+    let unit = resolve_unit(options.angles, pre.directive, path)?;
+    let header_line = pre.lines;
+    let cols = columns_from_header(&pre.header, path, header_line)?;
+    let mut rows = Rows::new(
+        cols.channels.clone(),
+        cols.has_sigma,
+        cols.has_weight,
+        unit,
+        options.negative_tolerance,
+    );
+    if !cols.ignored.is_empty() {
+        rows.note(format!("ignored columns: {}", cols.ignored.join(", ")));
+    }
+    read_rows(
+        reader,
+        path,
+        options,
+        &pre.header,
+        &cols,
+        header_line,
+        &mut rows,
+    )?;
+    if rows.rows_read() == 0 {
+        return Err(Error::input(
+            path,
+            header_line,
+            1,
+            "no data rows: the file has a header but no samples",
+        ));
+    }
+    Ok(rows.finish())
+}
+
+/// The angle unit: `--angles` wins only if it agrees with the file's own directive.
+fn resolve_unit(
+    option: Option<AngleUnit>,
+    directive: Option<(AngleUnit, u64)>,
+    path: &Path,
+) -> Result<AngleUnit> {
+    match (option, directive) {
+        (Some(o), Some((d, line))) if o != d => Err(Error::input(
+            path,
+            line,
+            1,
+            format!(
+                "the file says its angles are in {} but --angles {} was given; drop --angles",
+                unit_name(d),
+                unit_name(o)
+            ),
+        )),
+        (Some(o), _) => Ok(o),
+        (None, Some((d, _))) => Ok(d),
+        (None, None) => Ok(AngleUnit::Deg),
+    }
+}
+
+fn unit_name(u: AngleUnit) -> &'static str {
+    match u {
+        AngleUnit::Deg => "deg",
+        AngleUnit::Rad => "rad",
+    }
+}
+
+/// Offsets of the newlines a reader has passed, so a byte offset can be turned into a line.
+/// csv's own record positions point before skipped blank/comment lines (and drift with CRLF),
+/// so lines are counted here; the queue only holds newlines still in csv's read-ahead buffer.
+#[derive(Default)]
+struct Newlines {
+    read: u64,
+    pending: VecDeque<u64>,
+    before: u64,
+}
+
+impl Newlines {
+    /// Number of newlines strictly before byte offset `byte` (offsets must not decrease).
+    fn count_before(&mut self, byte: u64) -> u64 {
+        while self.pending.front().is_some_and(|&nl| nl < byte) {
+            self.pending.pop_front();
+            self.before += 1;
+        }
+        self.before
+    }
+}
+
+/// A reader that records where its newlines are.
+struct NewlineCounting<R> {
+    inner: R,
+    lines: Rc<RefCell<Newlines>>,
+}
+
+impl<R: Read> Read for NewlineCounting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let mut lines = self.lines.borrow_mut();
+        let start = lines.read;
+        for (i, _) in buf[..n].iter().enumerate().filter(|(_, &b)| b == b'\n') {
+            lines.pending.push_back(start + i as u64);
+        }
+        lines.read += n as u64;
+        Ok(n)
+    }
+}
+
+/// Stream the data rows after the header into `rows`.
+fn read_rows(
+    reader: impl Read,
+    path: &Path,
+    options: &LoadOptions,
+    header: &csv::StringRecord,
+    cols: &Columns,
+    header_line: u64,
+    rows: &mut Rows,
+) -> Result<()> {
+    let newlines = Rc::new(RefCell::new(Newlines::default()));
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .comment(Some(b'#'))
+        .buffer_capacity(1 << 16)
+        .from_reader(NewlineCounting {
+            inner: reader,
+            lines: Rc::clone(&newlines),
+        });
+    let nc = cols.channels.len();
+    let mut record = csv::ByteRecord::new();
+    let mut radiance: Vec<Cell> = vec![None; nc];
+    let mut sigma: Vec<Cell> = vec![None; if cols.has_sigma { nc } else { 0 }];
+    let mut weight: Vec<Cell> = vec![None; if cols.has_weight { nc } else { 0 }];
+    let n_fields = cols.roles.len();
+    loop {
+        let more = csv.read_byte_record(&mut record).map_err(|e| {
+            let byte = e.position().map_or(0, |p| p.byte());
+            let line = header_line + 1 + newlines.borrow_mut().count_before(byte);
+            match e.into_kind() {
+                csv::ErrorKind::Io(io) => Error::io(path, io),
+                other => Error::input(path, line, 1, format!("unreadable CSV: {other:?}")),
+            }
+        })?;
+        if !more {
+            return Ok(());
+        }
+        // The record ends just before csv's position; its last byte is on the record's line.
+        let end = csv.position().byte();
+        let line = header_line + 1 + newlines.borrow_mut().count_before(end.saturating_sub(1));
+        if record.len() != n_fields {
+            // A line of spaces only is blank, not a row.
+            if record.len() == 1 && record[0].iter().all(u8::is_ascii_whitespace) {
+                continue;
+            }
+            let column = record.len().min(n_fields) + 1;
+            return Err(Error::input(
+                path,
+                line,
+                column as u64,
+                format!(
+                    "expected {n_fields} fields as in the header, found {} \
+                     (a truncated or mis-delimited row?)",
+                    record.len()
+                ),
+            ));
+        }
+        let mut angles: [Cell; 4] = [None; 4];
+        for (k, (role, field)) in cols.roles.iter().zip(record.iter()).enumerate() {
+            if *role == Role::Ignored {
+                continue;
+            }
+            let cell = parse_cell(
+                field,
+                &options.missing,
+                path,
+                line,
+                k as u64 + 1,
+                &header[k],
+            )?;
+            match *role {
+                Role::Angle(a) => angles[a] = cell,
+                Role::Radiance(c) => radiance[c] = cell,
+                Role::Sigma(Some(c)) => sigma[c] = cell,
+                Role::Sigma(None) => sigma.fill(cell),
+                Role::Weight(Some(c)) => weight[c] = cell,
+                Role::Weight(None) => weight.fill(cell),
+                Role::Ignored => {}
+            }
+        }
+        rows.row(line, angles, &radiance, &sigma, &weight);
+    }
+}
+
+/// Column name for a channel's value: `radiance` for the lone default channel, else
+/// `radiance_<channel>` (and likewise for sigma and weight).
+fn channel_column(prefix: &str, channels: &[String], c: usize) -> String {
+    if channels.len() == 1 && channels[0] == "radiance" {
+        prefix.to_string()
+    } else {
+        format!("{prefix}_{}", channels[c])
+    }
+}
+
+/// Write `dataset` as header CSV with angles in radians (marked by `# angles: rad`), every value
+/// in Rust's shortest round-trip form, so loading the file gives back the same bits.
+pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
+    if let Some(bad) = dataset
+        .channels
+        .iter()
+        .find(|c| c.is_empty() || c.contains([',', '"', '\n', '\r', '#']))
+    {
+        return Err(Error::Other(format!(
+            "channel name `{bad}` cannot be a CSV column name (use letters, digits and `_`)"
+        )));
+    }
+    let nc = dataset.n_channels();
+    let mut header: Vec<String> = ANGLE_NAMES.iter().map(|s| s.to_string()).collect();
+    let extra = |prefix: &str| {
+        (0..nc)
+            .map(|c| channel_column(prefix, &dataset.channels, c))
+            .collect::<Vec<_>>()
+    };
+    header.extend(extra("radiance"));
+    if dataset.sigma.is_some() {
+        header.extend(extra("sigma"));
+    }
+    if dataset.weight.is_some() {
+        header.extend(extra("weight"));
+    }
+    write_atomically(path, |w| {
+        let io = |e| Error::io(path, e);
+        writeln!(w, "# written by hairfit; angles in radians").map_err(io)?;
+        writeln!(w, "# angles: rad").map_err(io)?;
+        writeln!(w, "{}", header.join(",")).map_err(io)?;
+        let mut line = String::new();
+        for i in 0..dataset.len() {
+            use std::fmt::Write as _;
+            line.clear();
+            let a = dataset.angles(i);
+            let _ = write!(line, "{},{},{},{}", a[0], a[1], a[2], a[3]);
+            let row = i * nc..(i + 1) * nc;
+            for v in &dataset.radiance[row.clone()] {
+                let _ = write!(line, ",{v}");
+            }
+            for arr in [&dataset.sigma, &dataset.weight].into_iter().flatten() {
+                for v in &arr[row.clone()] {
+                    let _ = write!(line, ",{v}");
+                }
+            }
+            line.push('\n');
+            w.write_all(line.as_bytes()).map_err(io)?;
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,277 @@
+//! The JSON dataset hairfit writes and reads: `{"channels":[..], "meta":{..}, "samples":[{"theta_i",
+//! "phi_i","theta_r","phi_r" (degrees), "radiance": number or [..], "sigma"?, "weight"?}]}`.
+//! `null` or an absent field is a missing value (a rejection); a wrong type is an input error.
+
+use std::path::Path;
+
+use serde::Deserialize;
+use serde_json::{Map, Value};
+
+use super::rows::{Cell, Rows};
+use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
+use crate::atomic::write_atomically;
+use crate::error::{Error, Result};
+
+#[derive(Deserialize)]
+struct FileJson {
+    samples: Vec<SampleJson>,
+    #[serde(default)]
+    channels: Option<Vec<String>>,
+    #[serde(default)]
+    meta: Map<String, Value>,
+}
+
+#[derive(Deserialize)]
+struct SampleJson {
+    theta_i: Option<f64>,
+    phi_i: Option<f64>,
+    theta_r: Option<f64>,
+    phi_r: Option<f64>,
+    radiance: Option<Value>,
+    sigma: Option<Value>,
+    weight: Option<Value>,
+}
+
+/// A serde_json error as an input error at its line and column (column 0 = end of input).
+fn json_error(path: &Path, e: &serde_json::Error) -> Error {
+    let text = e.to_string();
+    let message = text
+        .rsplit_once(" at line ")
+        .map_or(text.as_str(), |(m, _)| m);
+    let hint = if e.is_eof() && e.line() <= 1 && e.column() == 0 {
+        "no data rows: the file is empty".to_string()
+    } else {
+        format!("{message} (expected a hairfit JSON dataset: {{\"samples\": [...]}})")
+    };
+    Error::input(path, e.line() as u64, e.column().max(1) as u64, hint)
+}
+
+/// Line and column (1-based) where each element of the top-level `"samples"` array starts,
+/// found by a small scan that tracks strings and nesting depth (serde_json keeps no positions).
+fn sample_positions(bytes: &[u8]) -> Vec<(u64, u64)> {
+    let mut out = Vec::new();
+    let (mut line, mut col) = (1u64, 0u64);
+    let (mut depth, mut in_str, mut escaped) = (0usize, false, false);
+    let mut str_start = 0;
+    let mut last_key: &[u8] = b"";
+    let mut after_samples_key = false;
+    let mut samples_depth: Option<usize> = None;
+    for (i, &b) in bytes.iter().enumerate() {
+        if b == b'\n' {
+            line += 1;
+            col = 0;
+            continue;
+        }
+        col += 1;
+        if in_str {
+            if escaped {
+                escaped = false;
+            } else if b == b'\\' {
+                escaped = true;
+            } else if b == b'"' {
+                in_str = false;
+                if depth == 1 {
+                    last_key = &bytes[str_start..i];
+                }
+            }
+            continue;
+        }
+        match b {
+            b'"' => {
+                in_str = true;
+                str_start = i + 1;
+            }
+            b':' => after_samples_key = depth == 1 && last_key == b"samples",
+            b'[' => {
+                depth += 1;
+                if after_samples_key && depth == 2 {
+                    samples_depth = Some(depth);
+                }
+                after_samples_key = false;
+            }
+            b'{' => {
+                if samples_depth == Some(depth) {
+                    out.push((line, col));
+                }
+                depth += 1;
+            }
+            b']' | b'}' => {
+                if samples_depth == Some(depth) {
+                    samples_depth = None;
+                }
+                depth = depth.saturating_sub(1);
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Cells of a radiance/sigma/weight value: a number (broadcast when `broadcast`), an array with
+/// one number or null per channel, or null/absent (all missing).
+fn channel_cells(
+    value: Option<&Value>,
+    n: usize,
+    broadcast: bool,
+    out: &mut [Cell],
+) -> std::result::Result<(), String> {
+    match value {
+        None | Some(Value::Null) => out.fill(None),
+        Some(Value::Number(x)) if n == 1 || broadcast => out.fill(x.as_f64()),
+        Some(Value::Number(_)) => {
+            return Err(format!(
+                "a single number for {n} channels: give an array of {n}"
+            ))
+        }
+        Some(Value::Array(items)) if items.len() == n => {
+            for (cell, item) in out.iter_mut().zip(items) {
+                *cell = match item {
+                    Value::Null => None,
+                    Value::Number(x) => x.as_f64(),
+                    other => return Err(format!("`{other}` is not a number or null")),
+                };
+            }
+        }
+        Some(Value::Array(items)) => {
+            return Err(format!(
+                "an array of {} values for {n} channels",
+                items.len()
+            ))
+        }
+        Some(other) => return Err(format!("`{other}` is not a number, an array or null")),
+    }
+    Ok(())
+}
+
+/// The channel names: `"channels"` if given, else `["radiance"]` when radiance is a number.
+fn channels_of(file: &FileJson, path: &Path, positions: &[(u64, u64)]) -> Result<Vec<String>> {
+    if let Some(ch) = &file.channels {
+        if ch.is_empty() {
+            return Err(Error::input(path, 1, 1, "\"channels\" is empty"));
+        }
+        return Ok(ch.clone());
+    }
+    let first_array = file
+        .samples
+        .iter()
+        .position(|s| matches!(s.radiance, Some(Value::Array(_))));
+    if let Some(i) = first_array {
+        let (line, col) = positions.get(i).copied().unwrap_or((1, 1));
+        return Err(Error::input(
+            path,
+            line,
+            col,
+            "radiance is an array but the file has no \"channels\" list naming the channels",
+        ));
+    }
+    Ok(vec!["radiance".into()])
+}
+
+/// Load a JSON dataset (angles in degrees).
+pub(crate) fn load_json(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let file: FileJson = serde_json::from_slice(bytes).map_err(|e| json_error(path, &e))?;
+    let positions = sample_positions(bytes);
+    if file.samples.is_empty() {
+        return Err(Error::input(
+            path,
+            1,
+            1,
+            "no data rows: \"samples\" is empty",
+        ));
+    }
+    let channels = channels_of(&file, path, &positions)?;
+    let nc = channels.len();
+    let has = |f: fn(&SampleJson) -> &Option<Value>| {
+        file.samples
+            .iter()
+            .any(|s| !matches!(f(s), None | Some(Value::Null)))
+    };
+    let (has_sigma, has_weight) = (has(|s| &s.sigma), has(|s| &s.weight));
+    let mut rows = Rows::new(
+        channels,
+        has_sigma,
+        has_weight,
+        AngleUnit::Deg,
+        options.negative_tolerance,
+    );
+    *rows.meta_mut() = file.meta.clone();
+    let mut radiance: Vec<Cell> = vec![None; nc];
+    let mut sigma: Vec<Cell> = vec![None; if has_sigma { nc } else { 0 }];
+    let mut weight: Vec<Cell> = vec![None; if has_weight { nc } else { 0 }];
+    for (i, s) in file.samples.iter().enumerate() {
+        let (line, col) = positions.get(i).copied().unwrap_or((1, 1));
+        let err = |what: &str, m: String| {
+            Error::input(path, line, col, format!("sample {}: {what} is {m}", i + 1))
+        };
+        channel_cells(s.radiance.as_ref(), nc, false, &mut radiance)
+            .map_err(|m| err("radiance", m))?;
+        if has_sigma {
+            channel_cells(s.sigma.as_ref(), nc, true, &mut sigma).map_err(|m| err("sigma", m))?;
+        }
+        if has_weight {
+            channel_cells(s.weight.as_ref(), nc, true, &mut weight)
+                .map_err(|m| err("weight", m))?;
+        }
+        let angles = [s.theta_i, s.phi_i, s.theta_r, s.phi_r];
+        rows.row(line, angles, &radiance, &sigma, &weight);
+    }
+    Ok(rows.finish())
+}
+
+/// A per-channel value as JSON: a number for one channel, else an array.
+fn channel_value(values: &[f64]) -> Value {
+    if values.len() == 1 {
+        Value::from(values[0])
+    } else {
+        Value::from(values.to_vec())
+    }
+}
+
+/// Write `dataset` as a JSON dataset (angles in degrees), one sample per line so that a loaded
+/// sample's `source_line` points at it.
+pub fn write_json(dataset: &Dataset, path: &Path) -> Result<()> {
+    let nc = dataset.n_channels();
+    let io = |e| Error::io(path, e);
+    let ser = |v: &Value| serde_json::to_string(v).map_err(|e| Error::Other(e.to_string()));
+    write_atomically(path, |w| {
+        writeln!(w, "{{").map_err(io)?;
+        writeln!(
+            w,
+            "\"channels\": {},",
+            ser(&Value::from(dataset.channels.clone()))?
+        )
+        .map_err(io)?;
+        writeln!(
+            w,
+            "\"meta\": {},",
+            ser(&Value::Object(dataset.meta.clone()))?
+        )
+        .map_err(io)?;
+        writeln!(w, "\"samples\": [").map_err(io)?;
+        for i in 0..dataset.len() {
+            let a = dataset.angles_deg(i);
+            let row = i * nc..(i + 1) * nc;
+            let mut s = Map::new();
+            for (name, v) in ["theta_i", "phi_i", "theta_r", "phi_r"].iter().zip(a) {
+                s.insert(name.to_string(), Value::from(v));
+            }
+            s.insert(
+                "radiance".into(),
+                channel_value(&dataset.radiance[row.clone()]),
+            );
+            if let Some(sig) = &dataset.sigma {
+                s.insert("sigma".into(), channel_value(&sig[row.clone()]));
+            }
+            if let Some(wt) = &dataset.weight {
+                s.insert("weight".into(), channel_value(&wt[row.clone()]));
+            }
+            let sep = if i + 1 < dataset.len() { "," } else { "" };
+            writeln!(w, "{}{sep}", ser(&Value::Object(s))?).map_err(io)?;
+        }
+        writeln!(w, "]").map_err(io)?;
+        writeln!(w, "}}").map_err(io)?;
+        Ok(())
+    })
+}

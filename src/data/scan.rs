@@ -1,0 +1,346 @@
+//! Headerless goniometer scans that hold some angles fixed: whitespace- or comma-separated
+//! columns mapped by `--columns`, the other angles given by `--fixed`, optional `--map NAME=EXPR`
+//! (linear in x) per column, and a missing token (`?`) where the rig could not measure.
+
+use std::io::BufRead;
+use std::path::Path;
+
+use super::csv::parse_cell;
+use super::expr::Linear;
+use super::rows::{Cell, Rows};
+use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
+use crate::error::{Error, Result};
+
+const ANGLE_NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+
+/// Where a scan column's value goes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Target {
+    Angle(usize),
+    Radiance(usize),
+    Sigma(Option<usize>),
+    Weight(Option<usize>),
+    Skip,
+}
+
+/// The scan layout resolved from `--columns`, `--fixed` and `--map`.
+#[derive(Debug)]
+struct Layout {
+    targets: Vec<Target>,
+    names: Vec<String>,
+    maps: Vec<Linear>,
+    fixed: [Option<f64>; 4],
+    channels: Vec<String>,
+    has_sigma: bool,
+    has_weight: bool,
+}
+
+fn option_error(msg: String) -> Error {
+    Error::Other(msg)
+}
+
+/// Resolve the scan options into a layout, with an error naming the offending option.
+fn layout(options: &LoadOptions) -> Result<Layout> {
+    const VALID: &str = "theta_i, phi_i, theta_r, phi_r, radiance or radiance_<ch>, \
+                         sigma[_<ch>], weight[_<ch>], `_` or `skip`";
+    if options.columns.is_empty() {
+        return Err(option_error(format!(
+            "a headerless scan needs --columns (e.g. `--columns phi_r,theta_r,radiance`; \
+             valid names: {VALID})"
+        )));
+    }
+    let mut targets = Vec::new();
+    let mut names = Vec::new();
+    let mut channels: Vec<String> = Vec::new();
+    let mut sigma_cols = Vec::new();
+    let mut weight_cols = Vec::new();
+    for raw in &options.columns {
+        let name = raw.trim().to_string();
+        let lower = name.to_ascii_lowercase();
+        if lower != "_" && lower != "skip" && names.contains(&lower) {
+            return Err(option_error(format!("--columns names `{name}` twice")));
+        }
+        let suffix = |p: &str| lower.strip_prefix(p).map(|_| name[p.len()..].to_string());
+        let target = if let Some(a) = ANGLE_NAMES.iter().position(|&n| n == lower) {
+            Target::Angle(a)
+        } else if lower == "_" || lower == "skip" {
+            Target::Skip
+        } else if lower == "radiance" {
+            channels.push("radiance".into());
+            Target::Radiance(channels.len() - 1)
+        } else if let Some(ch) = suffix("radiance_").filter(|c| !c.is_empty()) {
+            channels.push(ch);
+            Target::Radiance(channels.len() - 1)
+        } else if lower == "sigma" || lower.starts_with("sigma_") {
+            sigma_cols.push((targets.len(), suffix("sigma_")));
+            Target::Skip
+        } else if lower == "weight" || lower.starts_with("weight_") {
+            weight_cols.push((targets.len(), suffix("weight_")));
+            Target::Skip
+        } else {
+            return Err(option_error(format!(
+                "--columns: unknown column name `{name}` (valid: {VALID})"
+            )));
+        };
+        targets.push(target);
+        names.push(lower);
+    }
+    if channels.is_empty() {
+        return Err(option_error(
+            "--columns must name a radiance column (`radiance` or `radiance_<ch>`)".into(),
+        ));
+    }
+    if channels.len() > 1 && channels.iter().any(|c| c == "radiance") {
+        return Err(option_error(
+            "--columns mixes `radiance` with `radiance_<ch>`: use one form".into(),
+        ));
+    }
+    for (cols, is_sigma) in [(&sigma_cols, true), (&weight_cols, false)] {
+        let what = if is_sigma { "sigma" } else { "weight" };
+        if cols.len() > 1 && cols.iter().any(|(_, ch)| ch.is_none()) {
+            return Err(option_error(format!(
+                "--columns mixes `{what}` with `{what}_<ch>`: use one form"
+            )));
+        }
+        for (k, ch) in cols.iter() {
+            let c = match ch {
+                None => None,
+                Some(n) => Some(channels.iter().position(|c| c == n).ok_or_else(|| {
+                    option_error(format!("--columns: `{what}_{n}` has no `radiance_{n}`"))
+                })?),
+            };
+            targets[*k] = if is_sigma {
+                Target::Sigma(c)
+            } else {
+                Target::Weight(c)
+            };
+        }
+        let broadcast = cols.iter().any(|(_, ch)| ch.is_none());
+        if !cols.is_empty() && !broadcast && cols.len() != channels.len() {
+            return Err(option_error(format!(
+                "--columns: give a `{what}_<ch>` column for every radiance channel"
+            )));
+        }
+    }
+    let fixed = parse_fixed(options, &targets)?;
+    let maps = parse_maps(options, &names, &targets)?;
+    for (a, angle) in ANGLE_NAMES.iter().enumerate() {
+        if fixed[a].is_none() && !targets.contains(&Target::Angle(a)) {
+            return Err(option_error(format!(
+                "angle `{angle}` is not given: add it to --columns or fix it with \
+                 --fixed {angle}=VALUE"
+            )));
+        }
+    }
+    Ok(Layout {
+        targets,
+        names,
+        maps,
+        fixed,
+        has_sigma: !sigma_cols.is_empty(),
+        has_weight: !weight_cols.is_empty(),
+        channels,
+    })
+}
+
+/// `--fixed NAME=VALUE` for angles not in the columns.
+fn parse_fixed(options: &LoadOptions, targets: &[Target]) -> Result<[Option<f64>; 4]> {
+    let mut fixed = [None; 4];
+    for item in &options.fixed {
+        let (name, value) = item.split_once('=').ok_or_else(|| {
+            option_error(format!(
+                "--fixed `{item}`: write NAME=VALUE, e.g. theta_i=30"
+            ))
+        })?;
+        let name = name.trim().to_ascii_lowercase();
+        let a = ANGLE_NAMES.iter().position(|&n| n == name).ok_or_else(|| {
+            option_error(format!(
+                "--fixed `{item}`: `{name}` is not an angle (theta_i, phi_i, theta_r, phi_r)"
+            ))
+        })?;
+        if targets.contains(&Target::Angle(a)) {
+            return Err(option_error(format!(
+                "--fixed `{item}`: `{name}` is also a column in --columns; give it once"
+            )));
+        }
+        if fixed[a].is_some() {
+            return Err(option_error(format!("--fixed gives `{name}` twice")));
+        }
+        let v: f64 = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| {
+                option_error(format!(
+                    "--fixed `{item}`: `{value}` is not a finite number"
+                ))
+            })?;
+        fixed[a] = Some(v);
+    }
+    Ok(fixed)
+}
+
+/// `--map NAME=EXPR`, one linear map per column (identity where none is given).
+fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Target]) -> Result<Vec<Linear>> {
+    let mut maps = vec![Linear::IDENTITY; names.len()];
+    let mut mapped = vec![false; names.len()];
+    for item in &options.maps {
+        let (name, expr) = item.split_once('=').ok_or_else(|| {
+            option_error(format!(
+                "--map `{item}`: write NAME=EXPR, e.g. theta_r=90-x"
+            ))
+        })?;
+        let name = name.trim().to_ascii_lowercase();
+        let k = names
+            .iter()
+            .position(|n| *n == name)
+            .filter(|&k| targets[k] != Target::Skip)
+            .ok_or_else(|| {
+                option_error(format!(
+                    "--map `{item}`: `{name}` is not one of the --columns ({})",
+                    names.join(",")
+                ))
+            })?;
+        if mapped[k] {
+            return Err(option_error(format!("--map gives `{name}` twice")));
+        }
+        mapped[k] = true;
+        maps[k] = Linear::parse(expr)
+            .map_err(|e| option_error(format!("--map `{item}`: expression `{expr}` {e}")))?;
+    }
+    Ok(maps)
+}
+
+/// Split a scan line into fields: on commas when it has any, else on runs of whitespace.
+fn split_fields<'a>(line: &'a [u8], out: &mut Vec<&'a [u8]>) {
+    out.clear();
+    if line.contains(&b',') {
+        out.extend(line.split(|&b| b == b','));
+    } else {
+        out.extend(
+            line.split(|b| b.is_ascii_whitespace())
+                .filter(|f| !f.is_empty()),
+        );
+    }
+}
+
+/// Trim ASCII whitespace (including a CR from CRLF) from both ends.
+fn trim_bytes(mut s: &[u8]) -> &[u8] {
+    while let [first, rest @ ..] = s {
+        if first.is_ascii_whitespace() {
+            s = rest;
+        } else {
+            break;
+        }
+    }
+    while let [rest @ .., last] = s {
+        if last.is_ascii_whitespace() {
+            s = rest;
+        } else {
+            break;
+        }
+    }
+    s
+}
+
+/// Load a headerless scan.
+pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
+    let lay = layout(options)?;
+    let unit = options.angles.unwrap_or(AngleUnit::Deg);
+    let mut rows = Rows::new(
+        lay.channels.clone(),
+        lay.has_sigma,
+        lay.has_weight,
+        unit,
+        options.negative_tolerance,
+    );
+    let fixed: Vec<String> = ANGLE_NAMES
+        .iter()
+        .zip(lay.fixed)
+        .filter_map(|(n, v)| v.map(|v| format!("{n}={v}")))
+        .collect();
+    if !fixed.is_empty() {
+        rows.note(format!("fixed angles: {}", fixed.join(", ")));
+    }
+    for (name, m) in lay.names.iter().zip(&lay.maps) {
+        if *m != Linear::IDENTITY {
+            rows.note(format!("column {name} mapped by x -> {m}"));
+        }
+    }
+    let mut reader = super::open(path)?;
+    let nc = lay.channels.len();
+    let mut buf = Vec::new();
+    let mut radiance: Vec<Cell> = vec![None; nc];
+    let mut sigma: Vec<Cell> = vec![None; if lay.has_sigma { nc } else { 0 }];
+    let mut weight: Vec<Cell> = vec![None; if lay.has_weight { nc } else { 0 }];
+    let mut line_no = 0u64;
+    loop {
+        buf.clear();
+        let n = reader
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            break;
+        }
+        line_no += 1;
+        let mut line = buf.as_slice();
+        if line_no == 1 {
+            line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
+        }
+        let line = trim_bytes(line);
+        if line.is_empty() || line[0] == b'#' {
+            continue;
+        }
+        let mut fields: Vec<&[u8]> = Vec::with_capacity(lay.targets.len());
+        split_fields(line, &mut fields);
+        if fields.len() != lay.targets.len() {
+            return Err(Error::input(
+                path,
+                line_no,
+                (fields.len().min(lay.targets.len()) + 1) as u64,
+                format!(
+                    "expected {} columns as given by --columns ({}), found {}",
+                    lay.targets.len(),
+                    lay.names.join(","),
+                    fields.len()
+                ),
+            ));
+        }
+        let mut angles: [Cell; 4] = lay.fixed;
+        for (k, field) in fields.iter().enumerate() {
+            let target = lay.targets[k];
+            if target == Target::Skip {
+                continue;
+            }
+            let cell = parse_cell(
+                trim_bytes(field),
+                &options.missing,
+                path,
+                line_no,
+                k as u64 + 1,
+                &lay.names[k],
+            )?
+            .map(|x| lay.maps[k].apply(x));
+            match target {
+                Target::Angle(a) => angles[a] = cell,
+                Target::Radiance(c) => radiance[c] = cell,
+                Target::Sigma(Some(c)) => sigma[c] = cell,
+                Target::Sigma(None) => sigma.fill(cell),
+                Target::Weight(Some(c)) => weight[c] = cell,
+                Target::Weight(None) => weight.fill(cell),
+                Target::Skip => {}
+            }
+        }
+        rows.row(line_no, angles, &radiance, &sigma, &weight);
+    }
+    if rows.rows_read() == 0 {
+        return Err(Error::input(
+            path,
+            line_no.max(1),
+            1,
+            "no data rows: the scan has no data lines",
+        ));
+    }
+    Ok(rows.finish())
+}

@@ -1,0 +1,140 @@
+//! The clap options of `hairfit fit` / `hairfit demo`, and the commands themselves (load, fit,
+//! write, summarise), so `main.rs` only parses and calls.
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use clap::Args;
+
+use super::{fit, fit_data, output, EffectsChoice, FitOptions, Global, Loss, Space};
+use crate::cli::ModelArgs;
+use crate::data::{load, LoadOptions};
+use crate::error::{Error, Result};
+
+/// Fit options (`hairfit fit`, `hairfit demo`).
+#[derive(Debug, Clone, Args)]
+pub struct FitArgs {
+    /// Residual space: `log` (relative errors; default) or `linear`.
+    #[arg(long, default_value = "log")]
+    pub space: Space,
+    /// Loss: l2, huber, cauchy or soft-l1.
+    #[arg(long, default_value = "l2")]
+    pub loss: Loss,
+    /// Robust-loss scale C, in normalised residual units.
+    #[arg(long, default_value_t = 1.0)]
+    pub loss_scale: f64,
+    /// Number of multi-start points (Latin hypercube over MODEL.md's typical ranges).
+    #[arg(long, default_value_t = 16)]
+    pub starts: usize,
+    /// Seed of the start design and the subsample.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Global stage between multi-start and polish: none or nelder-mead.
+    #[arg(long, default_value = "none")]
+    pub global: Global,
+    /// Fix a parameter, NAME=VALUE (MODEL.md names, degrees for *_deg); repeatable.
+    #[arg(long = "fix")]
+    pub fix: Vec<String>,
+    /// Free a parameter that is fixed by default (only `eta`).
+    #[arg(long = "free")]
+    pub free: Vec<String>,
+    /// `auto` (default: from the data's geometry) or `all`; --lobes/--no-glints/--no-eccentricity
+    /// override both.
+    #[arg(long)]
+    pub effects: Option<String>,
+    /// Samples used by the multi-start stage.
+    #[arg(long, default_value_t = 2000)]
+    pub subsample: usize,
+    /// Best multi-start results polished on all data.
+    #[arg(long, default_value_t = 2)]
+    pub polish: usize,
+    /// LM trial steps per start.
+    #[arg(long, default_value_t = 40)]
+    pub start_iters: u64,
+    /// LM trial steps per polish run.
+    #[arg(long, default_value_t = 300)]
+    pub polish_iters: u64,
+    /// Never show a progress bar.
+    #[arg(long)]
+    pub no_progress: bool,
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+impl FitArgs {
+    /// The fit options these arguments ask for.
+    pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
+        let cfg = self.model.config()?;
+        let default_lobes = crate::model::Lobes::default();
+        let explicit =
+            cfg.effects.lobes != default_lobes || self.model.no_glints || self.model.no_eccentricity;
+        let effects = if explicit {
+            EffectsChoice::Explicit(cfg.effects)
+        } else {
+            match self.effects.as_deref().map(|s| s.trim().to_ascii_lowercase()) {
+                None => EffectsChoice::Auto,
+                Some(s) if s == "auto" => EffectsChoice::Auto,
+                Some(s) if s == "all" => EffectsChoice::All,
+                Some(s) => {
+                    return Err(Error::Other(format!(
+                        "--effects `{s}`: use auto or all (or --lobes/--no-glints/--no-eccentricity)"
+                    )))
+                }
+            }
+        };
+        let mut free_eta = false;
+        for f in &self.free {
+            match f.trim() {
+                "eta" => free_eta = true,
+                other => {
+                    return Err(Error::Other(format!(
+                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on; delta_eta_prime and delta_h_m stay fixed)"
+                    )))
+                }
+            }
+        }
+        if !(self.loss_scale.is_finite() && self.loss_scale > 0.0) {
+            return Err(Error::Other(format!(
+                "--loss-scale {}: must be a positive number",
+                self.loss_scale
+            )));
+        }
+        Ok(FitOptions {
+            space: self.space,
+            loss: self.loss,
+            loss_scale: self.loss_scale,
+            starts: self.starts.max(1),
+            seed: self.seed,
+            global: self.global,
+            fix: self.fix.clone(),
+            free_eta,
+            effects,
+            mode: cfg.mode,
+            subsample: self.subsample.max(1),
+            polish: self.polish.max(1),
+            start_iters: self.start_iters,
+            polish_iters: self.polish_iters,
+            cancel,
+            progress: !self.no_progress,
+        })
+    }
+}
+
+/// `hairfit fit DATA --out DIR`: load, fit, write, and return the summary.
+pub fn fit_command(
+    data_path: &Path,
+    load_options: &LoadOptions,
+    args: &FitArgs,
+    out: &Path,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<String> {
+    let opts = args.options(cancel)?;
+    let (ds, report) = load(data_path, load_options)?;
+    let report_json = serde_json::to_value(&report)
+        .map_err(|e| Error::Other(format!("cannot serialise the load report: {e}")))?;
+    let data = fit_data(&ds);
+    let outcome = fit(&data, &data_path.display().to_string(), report_json, &opts)?;
+    output::write_outputs(out, &outcome)?;
+    Ok(output::summary(&outcome, Some(out)))
+}

@@ -1,0 +1,111 @@
+//! Robust losses (Ceres conventions: `ρ(s)` of the squared residual `s = r²`, scaled by `C`).
+//!
+//! The generic LM minimises `½‖r̃‖²`, so the loss enters as the square-root residual
+//! `r̃ = sign(r)·sqrt(ρ_C(r²))` with exact Jacobian rows `dr̃ = ρ′·r/r̃ · dr`: `½‖r̃‖²` is then
+//! exactly the robust cost. (Ceres' corrector rescales by `√ρ′` but keeps the cost separately; an
+//! argmin solver only sees `½‖r‖²`, so that form would optimise a different function.)
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::Serialize;
+
+use crate::error::Error;
+
+/// Which loss `ρ` is applied to the squared residuals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Loss {
+    /// Least squares, `ρ(s) = s`.
+    #[default]
+    L2,
+    /// `ρ(s) = s` for `s ≤ 1`, `2√s − 1` beyond.
+    Huber,
+    /// `ρ(s) = ln(1 + s)`.
+    Cauchy,
+    /// `ρ(s) = 2(√(1 + s) − 1)`.
+    SoftL1,
+}
+
+impl FromStr for Loss {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "l2" => Ok(Loss::L2),
+            "huber" => Ok(Loss::Huber),
+            "cauchy" => Ok(Loss::Cauchy),
+            "soft-l1" | "soft_l1" => Ok(Loss::SoftL1),
+            other => Err(Error::Other(format!(
+                "unknown loss `{other}`: use l2, huber, cauchy or soft-l1"
+            ))),
+        }
+    }
+}
+
+impl fmt::Display for Loss {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Loss::L2 => "l2",
+            Loss::Huber => "huber",
+            Loss::Cauchy => "cauchy",
+            Loss::SoftL1 => "soft-l1",
+        })
+    }
+}
+
+impl Loss {
+    /// `(ρ(s), ρ′(s))` of the unit-scale loss.
+    fn rho(&self, s: f64) -> (f64, f64) {
+        match self {
+            Loss::L2 => (s, 1.0),
+            Loss::Huber => {
+                if s <= 1.0 {
+                    (s, 1.0)
+                } else {
+                    let r = s.sqrt();
+                    (2.0 * r - 1.0, 1.0 / r)
+                }
+            }
+            Loss::Cauchy => ((1.0 + s).ln(), 1.0 / (1.0 + s)),
+            Loss::SoftL1 => {
+                let t = (1.0 + s).sqrt();
+                (2.0 * (t - 1.0), 1.0 / t)
+            }
+        }
+    }
+
+    /// `(r̃, dr̃/dr, ρ′)` for residual `r` with loss scale `c`: `ρ_C(s) = C²ρ(s/C²)`.
+    pub fn apply(&self, r: f64, c: f64) -> (f64, f64, f64) {
+        if *self == Loss::L2 {
+            return (r, 1.0, 1.0);
+        }
+        let c2 = c * c;
+        let (rho, drho) = self.rho(r * r / c2);
+        let rt = r.signum() * (c2 * rho).max(0.0).sqrt();
+        // r̃ ≈ r near 0, where ρ′ → 1: the ratio ρ′ r / r̃ tends to 1.
+        let factor = if rt.abs() > 1e-300 { drho * r / rt } else { 1.0 };
+        (rt, factor, drho)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn square_root_residual_reproduces_the_cost_and_its_derivative() {
+        for loss in [Loss::L2, Loss::Huber, Loss::Cauchy, Loss::SoftL1] {
+            for r in [-5.0, -0.3, 0.2, 1.5, 40.0] {
+                let c = 0.7;
+                let (rt, f, _) = loss.apply(r, c);
+                let (rho, _) = loss.rho(r * r / (c * c));
+                // ½r̃² is the robust cost exactly (up to rounding, hence 1e-12 relative).
+                assert!((rt * rt - c * c * rho).abs() <= 1e-12 * (1.0 + rt * rt));
+                let h = 1e-6;
+                let fd = (loss.apply(r + h, c).0 - loss.apply(r - h, c).0) / (2.0 * h);
+                // Central difference, O(h²) truncation plus O(ε/h) rounding: 1e-6 is ample.
+                assert!((fd - f).abs() < 1e-6, "{loss} r={r}: {fd} vs {f}");
+            }
+        }
+    }
+}

@@ -1,0 +1,581 @@
+//! The fit's outputs: `fit.json` (contracts.md), `params.json` (a plain `ParamFile`) and
+//! `curves.csv`, all written atomically, plus the one-screen summary. Non-finite numbers never
+//! reach a file: they become `null` with a warning.
+
+use std::f64::consts::PI;
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::bounds::{get, is_angle, report_factor, Bound};
+use super::problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode};
+use super::solve::RunStatus;
+use super::{all_parameters, FitOutcome, StageTrace};
+use crate::atomic::write_atomically;
+use crate::error::{Error, Result};
+use crate::model::{Effects, ModelConfig, ParamName, RootMode};
+use crate::params::ParamFile;
+
+/// `Some(x)` when finite.
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct DataInfo {
+    pub file: String,
+    pub channels: Vec<String>,
+    pub n_samples: usize,
+    pub load_report: serde_json::Value,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelInfo {
+    pub mode: RootMode,
+    pub effects: Effects,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ParamEntry {
+    pub name: String,
+    pub value: Option<f64>,
+    pub std_error: Option<f64>,
+    /// `free`, `fixed`, `at_bound` or `undetermined`.
+    pub status: String,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ScaleEntry {
+    pub channel: String,
+    pub value: Option<f64>,
+    pub std_error: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Correlation {
+    pub names: Vec<String>,
+    pub matrix: Vec<Vec<Option<f64>>>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelStats {
+    pub channel: String,
+    pub rms: Option<f64>,
+    pub reduced_chi2: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ResidualStats {
+    pub space: String,
+    pub loss: String,
+    pub rms: Option<f64>,
+    pub reduced_chi2: Option<f64>,
+    pub dof: usize,
+    pub per_channel: Vec<ChannelStats>,
+}
+
+/// fit.json, field names fixed by contracts.md.
+#[derive(Debug, Clone, Serialize)]
+pub struct FitJson {
+    pub hairfit_version: String,
+    pub status: String,
+    pub data: DataInfo,
+    pub model: ModelInfo,
+    pub options: serde_json::Value,
+    pub params: ParamFile,
+    pub parameters: Vec<ParamEntry>,
+    pub scale: Vec<ScaleEntry>,
+    pub correlation: Correlation,
+    pub warnings: Vec<String>,
+    pub residuals: ResidualStats,
+    pub trace: Vec<StageTrace>,
+    pub wall_time_s: f64,
+}
+
+/// One row of curves.csv (one sample, one channel; angles in degrees; fits include the scale).
+#[derive(Debug, Clone, Serialize)]
+pub struct CurveRow {
+    pub sample: usize,
+    pub line: u64,
+    pub channel: String,
+    pub theta_i: f64,
+    pub phi_i: f64,
+    pub theta_r: f64,
+    pub phi_r: f64,
+    pub data: f64,
+    pub sigma: Option<f64>,
+    pub fit: f64,
+    pub fit_r: f64,
+    pub fit_tt: f64,
+    pub fit_trt: f64,
+    pub residual: f64,
+    pub weight: f64,
+}
+
+/// What [`assemble`] needs from the fit driver.
+pub struct Assembly<'a, 'e, 'f> {
+    pub data: &'a FitData,
+    pub file: &'a str,
+    pub load_report: serde_json::Value,
+    pub config: ModelConfig,
+    pub ev: &'e Evaluator<'f, ModelForward>,
+    pub u: &'a [f64],
+    pub status: RunStatus,
+    pub options: serde_json::Value,
+    pub warnings: Vec<String>,
+    pub trace: Vec<StageTrace>,
+    pub started: Instant,
+}
+
+/// Wrap an azimuth to (−π, π].
+fn wrap(x: f64) -> f64 {
+    let y = (x + PI).rem_euclid(2.0 * PI) - PI;
+    if y <= -PI {
+        y + 2.0 * PI
+    } else {
+        y
+    }
+}
+
+/// Samples within 2 w_c of a glint azimuth ±φ_c(θ_d) (exact caustic, circular fiber, index η).
+fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> usize {
+    data.angles
+        .iter()
+        .filter(|a| {
+            let td = 0.5 * (a.theta_r - a.theta_i);
+            let (s, c) = td.sin_cos();
+            let ep = (eta * eta - s * s).sqrt() / c;
+            if !(ep < 2.0) {
+                return false;
+            }
+            let hc = ((4.0 - ep * ep) / 3.0).sqrt();
+            let phic = wrap(4.0 * (hc / ep).asin() - 2.0 * hc.asin() + 2.0 * PI).abs();
+            let phi = wrap(a.phi_r - a.phi_i).abs();
+            (phi - phic).abs() < 2.0 * w_c
+        })
+        .count()
+}
+
+/// Why the data cannot determine `p` (geometry first, else the correlated partners).
+fn why_undetermined(
+    p: ParamName,
+    data: &FitData,
+    params: &crate::model::Params<f64>,
+    partners: &[String],
+) -> String {
+    let tail = if partners.is_empty() {
+        String::new()
+    } else {
+        format!("; strongly correlated with {}", partners.join(", "))
+    };
+    match p {
+        ParamName::KG | ParamName::WC => {
+            let n = samples_near_glint(data, params.eta, params.w_c);
+            if n == 0 {
+                format!("no sample near the glint (|phi - phi_c| < 2 w_c){tail}")
+            } else {
+                format!("only {n} sample(s) near the glint (|phi - phi_c| < 2 w_c){tail}")
+            }
+        }
+        ParamName::Eccentricity => {
+            let c2: Vec<f64> = data.angles.iter().map(|a| (a.phi_i + a.phi_r).cos()).collect();
+            let spread = c2.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - c2.iter().copied().fold(f64::INFINITY, f64::min);
+            format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
+        }
+        ParamName::SigmaA(_) => {
+            let n = data
+                .angles
+                .iter()
+                .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * PI)
+                .count();
+            format!("absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}")
+        }
+        ParamName::AlphaR | ParamName::BetaR => {
+            let th: Vec<f64> = data
+                .angles
+                .iter()
+                .map(|a| 0.5 * (a.theta_i + a.theta_r))
+                .collect();
+            let spread = th.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - th.iter().copied().fold(f64::INFINITY, f64::min);
+            format!(
+                "the samples span theta_h by {:.1} deg only: the longitudinal lobe shape needs a scan across it{tail}",
+                spread.to_degrees()
+            )
+        }
+        _ => format!("the data do not constrain it{tail}"),
+    }
+}
+
+/// Build the outcome (fit.json content, parameters, curves) at solver parameters `u`.
+pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
+    let Assembly {
+        data,
+        file,
+        load_report,
+        config,
+        ev,
+        u,
+        status,
+        options,
+        mut warnings,
+        trace,
+        started,
+    } = a;
+    let nc = data.n_channels();
+    let nf = ev.free.len();
+    let x = ev.natural(&u[..nf]);
+    let mut params = ev.params_at(&x);
+    // Transforms keep x inside; clamp anyway so rounding can never leave the domain.
+    for &p in &ev.free {
+        let v = get(&params, p);
+        super::bounds::set(&mut params, p, Bound::of(p).clamp(v));
+    }
+    let e = ev.eval_internal(u, false);
+    let scale = e.scale.clone();
+
+    // Standard errors: Jacobian in natural reporting units (degrees for angles) + natural scales.
+    let col: Vec<f64> = ev.free.iter().map(|&p| 1.0 / report_factor(p)).collect();
+    let ej = ev.evaluate(&x, &col, ScaleMode::FixedNatural(&scale), true);
+    let m = ej.residual.len();
+    let ncol = ej.n_cols;
+    let jm = nalgebra::DMatrix::from_row_slice(m, ncol, ej.jacobian.as_deref().unwrap_or(&[]));
+    let ss: f64 = ej.residual.iter().map(|r| r * r).sum();
+    let dof = m.saturating_sub(ncol);
+    let cov = crate::lm::covariance(&jm, ss, dof);
+    if cov.is_none() {
+        warnings.push(format!(
+            "no standard errors: {} residuals for {} parameters (dof = {dof}) or a non-finite Jacobian",
+            m, ncol
+        ));
+    }
+    let col_zero: Vec<bool> = (0..ncol)
+        .map(|j| jm.column(j).iter().all(|v| *v == 0.0))
+        .collect();
+    let std_of = |j: usize| -> Option<f64> {
+        let c = cov.as_ref()?;
+        if c.undetermined[j] || col_zero[j] {
+            return None;
+        }
+        finite(c.matrix[(j, j)].max(0.0).sqrt())
+    };
+    let corr = cov.as_ref().map(|c| crate::lm::correlation(&c.matrix));
+
+    let mut parameters = Vec::new();
+    for p in all_parameters(nc) {
+        let f = report_factor(p);
+        let value = get(&params, p) * f;
+        let entry = match ev.free.iter().position(|q| *q == p) {
+            Some(j) => {
+                let undetermined =
+                    col_zero[j] || cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                let status = if undetermined {
+                    let partners: Vec<String> = match &corr {
+                        Some(r) => (0..nf)
+                            .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
+                            .map(|k| ev.free[k].json_name())
+                            .collect(),
+                        None => Vec::new(),
+                    };
+                    warnings.push(format!(
+                        "{}: not determined by the data ({}); value is the best fit but has no standard error",
+                        p.json_name(),
+                        if col_zero[j] {
+                            "S does not depend on it at any sample".to_string()
+                        } else {
+                            why_undetermined(p, data, &params, &partners)
+                        }
+                    ));
+                    "undetermined"
+                } else if Bound::of(p).at_bound(get(&params, p)) {
+                    "at_bound"
+                } else {
+                    "free"
+                };
+                ParamEntry {
+                    name: p.json_name(),
+                    value: finite(value),
+                    std_error: if undetermined { None } else { std_of(j) },
+                    status: status.into(),
+                }
+            }
+            None => ParamEntry {
+                name: p.json_name(),
+                value: finite(value),
+                std_error: None,
+                status: "fixed".into(),
+            },
+        };
+        if entry.value.is_none() {
+            warnings.push(format!("{}: value is not finite; written as null", p.json_name()));
+        }
+        parameters.push(entry);
+    }
+    let scale_entries: Vec<ScaleEntry> = (0..nc)
+        .map(|c| ScaleEntry {
+            channel: data.channels[c].clone(),
+            value: finite(scale[c]),
+            std_error: std_of(nf + c),
+        })
+        .collect();
+    let correlation = Correlation {
+        names: ev.free.iter().map(|p| p.json_name()).collect(),
+        matrix: (0..nf)
+            .map(|i| {
+                (0..nf)
+                    .map(|j| corr.as_ref().and_then(|r| finite(r[(i, j)])))
+                    .collect()
+            })
+            .collect(),
+    };
+
+    // Residual statistics in the fit space (normalised residuals).
+    let raw_ss: f64 = e.raw.iter().map(|r| r * r).sum();
+    let rt_ss: f64 = e.residual.iter().map(|r| r * r).sum();
+    let per_channel = (0..nc)
+        .map(|c| {
+            let rr: Vec<f64> = e.raw.iter().skip(c).step_by(nc).copied().collect();
+            let rt: f64 = e.residual.iter().skip(c).step_by(nc).map(|r| r * r).sum();
+            let n = rr.len() as f64;
+            // Each channel carries its share of the degrees of freedom.
+            let dof_c = n * dof as f64 / m.max(1) as f64;
+            ChannelStats {
+                channel: data.channels[c].clone(),
+                rms: finite((rr.iter().map(|r| r * r).sum::<f64>() / n).sqrt()),
+                reduced_chi2: finite(rt / dof_c),
+            }
+        })
+        .collect();
+    let residuals = ResidualStats {
+        space: ev.space.to_string(),
+        loss: ev.loss.to_string(),
+        rms: finite((raw_ss / m.max(1) as f64).sqrt()),
+        reduced_chi2: finite(rt_ss / dof as f64),
+        dof,
+        per_channel,
+    };
+
+    // Curves.
+    let mut curves = Vec::with_capacity(m);
+    let mut lobes = vec![[0.0; 3]; nc];
+    let fwd = ModelForward { config };
+    for (i, ang) in data.angles.iter().enumerate() {
+        let have = fwd.by_lobe(&params, ang, &mut lobes);
+        for c in 0..nc {
+            let k = i * nc + c;
+            let s = scale[c];
+            let fit = s * e.model[k];
+            let (fr, ft, ftrt) = if have {
+                (s * lobes[c][0], s * lobes[c][1], s * lobes[c][2])
+            } else {
+                (f64::NAN, f64::NAN, f64::NAN)
+            };
+            curves.push(CurveRow {
+                sample: i,
+                line: data.line.get(i).copied().unwrap_or(i as u64 + 1),
+                channel: data.channels[c].clone(),
+                theta_i: ang.theta_i.to_degrees(),
+                phi_i: ang.phi_i.to_degrees(),
+                theta_r: ang.theta_r.to_degrees(),
+                phi_r: ang.phi_r.to_degrees(),
+                data: data.values[k],
+                sigma: data.sigma.as_ref().map(|s| s[k]),
+                fit,
+                fit_r: fr,
+                fit_tt: ft,
+                fit_trt: ftrt,
+                residual: e.raw[k],
+                weight: e.robust_weight[k],
+            });
+        }
+    }
+    if curves
+        .iter()
+        .any(|r| ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight].iter().all(|v| v.is_finite()))
+    {
+        warnings.push("curves.csv: some fitted values are not finite; written as empty cells".into());
+    }
+
+    let json = FitJson {
+        hairfit_version: env!("CARGO_PKG_VERSION").into(),
+        status: status.as_str().into(),
+        data: DataInfo {
+            file: file.into(),
+            channels: data.channels.clone(),
+            n_samples: data.len(),
+            load_report,
+        },
+        model: ModelInfo {
+            mode: config.mode,
+            effects: config.effects,
+        },
+        options,
+        params: ParamFile::from_params(&params),
+        parameters,
+        scale: scale_entries,
+        correlation,
+        warnings,
+        residuals,
+        trace,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    };
+    let _ = is_angle;
+    Ok(FitOutcome {
+        json,
+        params,
+        curves,
+    })
+}
+
+/// Replace non-finite numbers in a JSON value by null (serde_json would write them as null too,
+/// but this keeps the guarantee explicit whatever the serializer).
+fn scrub(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Array(a) => a.iter_mut().for_each(scrub),
+        serde_json::Value::Object(o) => o.values_mut().for_each(scrub),
+        serde_json::Value::Number(n) => {
+            if n.as_f64().is_some_and(|x| !x.is_finite()) {
+                *v = serde_json::Value::Null;
+            }
+        }
+        _ => {}
+    }
+}
+
+fn json_err(path: &Path, e: serde_json::Error) -> Error {
+    Error::Other(format!("{}: cannot serialise: {e}", path.display()))
+}
+
+/// A CSV cell: empty for non-finite values.
+fn cell(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:e}")
+    } else {
+        String::new()
+    }
+}
+
+/// Write `fit.json`, `params.json` and `curves.csv` into `dir` (each atomically).
+pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let fit_path = dir.join("fit.json");
+    let mut v = serde_json::to_value(&out.json).map_err(|e| json_err(&fit_path, e))?;
+    scrub(&mut v);
+    write_atomically(&fit_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &v).map_err(|e| json_err(&fit_path, e))?;
+        w.write_all(b"\n").map_err(|e| Error::io(&fit_path, e))
+    })?;
+    let params_path = dir.join("params.json");
+    write_atomically(&params_path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &out.json.params)
+            .map_err(|e| json_err(&params_path, e))?;
+        w.write_all(b"\n").map_err(|e| Error::io(&params_path, e))
+    })?;
+    let curves_path = dir.join("curves.csv");
+    write_atomically(&curves_path, |w| {
+        let io = |e| Error::io(&curves_path, e);
+        writeln!(
+            w,
+            "sample,line,channel,theta_i,phi_i,theta_r,phi_r,data,sigma,fit,fit_r,fit_tt,fit_trt,residual,weight"
+        )
+        .map_err(io)?;
+        for r in &out.curves {
+            writeln!(
+                w,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                r.sample,
+                r.line,
+                r.channel,
+                r.theta_i,
+                r.phi_i,
+                r.theta_r,
+                r.phi_r,
+                cell(r.data),
+                r.sigma.map(cell).unwrap_or_default(),
+                cell(r.fit),
+                cell(r.fit_r),
+                cell(r.fit_tt),
+                cell(r.fit_trt),
+                cell(r.residual),
+                cell(r.weight)
+            )
+            .map_err(io)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// `v ± e` with a sensible number of digits.
+fn pm(v: Option<f64>, e: Option<f64>) -> String {
+    match (v, e) {
+        (Some(v), Some(e)) => format!("{v:>12.6} ± {e:.2e}"),
+        (Some(v), None) => format!("{v:>12.6}"),
+        _ => "        null".into(),
+    }
+}
+
+/// The one-screen summary printed by `hairfit fit` / `hairfit demo`.
+pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
+    let j = &out.json;
+    let mut s = String::new();
+    let l = j.model.effects.lobes;
+    let lobes: Vec<&str> = [(l.r, "R"), (l.tt, "TT"), (l.trt, "TRT")]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+    s += &format!(
+        "hairfit fit: {} — {} samples × {} channel(s) from {}\n",
+        j.status,
+        j.data.n_samples,
+        j.data.channels.len(),
+        j.data.file
+    );
+    s += &format!(
+        "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
+        j.model.mode,
+        lobes.join("+"),
+        if j.model.effects.glints { "on" } else { "off" },
+        if j.model.effects.eccentricity { "on" } else { "off" },
+        j.options["effects_choice"].as_str().unwrap_or("?")
+    );
+    if let Some(reasons) = j.options["effects_reasons"].as_array() {
+        for r in reasons {
+            s += &format!("  {}\n", r.as_str().unwrap_or(""));
+        }
+    }
+    s += "parameters:\n";
+    for p in &j.parameters {
+        s += &format!("  {:<16} {}  {}\n", p.name, pm(p.value, p.std_error), p.status);
+    }
+    for c in &j.scale {
+        s += &format!("  scale[{}]{:<8} {}\n", c.channel, "", pm(c.value, c.std_error));
+    }
+    let r = &j.residuals;
+    s += &format!(
+        "residuals ({} space, {} loss): rms {} reduced chi2 {} dof {}\n",
+        r.space,
+        r.loss,
+        r.rms.map_or("null".into(), |v| format!("{v:.4e}")),
+        r.reduced_chi2.map_or("null".into(), |v| format!("{v:.4e}")),
+        r.dof
+    );
+    for t in &j.trace {
+        s += &format!(
+            "  stage {:<18} iterations {:>5}  cost {:.6e}  {:.2} s\n",
+            t.stage, t.iterations, t.cost, t.wall_s
+        );
+    }
+    for w in &j.warnings {
+        s += &format!("warning: {w}\n");
+    }
+    s += &format!("wall time {:.2} s", j.wall_time_s);
+    if let Some(d) = dir {
+        s += &format!("; wrote {}/{{fit.json,params.json,curves.csv}}", d.display());
+    }
+    s.push('\n');
+    s
+}

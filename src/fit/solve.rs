@@ -1,0 +1,238 @@
+//! Running the local solver through argmin's `Executor`: a cost-trace observer, a cancellation
+//! wrapper, and the multi-start driver (short runs on a subsample, then polish on all data).
+//!
+//! Cancellation: argmin's own `ctrlc` feature installs a process-wide handler per `Executor::run`
+//! and only the first installation wins, so with many executors running in parallel (multi-start)
+//! most runs would not see Ctrl-C. Instead the CLI installs one handler that sets a shared
+//! `AtomicBool`, and every run is wrapped in [`Cancellable`], whose `terminate` checks it.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use argmin::core::observers::{Observe, ObserverMode};
+use argmin::core::{
+    Error as ArgminError, Executor, IterState, Problem, Solver, State, TerminationReason,
+    TerminationStatus, KV,
+};
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use super::problem::{Evaluator, Forward, LsqProblem};
+
+/// argmin state of the least-squares solvers.
+pub type LsqState = IterState<DVector<f64>, (), DMatrix<f64>, (), DVector<f64>, f64>;
+
+/// How a solver run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    Converged,
+    Interrupted,
+    MaxIterations,
+    Failed,
+}
+
+impl RunStatus {
+    /// The fit.json status string.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            RunStatus::Converged => "converged",
+            RunStatus::Interrupted => "interrupted",
+            RunStatus::MaxIterations => "max_iterations",
+            RunStatus::Failed => "failed",
+        }
+    }
+}
+
+/// Wraps a solver so that a shared flag stops it at the next iteration boundary.
+pub struct Cancellable<S> {
+    pub inner: S,
+    pub flag: Option<Arc<AtomicBool>>,
+}
+
+impl<O, S: Solver<O, LsqState>> Solver<O, LsqState> for Cancellable<S> {
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: LsqState,
+    ) -> Result<(LsqState, Option<KV>), ArgminError> {
+        self.inner.init(problem, state)
+    }
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        state: LsqState,
+    ) -> Result<(LsqState, Option<KV>), ArgminError> {
+        self.inner.next_iter(problem, state)
+    }
+    fn terminate_internal(&mut self, state: &LsqState) -> TerminationStatus {
+        if is_cancelled(&self.flag) {
+            return TerminationStatus::Terminated(TerminationReason::Interrupt);
+        }
+        self.inner.terminate_internal(state)
+    }
+    fn terminate(&mut self, state: &LsqState) -> TerminationStatus {
+        self.inner.terminate(state)
+    }
+}
+
+/// True when the cancellation flag is set.
+pub fn is_cancelled(flag: &Option<Arc<AtomicBool>>) -> bool {
+    flag.as_ref().is_some_and(|f| f.load(Ordering::SeqCst))
+}
+
+/// Records the cost after every iteration.
+struct TraceObserver(Arc<Mutex<Vec<f64>>>);
+
+impl Observe<LsqState> for TraceObserver {
+    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+        if let Ok(mut h) = self.0.lock() {
+            h.push(state.get_cost());
+        }
+        Ok(())
+    }
+}
+
+/// Outcome of one local solver run.
+#[derive(Debug, Clone)]
+pub struct LocalRun {
+    /// Best solver parameters found.
+    pub u: Vec<f64>,
+    /// `½‖r̃‖²` at `u`.
+    pub cost: f64,
+    pub iterations: u64,
+    /// Solver cost after every iteration.
+    pub history: Vec<f64>,
+    pub status: RunStatus,
+    pub wall_s: f64,
+}
+
+/// The local least-squares solver: Moré–MINPACK Levenberg–Marquardt (`crate::lm`).
+pub fn local_solver() -> crate::lm::LevenbergMarquardt {
+    crate::lm::LevenbergMarquardt::new()
+}
+
+/// Run the local solver from `u0` for at most `max_iters` iterations.
+pub fn run_local<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    u0: &[f64],
+    max_iters: u64,
+    cancel: &Option<Arc<AtomicBool>>,
+) -> LocalRun {
+    let t0 = Instant::now();
+    let start_cost = ev.eval_internal(u0, false).cost();
+    let history = Arc::new(Mutex::new(Vec::new()));
+    let solver = Cancellable {
+        inner: local_solver(),
+        flag: cancel.clone(),
+    };
+    let result = Executor::new(LsqProblem { ev }, solver)
+        .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
+        .add_observer(TraceObserver(history.clone()), ObserverMode::Always)
+        .run();
+    let history = history.lock().map(|h| h.clone()).unwrap_or_default();
+    let (u, iterations, status) = match result {
+        Ok(res) => {
+            let st = &res.state;
+            let u = st
+                .get_best_param()
+                .or(st.get_param())
+                .map(|p| p.as_slice().to_vec())
+                .unwrap_or_else(|| u0.to_vec());
+            let status = match st.get_termination_reason() {
+                Some(TerminationReason::Interrupt) => RunStatus::Interrupted,
+                Some(TerminationReason::MaxItersReached) => RunStatus::MaxIterations,
+                // LM's other exits (converged, or no further progress possible at machine
+                // precision) both leave the best point it can reach.
+                _ => RunStatus::Converged,
+            };
+            (u, st.get_iter(), status)
+        }
+        Err(_) => (u0.to_vec(), 0, RunStatus::Failed),
+    };
+    let cost = ev.eval_internal(&u, false).cost();
+    // Never hand back a point worse than the start (a failed run keeps the start).
+    let (u, cost) = if cost.is_finite() && cost <= start_cost || !start_cost.is_finite() {
+        (u, cost)
+    } else {
+        (u0.to_vec(), start_cost)
+    };
+    LocalRun {
+        u,
+        cost,
+        iterations,
+        history,
+        status,
+        wall_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// The subsample cost as an argmin `CostFunction` (for the derivative-free global stage).
+struct CostOnly<'e, 'f, F: Forward> {
+    ev: &'e Evaluator<'f, F>,
+}
+
+impl<F: Forward> argmin::core::CostFunction for CostOnly<'_, '_, F> {
+    type Param = DVector<f64>;
+    type Output = f64;
+    fn cost(&self, u: &DVector<f64>) -> Result<f64, ArgminError> {
+        let c = self.ev.eval_internal(u.as_slice(), false).cost();
+        Ok(if c.is_finite() { c } else { f64::MAX })
+    }
+}
+
+/// Records the best cost after every Nelder–Mead iteration.
+struct NmTrace(Arc<Mutex<Vec<f64>>>);
+
+impl<S: State<Float = f64>> Observe<S> for NmTrace {
+    fn observe_iter(&mut self, state: &S, _kv: &KV) -> Result<(), ArgminError> {
+        if let Ok(mut h) = self.0.lock() {
+            h.push(state.get_best_cost());
+        }
+        Ok(())
+    }
+}
+
+/// argmin's Nelder–Mead from `u0` (initial simplex: steps of 0.2 in each internal coordinate,
+/// about a tenth of a bounded parameter's range); returns `(u, cost, iterations, history)`.
+pub fn nelder_mead<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    u0: &[f64],
+    max_iters: u64,
+) -> (Vec<f64>, f64, u64, Vec<f64>) {
+    let x0 = DVector::from_column_slice(u0);
+    let mut simplex = vec![x0.clone()];
+    for j in 0..u0.len() {
+        let mut x = x0.clone();
+        x[j] += 0.2;
+        simplex.push(x);
+    }
+    let history = Arc::new(Mutex::new(Vec::new()));
+    let solver = argmin::solver::neldermead::NelderMead::new(simplex);
+    let res = Executor::new(CostOnly { ev }, solver)
+        .configure(|s| s.max_iters(max_iters))
+        .add_observer(NmTrace(history.clone()), ObserverMode::Always)
+        .run();
+    let history = history.lock().map(|h| h.clone()).unwrap_or_default();
+    let start_cost = ev.eval_internal(u0, false).cost();
+    match res {
+        Ok(r) => {
+            let st = r.state();
+            let u = st
+                .get_best_param()
+                .map(|p| p.as_slice().to_vec())
+                .unwrap_or_else(|| u0.to_vec());
+            let c = ev.eval_internal(&u, false).cost();
+            if c <= start_cost {
+                (u, c, st.get_iter(), history)
+            } else {
+                (u0.to_vec(), start_cost, st.get_iter(), history)
+            }
+        }
+        Err(_) => (u0.to_vec(), start_cost, 0, history),
+    }
+}

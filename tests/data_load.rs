@@ -1,0 +1,412 @@
+//! The loader on well-formed files of each format: exact accounting of every row, each
+//! rejection reason, fixed-angle scan mapping, and write→load round trips.
+
+use std::path::{Path, PathBuf};
+
+use hairfit::data::{
+    load, write_csv, write_json, AngleUnit, Dataset, Format, LoadOptions, LoadReport,
+    RejectReason::*,
+};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/loader")
+        .join(name)
+}
+
+fn write(dir: &Path, name: &str, content: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn scan_options(columns: &str, fixed: &str, maps: &[&str]) -> LoadOptions {
+    LoadOptions {
+        columns: columns.split(',').map(String::from).collect(),
+        fixed: fixed
+            .split(',')
+            .filter(|s| !s.is_empty())
+            .map(String::from)
+            .collect(),
+        maps: maps.iter().map(|s| s.to_string()).collect(),
+        ..LoadOptions::default()
+    }
+}
+
+/// The accounting invariant every report must satisfy.
+fn assert_accounts(report: &LoadReport, ds: &Dataset) {
+    assert_eq!(report.rows_read, report.accepted + report.rejected_total());
+    assert_eq!(report.accepted as usize, ds.len());
+    assert_eq!(ds.source_line.len(), ds.len());
+    assert_eq!(ds.radiance.len(), ds.len() * ds.n_channels());
+}
+
+#[test]
+fn messy_csv_counts_every_reason_exactly() {
+    let (ds, r) = load(&fixture("messy.csv"), &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(r.format, "csv");
+    assert_eq!(r.rows_read, 14);
+    assert_eq!(r.accepted, 4);
+    assert_eq!(r.rejected_count(MissingValue), 2);
+    assert_eq!(r.rejected[&MissingValue].first_lines, [4, 5]);
+    assert_eq!(r.rejected_count(NonFinite), 3);
+    assert_eq!(r.rejected[&NonFinite].first_lines, [7, 8, 9]);
+    assert_eq!(r.rejected_count(ThetaOutOfRange), 2);
+    assert_eq!(r.rejected[&ThetaOutOfRange].first_lines, [10, 11]);
+    assert_eq!(r.rejected_count(NonPositiveSigma), 2);
+    assert_eq!(r.rejected[&NonPositiveSigma].first_lines, [13, 14]);
+    assert_eq!(r.rejected_count(Duplicate), 1);
+    assert_eq!(r.duplicate_of, [[15, 3]]);
+    assert_eq!(r.rejected_count(NegativeRadiance), 0);
+    assert_eq!(r.negative_kept.count, 2);
+    assert_eq!(r.negative_kept.first_lines, [12, 18]);
+    assert!(r
+        .notes
+        .iter()
+        .any(|n| n.contains("ignored columns: operator")));
+    assert_eq!(ds.source_line, [3, 12, 17, 18]);
+    assert_eq!(ds.channels, ["radiance"]);
+    // 1e308 is finite and kept as is.
+    assert_eq!(ds.value(2, 0), 1e308);
+    assert_eq!(ds.sigma.as_deref(), Some(&[0.1; 4][..]));
+    // Degrees are converted with f64::to_radians, so the same call gives the same bits.
+    assert_eq!(ds.angles(0), [10f64, 0.0, 20.0, 30.0].map(f64::to_radians));
+    let text = r.to_string();
+    assert!(
+        text.contains("14 rows read, 4 accepted, 10 rejected"),
+        "{text}"
+    );
+    assert!(
+        text.contains("line 15 repeats the angles of line 3"),
+        "{text}"
+    );
+}
+
+#[test]
+fn negative_tolerance_rejects_only_beyond_it() {
+    let options = LoadOptions {
+        negative_tolerance: Some(0.001),
+        ..LoadOptions::default()
+    };
+    let (ds, r) = load(&fixture("messy.csv"), &options).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(r.rejected_count(NegativeRadiance), 1);
+    assert_eq!(r.rejected[&NegativeRadiance].first_lines, [12]);
+    assert_eq!(r.accepted, 3);
+    assert_eq!(r.negative_kept.first_lines, [18]);
+}
+
+#[test]
+fn report_serializes_with_reason_names() {
+    let (_, r) = load(&fixture("messy.csv"), &LoadOptions::default()).unwrap();
+    let v = serde_json::to_value(&r).unwrap();
+    assert_eq!(v["rows_read"], 14);
+    assert_eq!(v["rejected"]["non_finite"]["count"], 3);
+    assert_eq!(v["rejected"]["duplicate"]["first_lines"][0], 15);
+    assert_eq!(v["negative_kept"]["count"], 2);
+}
+
+#[test]
+fn multichannel_csv_broadcasts_sigma_and_reads_weights() {
+    let (ds, r) = load(&fixture("rgb.csv"), &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(ds.channels, ["r", "g", "b"]);
+    assert_eq!(r.rows_read, 3);
+    assert_eq!(r.rejected_count(NonPositiveWeight), 1);
+    assert_eq!(r.rejected[&NonPositiveWeight].first_lines, [3]);
+    assert_eq!(ds.len(), 2);
+    assert_eq!(ds.value(1, 2), 9.0);
+    assert_eq!(
+        ds.sigma.as_deref(),
+        Some(&[0.5, 0.5, 0.5, 0.25, 0.25, 0.25][..])
+    );
+    assert_eq!(
+        ds.weight.as_deref(),
+        Some(&[1.0, 1.0, 2.0, 1.0, 3.0, 1.0][..])
+    );
+    assert_eq!(ds.weight_of(1, 1), Some(3.0));
+}
+
+#[test]
+fn radians_option_skips_conversion_and_uses_the_radian_limit() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "rad.csv",
+        "theta_i,phi_i,theta_r,phi_r,radiance\n0.5,0,1.5,3,1\n0.5,0,1.5708,3,1\n",
+    );
+    let options = LoadOptions {
+        angles: Some(AngleUnit::Rad),
+        ..LoadOptions::default()
+    };
+    let (ds, r) = load(&p, &options).unwrap();
+    assert_eq!(ds.angles(0), [0.5, 0.0, 1.5, 3.0]);
+    // 1.5708 > π/2 = 1.57079...: on the axis side of the limit.
+    assert_eq!(r.rejected_count(ThetaOutOfRange), 1);
+    // The same file read as degrees keeps both rows.
+    let (_, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(r.accepted, 2);
+}
+
+#[test]
+fn unit_directive_is_honoured_and_conflicts_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "d.csv",
+        "# angles: rad\ntheta_i,phi_i,theta_r,phi_r,radiance\n0.5,0,1,3,1\n",
+    );
+    let (ds, _) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(ds.angles(0), [0.5, 0.0, 1.0, 3.0]);
+    let options = LoadOptions {
+        angles: Some(AngleUnit::Deg),
+        ..LoadOptions::default()
+    };
+    let msg = load(&p, &options).unwrap_err().to_string();
+    assert!(
+        msg.contains("d.csv:1:1") && msg.contains("--angles"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn fixed_angle_scan_lands_values_in_the_right_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "scan.txt",
+        "# phi  polar  value\n10 60 1.25\n20\t60.5   ?\n\n30 -5 2\n40 61 -3\n",
+    );
+    let options = scan_options(
+        "phi_r,theta_r,radiance",
+        "theta_i=30,phi_i=0",
+        &["theta_r=90-x"],
+    );
+    let (ds, r) = load(&p, &options).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(r.format, "scan");
+    assert_eq!(r.rows_read, 4);
+    assert_eq!(r.rejected_count(MissingValue), 1);
+    assert_eq!(r.rejected[&MissingValue].first_lines, [3]);
+    // polar -5 maps to θ_r = 95°: past the axis.
+    assert_eq!(r.rejected[&ThetaOutOfRange].first_lines, [5]);
+    assert_eq!(ds.source_line, [2, 6]);
+    // The map is -1·x + 90, evaluated exactly for these integers, then to_radians.
+    assert_eq!(ds.theta_r, [30f64.to_radians(), 29f64.to_radians()]);
+    assert_eq!(ds.phi_r, [10f64.to_radians(), 40f64.to_radians()]);
+    assert_eq!(ds.theta_i, [30f64.to_radians(); 2]);
+    assert_eq!(ds.phi_i, [0.0; 2]);
+    assert_eq!(ds.radiance, [1.25, -3.0]);
+    assert_eq!(r.negative_kept.first_lines, [6]);
+}
+
+#[test]
+fn scan_with_commas_skip_columns_radians_and_channels() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "scan.dat",
+        "0.1, 99, 0.2, 1, 2, 0.5\n0.3, 99, 0.4, 3, 4, 0.5\n",
+    );
+    let mut options = scan_options(
+        "theta_r,skip,phi_r,radiance_r,radiance_g,sigma",
+        "theta_i=0.5,phi_i=-1",
+        &["phi_r=2*x+1", "radiance_g=x/2"],
+    );
+    options.angles = Some(AngleUnit::Rad);
+    let (ds, r) = load(&p, &options).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(ds.channels, ["r", "g"]);
+    assert_eq!(ds.theta_i, [0.5, 0.5]);
+    assert_eq!(ds.phi_i, [-1.0, -1.0]);
+    assert_eq!(ds.theta_r, [0.1, 0.3]);
+    // Same arithmetic as the map (2·x + 1), so equal bits.
+    assert_eq!(ds.phi_r, [2.0 * 0.2 + 1.0, 2.0 * 0.4 + 1.0]);
+    assert_eq!(ds.radiance, [1.0, 1.0, 3.0, 2.0]);
+    assert_eq!(ds.sigma.as_deref(), Some(&[0.5; 4][..]));
+}
+
+#[test]
+fn scan_option_errors_say_what_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "s.txt", "1 2 3\n");
+    let cases: [(LoadOptions, &str); 6] = [
+        (
+            scan_options("phi_r,theta_r,radiance", "theta_i=30", &[]),
+            "phi_i",
+        ),
+        (
+            scan_options(
+                "phi_r,theta_r,radiance",
+                "theta_i=30,phi_i=0",
+                &["theta_r=x*x"],
+            ),
+            "not linear",
+        ),
+        (
+            scan_options(
+                "phi_r,theta_r,radiance",
+                "theta_i=30,phi_i=0",
+                &["theta_i=90-x"],
+            ),
+            "not one of the --columns",
+        ),
+        (
+            scan_options("phi_r,theta_r,foo", "theta_i=30,phi_i=0", &[]),
+            "unknown column name `foo`",
+        ),
+        (
+            scan_options("phi_r,theta_r,phi_i", "theta_i=30", &[]),
+            "radiance",
+        ),
+        (
+            scan_options("phi_r,theta_r,radiance", "theta_i=30,phi_i=zero", &[]),
+            "not a finite number",
+        ),
+    ];
+    for (options, want) in cases {
+        let msg = load(&p, &options).unwrap_err().to_string();
+        assert!(msg.contains(want), "{want}: {msg}");
+    }
+    // A scan without --columns cannot be read.
+    let msg = load(&p, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(msg.contains("--columns"), "{msg}");
+}
+
+#[test]
+fn shipped_scan_example_loads_as_documented() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scan_example.txt");
+    let mut options = scan_options(
+        "phi_r,theta_r,radiance",
+        "theta_i=-20,phi_i=0",
+        &["theta_r=90-x"],
+    );
+    options.missing = "?".into();
+    let (ds, r) = load(&path, &options).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!((r.rows_read, r.accepted), (90, 86));
+    assert_eq!(r.rejected[&MissingValue].first_lines, [6, 60, 61, 82]);
+    assert_eq!(r.negative_kept.first_lines, [73]);
+}
+
+#[test]
+fn json_dataset_reports_rows_with_their_lines() {
+    let (ds, r) = load(&fixture("dataset.json"), &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(r.format, "json");
+    assert_eq!(r.rows_read, 6);
+    assert_eq!(r.accepted, 2);
+    assert_eq!(r.rejected[&MissingValue].first_lines, [6, 7]);
+    assert_eq!(r.rejected[&ThetaOutOfRange].first_lines, [8]);
+    assert_eq!(r.duplicate_of, [[9, 5]]);
+    assert_eq!(r.negative_kept.first_lines, [10]);
+    assert_eq!(ds.channels, ["r", "g"]);
+    assert_eq!(ds.source_line, [5, 10]);
+    assert_eq!(ds.radiance, [1.5, 2.5, -0.25, 4.0]);
+    assert_eq!(ds.sigma.as_deref(), Some(&[0.1, 0.1, 0.1, 0.2][..]));
+    assert_eq!(ds.meta["fiber"], "blond #3");
+}
+
+/// A dataset with awkward values: negative zero, subnormal-free extremes, several channels.
+fn sample_dataset() -> Dataset {
+    let mut ds = Dataset::with_channels(vec!["r".into(), "g".into()], true, true);
+    let mut x = 0.123_456_789_f64;
+    for i in 0..200u64 {
+        // A deterministic scramble of values with full 53-bit mantissas.
+        x = (x * 3.917_345_123 + 0.271_828_182_845).fract();
+        let angles = [
+            (x - 0.5) * 3.1,
+            (x * 7.0).fract() * 6.2 - 3.1,
+            (0.5 - (x * 13.0).fract()) * 3.1,
+            if i == 0 {
+                -0.0
+            } else {
+                (x * 17.0).fract() * 6.2 - 3.1
+            },
+        ];
+        let radiance = [x * 1e-3 - 2e-4, 1.0 / (x + 1e-9)];
+        ds.push(
+            angles,
+            &radiance,
+            Some(&[x + 1e-3, 0.1]),
+            Some(&[1.0, x + 0.5]),
+            i + 1,
+        );
+    }
+    ds.meta.insert("source".into(), "synthetic".into());
+    ds
+}
+
+#[test]
+fn csv_write_then_load_is_bit_exact() {
+    let ds = sample_dataset();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("out.csv");
+    write_csv(&ds, &p).unwrap();
+    let (back, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(r.accepted, 200);
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(back.channels, ds.channels);
+    for (a, b) in [
+        (&back.theta_i, &ds.theta_i),
+        (&back.phi_i, &ds.phi_i),
+        (&back.theta_r, &ds.theta_r),
+        (&back.phi_r, &ds.phi_r),
+        (&back.radiance, &ds.radiance),
+        (back.sigma.as_ref().unwrap(), ds.sigma.as_ref().unwrap()),
+        (back.weight.as_ref().unwrap(), ds.weight.as_ref().unwrap()),
+    ] {
+        assert_eq!(bits(a), bits(b));
+    }
+    // Two comment lines and the header come first.
+    assert_eq!(back.source_line[0], 4);
+}
+
+#[test]
+fn json_write_then_load_round_trips() {
+    let ds = sample_dataset();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("out.json");
+    write_json(&ds, &p).unwrap();
+    let (back, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_eq!(r.accepted, 200);
+    assert_eq!(back.channels, ds.channels);
+    assert_eq!(back.meta, ds.meta);
+    // One sample per line after the 4 header lines.
+    assert_eq!(back.source_line[0], 5);
+    assert_eq!(back.source_line[199], 204);
+    // Angles go through degrees: to_degrees then to_radians is two roundings (≤ 1 ulp each) plus
+    // serde_json's default float parser (≤ 1 ulp), so allow 4 ulp relative (~9e-16) or 1e-300.
+    let close =
+        |a: f64, b: f64| (a - b).abs() <= 4.0 * f64::EPSILON * a.abs().max(b.abs()) + 1e-300;
+    for i in 0..ds.len() {
+        for (a, b) in back.angles(i).iter().zip(ds.angles(i)) {
+            assert!(close(*a, b), "sample {i}: {a} vs {b}");
+        }
+    }
+    for (a, b) in back
+        .radiance
+        .iter()
+        .chain(back.sigma.as_ref().unwrap())
+        .zip(ds.radiance.iter().chain(ds.sigma.as_ref().unwrap()))
+    {
+        assert!(close(*a, *b), "{a} vs {b}");
+    }
+}
+
+#[test]
+fn format_is_detected_from_extension_and_overridable() {
+    use hairfit::data::detect_format;
+    let d = LoadOptions::default();
+    assert_eq!(detect_format(Path::new("a.CSV"), &d), Format::Csv);
+    assert_eq!(detect_format(Path::new("a.json"), &d), Format::Json);
+    assert_eq!(detect_format(Path::new("a.txt"), &d), Format::Scan);
+    let forced = LoadOptions {
+        format: Some(Format::Csv),
+        ..LoadOptions::default()
+    };
+    assert_eq!(detect_format(Path::new("a.txt"), &forced), Format::Csv);
+    let scan = scan_options("phi_r,theta_r,radiance", "", &[]);
+    assert_eq!(detect_format(Path::new("a.csv"), &scan), Format::Scan);
+}
