@@ -404,8 +404,20 @@ pub fn fit(
         wall_s: tp.elapsed().as_secs_f64(),
         history: best.history.clone(),
     });
+    // An infinite cost (e.g. linear-space residuals of values near 1e300 overflow when squared)
+    // means no step was ever accepted: say so instead of reporting the start as converged.
+    let overflowed = !best.cost.is_finite();
+    if overflowed {
+        let big = data.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        warnings.push(format!(
+            "the cost is not finite at any point tried ({} space, largest |value| {big:.3e}): the residuals overflow, so the parameters are the start values, not a fit; use --space log or rescale the data",
+            opts.space
+        ));
+    }
     let status = if is_cancelled(&opts.cancel) {
         RunStatus::Interrupted
+    } else if overflowed {
+        RunStatus::Failed
     } else {
         best.status
     };
