@@ -206,3 +206,31 @@ fn a_completed_run_replaces_fit_json_atomically_under_a_polling_reader() {
         assert_eq!(j["options"]["seed"], run, "fit.json is the new run's");
     }
 }
+
+/// SIGTERM (what `timeout`, batch schedulers and service managers send before SIGKILL) keeps
+/// the best so far exactly like Ctrl-C.
+#[test]
+fn sigterm_also_writes_the_best_so_far() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("big.csv");
+    big_dataset(&data);
+    let out = dir.path().join("fit");
+    let child = start_fit(&data, &out);
+    std::thread::sleep(Duration::from_millis(2500));
+    let ok = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill runs")
+        .success();
+    assert!(ok, "kill -TERM failed");
+    let f = wait_with_deadline(child, Duration::from_secs(60), "terminated fit");
+    assert_eq!(
+        f.status.code(),
+        Some(0),
+        "SIGTERM killed the fit without output: {:?} {}",
+        f.status,
+        f.stderr
+    );
+    let j = check_fit_dir(&out, "terminated");
+    assert_eq!(j["status"], "interrupted");
+}
