@@ -234,3 +234,61 @@ fn sigterm_also_writes_the_best_so_far() {
     let j = check_fit_dir(&out, "terminated");
     assert_eq!(j["status"], "interrupted");
 }
+
+/// Ctrl-C during `hairfit eval --output` must not leave the atomic writer's temporary file (it
+/// can be hundreds of MB) nor a partial output behind.
+#[test]
+fn sigint_during_eval_leaves_no_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("p.json");
+    std::fs::write(
+        &params,
+        r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#,
+    )
+    .unwrap();
+    // 3M rows: evaluating and writing them takes a few seconds.
+    let input = dir.path().join("angles.csv");
+    let mut s = String::from("theta_i,phi_i,theta_r,phi_r\n");
+    let mut rng = SplitMix64::new(1);
+    for _ in 0..3_000_000 {
+        let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.uniform();
+        s += &format!(
+            "{:.4},{:.4},{:.4},{:.4}\n",
+            u(-60.0, 60.0),
+            u(0.0, 360.0),
+            u(-60.0, 60.0),
+            u(-180.0, 180.0)
+        );
+    }
+    std::fs::write(&input, s).unwrap();
+    let out_dir = dir.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let output = out_dir.join("s.csv");
+    let child = spawn_hairfit(
+        &[
+            "eval",
+            "--params",
+            params.to_str().unwrap(),
+            "--input",
+            input.to_str().unwrap(),
+            "--output",
+            output.to_str().unwrap(),
+        ],
+        &[],
+    );
+    std::thread::sleep(Duration::from_millis(700));
+    sigint(&child);
+    let f = wait_with_deadline(child, Duration::from_secs(60), "interrupted eval");
+    if f.status.success() {
+        // Finished before the signal: the output must then be complete.
+        let text = std::fs::read_to_string(&output).unwrap();
+        assert_eq!(text.lines().count(), 3_000_001, "complete output");
+    } else {
+        assert!(
+            !output.exists(),
+            "interrupted eval left a partial {}",
+            output.display()
+        );
+    }
+    assert_no_temp_files(&out_dir, "interrupted eval");
+}
