@@ -113,6 +113,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             output,
             model,
         } => {
+            remove_partial_output_on_interrupt();
             let file = ParamFile::load(&params).map_err(|e| name_parameter_file(e, &params))?;
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
@@ -140,6 +141,17 @@ fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
         eprintln!("hairfit: warning: Ctrl-C will not stop the fit cleanly: {e}");
     }
     flag
+}
+
+/// Ctrl-C/SIGTERM in a command with no best-so-far to keep: remove the partial output's
+/// temporary file, then exit as the signal would have (130).
+fn remove_partial_output_on_interrupt() {
+    if let Err(e) = ctrlc::set_handler(|| {
+        hairfit::atomic::remove_in_flight();
+        std::process::exit(130);
+    }) {
+        eprintln!("hairfit: warning: Ctrl-C may leave a temporary file: {e}");
+    }
 }
 
 /// Domain errors come from the values, not a position in the file: say which file they are in.
