@@ -103,7 +103,23 @@ fn bench_model(c: &mut Criterion) {
             effects: Effects::default(),
         };
         group.bench_with_input(
-            BenchmarkId::new(mode.to_string(), "7 params"),
+            BenchmarkId::new(mode.to_string(), "static 7 params"),
+            &config,
+            |b, cfg| {
+                let mut sj = StaticJacobian::<7>::new(&p, &which);
+                let (mut v, mut j) = ([0.0], [[0.0; 7]]);
+                b.iter(|| {
+                    let mut acc = 0.0;
+                    for a in &angles {
+                        sj.eval(cfg, a, &mut v, &mut j);
+                        acc += j[0][0];
+                    }
+                    acc
+                })
+            },
+        );
+        group.bench_with_input(
+            BenchmarkId::new(mode.to_string(), "dyn 7 params"),
             &config,
             |b, cfg| {
                 b.iter(|| {

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
+use crate::data::lines::LineCounter;
 use crate::error::{Error, Result};
 use crate::model::{scattering, Angles, ModelConfig, Params};
 
@@ -78,15 +79,22 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
     output: &mut W,
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
+    let (input, newlines) = LineCounter::wrap(input);
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(false)
         .comment(Some(b'#'))
         .from_reader(input);
-    let headers = reader
-        .byte_headers()
-        .map_err(|e| csv_error(source, &e))?
-        .clone();
+    // The record just read ends before the reader's position; its last byte is on its line.
+    let line_of_last_record = |reader: &csv::Reader<_>| {
+        let end: u64 = csv::Reader::position(reader).byte();
+        1 + newlines.borrow_mut().count_before(end.saturating_sub(1))
+    };
+    let headers = match reader.byte_headers() {
+        Ok(h) => h.clone(),
+        Err(e) => return Err(csv_error(source, &e, line_of_last_record(&reader))),
+    };
+    let header_line = line_of_last_record(&reader);
     let header_names: Vec<String> = headers
         .iter()
         .enumerate()
@@ -101,12 +109,12 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
             name.trim().to_string()
         })
         .collect();
-    let angle_index = locate_angle_columns(source, &header_names)?;
+    let angle_index = locate_angle_columns(source, header_line, &header_names)?;
     for name in &request.output_columns {
         if header_names.iter().any(|h| h == name) {
             return Err(Error::input(
                 source,
-                1,
+                header_line,
                 1 + header_names.iter().position(|h| h == name).unwrap() as u64,
                 format!(
                     "the input already has a column `{name}`, which eval would append; rename it"
@@ -132,13 +140,12 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         records.clear();
         angles.clear();
         while records.len() < CHUNK_ROWS {
-            if !reader
-                .read_byte_record(&mut spare)
-                .map_err(|e| csv_error(source, &e))?
-            {
-                break;
+            match reader.read_byte_record(&mut spare) {
+                Ok(true) => {}
+                Ok(false) => break,
+                Err(e) => return Err(csv_error(source, &e, line_of_last_record(&reader))),
             }
-            let line = spare.position().map_or(0, |p| p.line());
+            let line = line_of_last_record(&reader);
             angles.push(parse_angles(
                 source,
                 line,
@@ -177,7 +184,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
 }
 
 /// Indices of the four angle columns, or an error naming the missing ones.
-fn locate_angle_columns(source: &Path, headers: &[String]) -> Result<[usize; 4]> {
+fn locate_angle_columns(source: &Path, header_line: u64, headers: &[String]) -> Result<[usize; 4]> {
     let mut index = [0usize; 4];
     let mut missing = Vec::new();
     for (slot, name) in index.iter_mut().zip(ANGLE_COLUMNS) {
@@ -191,7 +198,7 @@ fn locate_angle_columns(source: &Path, headers: &[String]) -> Result<[usize; 4]>
     } else {
         Err(Error::input(
             source,
-            1,
+            header_line,
             1,
             format!(
                 "missing column(s) {}; the header must name theta_i,phi_i,theta_r,phi_r (degrees), found: {}",
@@ -257,15 +264,12 @@ fn parse_angles(
     Ok(Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]))
 }
 
-fn csv_error(source: &Path, err: &csv::Error) -> Error {
-    let (line, column) = match err.kind() {
-        csv::ErrorKind::UnequalLengths { pos, len, .. } => {
-            (pos.as_ref().map_or(0, |p| p.line()), *len + 1)
-        }
-        csv::ErrorKind::Utf8 { pos, err } => {
-            (pos.as_ref().map_or(0, |p| p.line()), err.field() as u64 + 1)
-        }
-        _ => (err.position().map_or(0, |p| p.line()), 1),
+/// A csv error at `line` (where the reader stopped: the offending record's line).
+fn csv_error(source: &Path, err: &csv::Error, line: u64) -> Error {
+    let column = match err.kind() {
+        csv::ErrorKind::UnequalLengths { len, .. } => *len + 1,
+        csv::ErrorKind::Utf8 { err, .. } => err.field() as u64 + 1,
+        _ => 1,
     };
     let message = match err.kind() {
         csv::ErrorKind::UnequalLengths {

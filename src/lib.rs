@@ -10,6 +10,7 @@
 //! - [`fit`]: `hairfit fit` / `hairfit demo`: least squares with exact Jacobians and uncertainties.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
+//! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
@@ -22,5 +23,6 @@ pub mod lm;
 pub mod model;
 pub mod nist;
 pub mod params;
+pub mod synth;
 
 pub use error::{Error, Result};

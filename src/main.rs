@@ -1,4 +1,7 @@
 //! The `hairfit` command line: parses arguments and calls the library.
+//!
+//! Each subcommand is one `Command` variant holding its clap `Args` and one match arm in `run`
+//! that calls the library.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -23,41 +26,52 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r in degrees).
-    Eval {
-        /// Parameter file (JSON, MODEL.md's names).
-        #[arg(long)]
-        params: PathBuf,
-        /// Angles CSV with a header; other columns are carried through.
-        #[arg(long)]
-        input: PathBuf,
-        /// Output CSV (written atomically); stdout when absent.
-        #[arg(long)]
-        output: Option<PathBuf>,
-        #[command(flatten)]
-        model: ModelArgs,
-    },
-    /// Fit the model to a data file; writes fit.json, params.json and curves.csv into --out.
-    Fit {
-        /// Data file (.csv with a header, .json, or a headerless scan with --columns).
-        data: PathBuf,
-        #[command(flatten)]
-        load: hairfit::data::LoadOptions,
-        #[command(flatten)]
-        fit: hairfit::fit::args::FitArgs,
-        /// Output directory (e.g. fits/NAME).
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
-    Demo {
-        #[command(flatten)]
-        fit: hairfit::fit::args::FitArgs,
-        /// Output directory.
-        #[arg(long, default_value = "fits/demo")]
-        out: PathBuf,
-    },
+    Eval(EvalArgs),
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
+    /// Fit the model to a data file; writes fit.json, params.json and curves.csv into --out.
+    Fit(FitCmdArgs),
+    /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
+    Demo(DemoArgs),
+    /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
+    Synth(hairfit::synth::SynthArgs),
+}
+
+#[derive(clap::Args)]
+struct FitCmdArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    data: PathBuf,
+    #[command(flatten)]
+    load: hairfit::data::LoadOptions,
+    #[command(flatten)]
+    fit: hairfit::fit::args::FitArgs,
+    /// Output directory (e.g. fits/NAME).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct DemoArgs {
+    #[command(flatten)]
+    fit: hairfit::fit::args::FitArgs,
+    /// Output directory.
+    #[arg(long, default_value = "fits/demo")]
+    out: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct EvalArgs {
+    /// Parameter file (JSON, MODEL.md's names).
+    #[arg(long)]
+    params: PathBuf,
+    /// Angles CSV with a header; other columns are carried through.
+    #[arg(long)]
+    input: PathBuf,
+    /// Output CSV (written atomically); stdout when absent.
+    #[arg(long)]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    model: ModelArgs,
 }
 
 #[derive(clap::Args)]
@@ -84,50 +98,60 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Fit {
-            data,
-            load,
-            fit,
-            out,
-        } => {
-            let cancel = ctrl_c_flag();
-            print!(
-                "{}",
-                hairfit::fit::args::fit_command(&data, &load, &fit, &out, Some(cancel))?
-            );
-        }
-        Command::Demo { fit, out } => {
-            let cancel = ctrl_c_flag();
-            print!(
-                "{}",
-                hairfit::fit::demo::demo_command(&fit, &out, Some(cancel))?
-            );
-        }
-        Command::Load(args) => {
-            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
-            print!("{text}");
-        }
-        Command::Eval {
-            params,
-            input,
-            output,
-            model,
-        } => {
+        Command::Eval(args) => {
             remove_partial_output_on_interrupt();
-            let file = ParamFile::load(&params).map_err(|e| name_parameter_file(e, &params))?;
+            let file =
+                ParamFile::load(&args.params).map_err(|e| name_parameter_file(e, &args.params))?;
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
                 params: file.to_params(),
-                config: model.config()?,
+                config: args.model.config()?,
             };
-            let summary = eval_file(&input, output.as_deref(), &request)?;
-            if let Some(out) = output {
+            let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
+            if let Some(out) = args.output {
                 eprintln!(
                     "hairfit: evaluated {} rows into {}",
                     summary.rows,
                     out.display()
                 );
             }
+        }
+        Command::Load(args) => {
+            print!(
+                "{}",
+                hairfit::data::load_command(&args.file, &args.options, args.json)?
+            );
+        }
+        Command::Synth(args) => {
+            remove_partial_output_on_interrupt();
+            // argv[0] varies with the install; record the command as a user types it.
+            let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
+            let command_line = hairfit::synth::command_line_string(argv);
+            let summary = hairfit::synth::run(&args, Some(command_line))?;
+            eprintln!(
+                "hairfit: wrote {} samples ({} outliers) to {} and the truth to {}",
+                summary.n_samples,
+                summary.n_outliers,
+                summary.csv.display(),
+                summary.truth.display()
+            );
+            for note in &summary.notes {
+                eprintln!("hairfit: note: {note}");
+            }
+        }
+        Command::Fit(a) => {
+            let cancel = Some(ctrl_c_flag());
+            print!(
+                "{}",
+                hairfit::fit::args::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?
+            );
+        }
+        Command::Demo(a) => {
+            let cancel = Some(ctrl_c_flag());
+            print!(
+                "{}",
+                hairfit::fit::demo::demo_command(&a.fit, &a.out, cancel)?
+            );
         }
     }
     Ok(())

@@ -231,7 +231,11 @@ fn scan_with_commas_skip_columns_radians_and_channels() {
 fn scan_option_errors_say_what_is_missing() {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "s.txt", "1 2 3\n");
-    let cases: [(LoadOptions, &str); 6] = [
+    let cases: [(LoadOptions, &str); 7] = [
+        (
+            scan_options("phi_r,theta_r,radiance", "theta_i=90,phi_i=0", &[]),
+            "|theta| must be below 90",
+        ),
         (
             scan_options("phi_r,theta_r,radiance", "theta_i=30", &[]),
             "phi_i",
@@ -376,23 +380,26 @@ fn json_write_then_load_round_trips() {
     // One sample per line after the 4 header lines.
     assert_eq!(back.source_line[0], 5);
     assert_eq!(back.source_line[199], 204);
-    // Angles go through degrees: to_degrees then to_radians is two roundings (≤ 1 ulp each) plus
-    // serde_json's default float parser (≤ 1 ulp), so allow 4 ulp relative (~9e-16) or 1e-300.
-    let close =
-        |a: f64, b: f64| (a - b).abs() <= 4.0 * f64::EPSILON * a.abs().max(b.abs()) + 1e-300;
+    // Angles go through degrees: two rounded products with two rounded constants (180/π, π/180),
+    // each ≤ ε/2 relative, so ≤ 2ε to first order; 3ε covers the second-order terms. The
+    // decimal text itself round-trips exactly (serde_json's float_roundtrip parser).
+    let close = |a: f64, b: f64| (a - b).abs() <= 3.0 * f64::EPSILON * a.abs().max(b.abs());
     for i in 0..ds.len() {
         for (a, b) in back.angles(i).iter().zip(ds.angles(i)) {
             assert!(close(*a, b), "sample {i}: {a} vs {b}");
         }
     }
-    for (a, b) in back
-        .radiance
-        .iter()
-        .chain(back.sigma.as_ref().unwrap())
-        .zip(ds.radiance.iter().chain(ds.sigma.as_ref().unwrap()))
-    {
-        assert!(close(*a, *b), "{a} vs {b}");
-    }
+    // Values are written in shortest round-trip form and parsed correctly rounded: bit-exact.
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&back.radiance), bits(&ds.radiance));
+    assert_eq!(
+        bits(back.sigma.as_ref().unwrap()),
+        bits(ds.sigma.as_ref().unwrap())
+    );
+    assert_eq!(
+        bits(back.weight.as_ref().unwrap()),
+        bits(ds.weight.as_ref().unwrap())
+    );
 }
 
 #[test]
@@ -409,4 +416,30 @@ fn format_is_detected_from_extension_and_overridable() {
     assert_eq!(detect_format(Path::new("a.txt"), &forced), Format::Csv);
     let scan = scan_options("phi_r,theta_r,radiance", "", &[]);
     assert_eq!(detect_format(Path::new("a.csv"), &scan), Format::Scan);
+}
+
+#[test]
+fn duplicates_match_signed_zeros_and_keep_channels_aligned() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "dup.csv",
+        "theta_i,phi_i,theta_r,phi_r,radiance_r,radiance_g,sigma_r,sigma_g\n\
+         0,0,10,20,1,2,0.1,0.2\n\
+         1,0,10,20,3,4,0.3,0.4\n\
+         -0,0,10,20,5,6,0.5,0.6\n\
+         0,-0,10,20,7,8,0.7,0.8\n\
+         2,0,10,20,9,10,0.9,1.0\n\
+         1,0,10,20,11,12,1.1,1.2\n",
+    );
+    let (ds, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!(r.rejected[&Duplicate].first_lines, [4, 5, 7]);
+    assert_eq!(r.duplicate_of, [[4, 2], [5, 2], [7, 3]]);
+    assert_eq!(ds.source_line, [2, 3, 6]);
+    assert_eq!(ds.radiance, [1.0, 2.0, 3.0, 4.0, 9.0, 10.0]);
+    assert_eq!(
+        ds.sigma.as_deref(),
+        Some(&[0.1, 0.2, 0.3, 0.4, 0.9, 1.0][..])
+    );
 }

@@ -60,6 +60,8 @@ fn energy_r_and_tt_both_modes_trt_exact() {
             (RootMode::Exact, 0),
             (RootMode::Exact, 1),
             (RootMode::Exact, 2),
+            // Not required by MODEL.md, but the cubic map is one consistent map too.
+            (RootMode::Cubic, 2),
         ] {
             let cfg = config(mode, only(p), false, false);
             let lhs = energy_lhs(&params, &cfg, p, theta_d);
@@ -217,6 +219,36 @@ fn trt_bounded_next_to_caustic_trap() {
                             "{mode} θ_d={theta_d} φ={phi}: N_TRT {v} vs bound {bound}"
                         );
                     }
+                }
+            }
+            // The Jacobian stays bounded next to the fold too (the fade's δ² beats the
+            // implicit-function 1/δ^{3/2}): within 10× its size 0.1 rad away.
+            let which = [
+                ParamName::Eta,
+                ParamName::SigmaA(0),
+                ParamName::AlphaR,
+                ParamName::WC,
+            ];
+            let jac_at = |phi: f64| {
+                let a = Angles {
+                    theta_i: -theta_d,
+                    phi_i: 0.0,
+                    theta_r: theta_d,
+                    phi_r: phi,
+                };
+                scattering_jacobian(&params, &cfg, &a, &which).1[0].clone()
+            };
+            let scale: f64 = jac_at(phi_c - 0.1)
+                .iter()
+                .map(|d| d.abs())
+                .fold(0.0, f64::max);
+            for k in 2..=14 {
+                for side in [1.0, -1.0] {
+                    let j = jac_at(phi_c + side * 10f64.powi(-k));
+                    assert!(
+                        j.iter().all(|d| d.is_finite() && d.abs() <= 10.0 * scale),
+                        "{mode} k={k}: {j:?} vs {scale}"
+                    );
                 }
             }
             // Exactly at ±φ_c: finite value and finite derivatives.
@@ -547,5 +579,30 @@ fn trt_root_counts() {
         assert_eq!(exit_roots(&map, -0.5 * (lo + hi)).n, window, "{mode}");
         let past = ExitMap::new(mode, 2, 2.5);
         assert_eq!(exit_roots(&past, 0.1).n, 1, "{mode}");
+    }
+}
+
+#[test]
+fn roots_solve_the_map_to_machine_precision() {
+    for mode in MODES {
+        for p in [1, 2] {
+            for eta_p in [1.05, 1.3, 1.55, 1.99, 2.0, 2.2, 5.0, 1e4] {
+                let map = ExitMap::new(mode, p, eta_p);
+                for i in 0..=720 {
+                    let phi = hairfit::model::angles::wrap(-PI + i as f64 * PI / 360.0 + 1e-7);
+                    let r = exit_roots(&map, phi);
+                    for k in 0..r.n {
+                        let g = r.gamma[k];
+                        let miss = map.value(&g) - r.target[k];
+                        // Φ is evaluated with a few ulps of error (|Φ| ≤ 3π): 1e-13 absolute.
+                        assert!(
+                            miss.abs() <= 1e-13 && g.abs() <= std::f64::consts::FRAC_PI_2,
+                            "{mode} p={p} η'={eta_p} φ={phi}: root {g} misses by {miss}"
+                        );
+                        assert!(hairfit::model::angles::wrap(r.target[k] - phi).abs() < 1e-12);
+                    }
+                }
+            }
+        }
     }
 }

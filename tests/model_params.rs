@@ -130,3 +130,31 @@ fn json_names_and_lobe_parsing() {
     // η, σ_a[0], σ_a[1], α_R, β_R, k_G, w_c, a, Δη', Δh_M.
     assert_eq!(Effects::default().parameters(2).len(), 10);
 }
+
+#[test]
+fn angles_on_the_axis_are_rejected() {
+    use hairfit::model::Angles;
+    assert!(Angles::from_degrees(-89.999, 10.0, 45.0, 400.0)
+        .validate()
+        .is_ok());
+    for (a, name) in [
+        (Angles::from_degrees(90.0, 0.0, 0.0, 0.0), "theta_i"),
+        (Angles::from_degrees(0.0, 0.0, -90.0, 0.0), "theta_r"),
+        (Angles::from_degrees(0.0, f64::NAN, 0.0, 0.0), "phi_i"),
+    ] {
+        assert!(matches!(a.validate(), Err(Error::Parameter { name: n, .. }) if n == name));
+    }
+}
+
+#[test]
+fn model_config_serde_defaults() {
+    use hairfit::model::{ModelConfig, RootMode};
+    let c: ModelConfig =
+        serde_json::from_str(r#"{"mode": "exact", "effects": {"glints": false}}"#).unwrap();
+    assert_eq!(c.mode, RootMode::Exact);
+    assert!(!c.effects.glints && c.effects.eccentricity && c.effects.lobes.trt);
+    assert_eq!(
+        serde_json::to_string(&RootMode::Cubic).unwrap(),
+        "\"cubic\""
+    );
+}

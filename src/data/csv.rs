@@ -3,12 +3,10 @@
 //! Comment lines before the header may carry the unit directive `# angles: rad` (what
 //! [`write_csv`] writes, so that a write→load round trip is bit-exact).
 
-use std::cell::RefCell;
-use std::collections::VecDeque;
 use std::io::{BufRead, Read};
 use std::path::Path;
-use std::rc::Rc;
 
+use super::lines::LineCounter;
 use super::rows::{Cell, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
 use crate::atomic::write_atomically;
@@ -38,8 +36,8 @@ struct Columns {
     ignored: Vec<String>,
 }
 
-/// Read the header line and the comment/blank lines before it. Returns the header fields, the
-/// unit directive if any (with its line), and the number of lines consumed.
+/// What comes before the data: the header fields, the unit directive if any (with its line),
+/// and the number of lines consumed (comments, blanks and the header).
 struct Preamble {
     header: csv::StringRecord,
     directive: Option<(AngleUnit, u64)>,
@@ -76,6 +74,7 @@ fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<Angle
     }
 }
 
+/// Read the comment/blank lines and the header line at the top of a CSV file.
 fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
     skip_bom(reader, path)?;
     let mut buf = Vec::new();
@@ -144,6 +143,17 @@ fn parse_header_line(line: &[u8], path: &Path, line_no: u64) -> Result<csv::Stri
 const HEADER_HELP: &str = "required: theta_i, phi_i, theta_r, phi_r and either `radiance` or \
      `radiance_<channel>` columns; optional: sigma[_<channel>], weight[_<channel>]";
 
+/// A hint when the header is one column that looks split by another separator.
+fn separator_hint(header: &csv::StringRecord) -> &'static str {
+    match header.iter().next() {
+        Some(h) if header.len() == 1 && (h.contains(';') || h.contains('\t')) => {
+            " (the file seems to use `;` or tabs between columns: hairfit CSV uses commas; \
+             for a headerless scan give --columns)"
+        }
+        _ => "",
+    }
+}
+
 /// Assign a role to every header column and check the set is complete and consistent.
 fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Result<Columns> {
     let err = |col: usize, msg: String| Error::input(path, line, col as u64 + 1, msg);
@@ -202,8 +212,9 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
             return Err(err(
                 0,
                 format!(
-                    "header has no `{angle}` column ({HEADER_HELP}); found: {}",
-                    found()
+                    "header has no `{angle}` column ({HEADER_HELP}); found: {}{}",
+                    found(),
+                    separator_hint(header)
                 ),
             ));
         }
@@ -283,7 +294,6 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
 
 /// Parse one cell: `None` when empty or the missing token, else a number (NaN/inf/1e999 parse
 /// to non-finite values, which validation rejects). Anything else is an input error.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn parse_cell(
     bytes: &[u8],
     missing: &str,
@@ -292,7 +302,7 @@ pub(crate) fn parse_cell(
     column: u64,
     name: &str,
 ) -> Result<Cell> {
-    let text = std::str::from_utf8(bytes).map_err(|_| {
+    let text = std::str::from_utf8(bytes.trim_ascii()).map_err(|_| {
         Error::input(
             path,
             line,
@@ -300,7 +310,6 @@ pub(crate) fn parse_cell(
             format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
         )
     })?;
-    let text = text.trim();
     if text.is_empty() || text == missing {
         return Ok(None);
     }
@@ -335,15 +344,14 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
     if !cols.ignored.is_empty() {
         rows.note(format!("ignored columns: {}", cols.ignored.join(", ")));
     }
-    read_rows(
-        reader,
+    let file_len = reader.get_ref().metadata().map_or(0, |m| m.len());
+    let input = Input {
         path,
-        options,
-        &pre.header,
-        &cols,
+        header: &pre.header,
         header_line,
-        &mut rows,
-    )?;
+        file_len,
+    };
+    read_rows(reader, &input, options, &cols, &mut rows)?;
     if rows.rows_read() == 0 {
         return Err(Error::input(
             path,
@@ -385,66 +393,38 @@ fn unit_name(u: AngleUnit) -> &'static str {
     }
 }
 
-/// Offsets of the newlines a reader has passed, so a byte offset can be turned into a line.
-/// csv's own record positions point before skipped blank/comment lines (and drift with CRLF),
-/// so lines are counted here; the queue only holds newlines still in csv's read-ahead buffer.
-#[derive(Default)]
-struct Newlines {
-    read: u64,
-    pending: VecDeque<u64>,
-    before: u64,
+/// Where the data rows come from.
+struct Input<'a> {
+    path: &'a Path,
+    header: &'a csv::StringRecord,
+    header_line: u64,
+    file_len: u64,
 }
 
-impl Newlines {
-    /// Number of newlines strictly before byte offset `byte` (offsets must not decrease).
-    fn count_before(&mut self, byte: u64) -> u64 {
-        while self.pending.front().is_some_and(|&nl| nl < byte) {
-            self.pending.pop_front();
-            self.before += 1;
-        }
-        self.before
-    }
-}
-
-/// A reader that records where its newlines are.
-struct NewlineCounting<R> {
-    inner: R,
-    lines: Rc<RefCell<Newlines>>,
-}
-
-impl<R: Read> Read for NewlineCounting<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.inner.read(buf)?;
-        let mut lines = self.lines.borrow_mut();
-        let start = lines.read;
-        for (i, _) in buf[..n].iter().enumerate().filter(|(_, &b)| b == b'\n') {
-            lines.pending.push_back(start + i as u64);
-        }
-        lines.read += n as u64;
-        Ok(n)
-    }
-}
+/// Rows after which the bytes per row so far size the reservation for the rest of the file.
+const SIZE_SAMPLE_ROWS: u64 = 4096;
 
 /// Stream the data rows after the header into `rows`.
 fn read_rows(
     reader: impl Read,
-    path: &Path,
+    input: &Input,
     options: &LoadOptions,
-    header: &csv::StringRecord,
     cols: &Columns,
-    header_line: u64,
     rows: &mut Rows,
 ) -> Result<()> {
-    let newlines = Rc::new(RefCell::new(Newlines::default()));
+    let Input {
+        path,
+        header,
+        header_line,
+        file_len,
+    } = *input;
+    let (reader, newlines) = LineCounter::wrap(reader);
     let mut csv = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .comment(Some(b'#'))
         .buffer_capacity(1 << 16)
-        .from_reader(NewlineCounting {
-            inner: reader,
-            lines: Rc::clone(&newlines),
-        });
+        .from_reader(reader);
     let nc = cols.channels.len();
     let mut record = csv::ByteRecord::new();
     let mut radiance: Vec<Cell> = vec![None; nc];
@@ -507,6 +487,12 @@ fn read_rows(
             }
         }
         rows.row(line, angles, &radiance, &sigma, &weight);
+        if rows.rows_read() == SIZE_SAMPLE_ROWS {
+            let per_row = end / SIZE_SAMPLE_ROWS + 1;
+            let rest = file_len.saturating_sub(end) / per_row;
+            // 10% headroom: row lengths vary a little through a file.
+            rows.reserve((rest + rest / 10) as usize);
+        }
     }
 }
 

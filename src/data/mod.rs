@@ -8,6 +8,7 @@
 mod csv;
 mod expr;
 mod json;
+pub(crate) mod lines;
 mod report;
 mod rows;
 mod scan;
@@ -171,19 +172,19 @@ pub struct LoadOptions {
     pub angles: Option<AngleUnit>,
     /// Scan columns in order, e.g. `phi_r,theta_r,radiance` (`_` or `skip` ignores a column).
     /// Implies --format scan unless --format is given.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
     pub columns: Vec<String>,
     /// Angles a scan holds fixed, e.g. `theta_i=30,phi_i=0` (in the --angles unit).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', value_name = "NAME=VALUE")]
     pub fixed: Vec<String>,
     /// Map a scan column through a linear expression in x, e.g. `theta_r=90-x` (repeatable).
-    #[arg(long = "map")]
+    #[arg(long = "map", value_name = "NAME=EXPR")]
     pub maps: Vec<String>,
     /// Token meaning "not measured" (empty cells are always missing).
-    #[arg(long, default_value = "?")]
+    #[arg(long, default_value = "?", value_name = "TOKEN")]
     pub missing: String,
     /// Reject rows whose radiance is below -TOL in any channel [default: keep all negatives].
-    #[arg(long)]
+    #[arg(long, value_name = "TOL")]
     pub negative_tolerance: Option<f64>,
 }
 
@@ -226,7 +227,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)>
     let format = detect_format(path, options);
     check_options_fit_format(path, format, options)?;
     if let Some(t) = options.negative_tolerance {
-        if !(t >= 0.0) {
+        // NaN fails this too.
+        if t.is_nan() || t < 0.0 {
             return Err(Error::Other(format!(
                 "--negative-tolerance must be a number >= 0 (got {t})"
             )));

@@ -46,6 +46,32 @@ impl Rows {
         &mut self.ds.meta
     }
 
+    /// Reserve room for about `rows` more accepted samples (avoids repeated doubling, whose
+    /// copies and fresh page faults dominate large loads).
+    pub fn reserve(&mut self, rows: usize) {
+        let nc = self.ds.n_channels();
+        let ds = &mut self.ds;
+        for v in [
+            &mut ds.theta_i,
+            &mut ds.phi_i,
+            &mut ds.theta_r,
+            &mut ds.phi_r,
+        ] {
+            v.reserve(rows);
+        }
+        for v in [
+            Some(&mut ds.radiance),
+            ds.sigma.as_mut(),
+            ds.weight.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            v.reserve(rows * nc);
+        }
+        ds.source_line.reserve(rows);
+    }
+
     /// Number of rows seen so far.
     pub fn rows_read(&self) -> u64 {
         self.report.rows_read
@@ -146,6 +172,7 @@ impl Rows {
         remove_duplicates(&mut self.ds, &mut self.report);
         count_negative_kept(&self.ds, &mut self.report);
         self.report.accepted = self.ds.len() as u64;
+        shrink_if_loose(&mut self.ds);
         if self.report.negative_kept.count > 0 {
             self.report.notes.push(format!(
                 "{} accepted rows have a negative radiance (kept: dark-frame subtraction makes \
@@ -170,7 +197,8 @@ fn angles_hash(keys: [u64; 4]) -> u64 {
 }
 
 /// Duplicate rejection: a sample with the same four angles as an earlier accepted sample is
-/// removed. Sorting (hash, index) pairs uses 16 bytes per sample, far less than a hash map.
+/// removed. Candidates are found by sorting one u64 per sample (hash in the high bits, index in
+/// the low bits: 8 bytes per sample, far less than a hash map), then confirmed on the angles.
 fn remove_duplicates(ds: &mut Dataset, report: &mut LoadReport) {
     let n = ds.len();
     let key = |i: usize| {
@@ -181,22 +209,28 @@ fn remove_duplicates(ds: &mut Dataset, report: &mut LoadReport) {
             angle_key(ds.phi_r[i]),
         ]
     };
-    let mut order: Vec<(u64, usize)> = (0..n).map(|i| (angles_hash(key(i)), i)).collect();
+    let index_bits = usize::BITS - n.leading_zeros();
+    let index_mask = (1u64 << index_bits) - 1;
+    let mut order: Vec<u64> = (0..n)
+        .map(|i| (angles_hash(key(i)) & !index_mask) | i as u64)
+        .collect();
     order.par_sort_unstable();
+    let index = |v: u64| (v & index_mask) as usize;
     // (duplicate index, first index with the same angles)
     let mut dups: Vec<(usize, usize)> = Vec::new();
     let mut start = 0;
     while start < n {
+        let hash = order[start] & !index_mask;
         let mut end = start + 1;
-        while end < n && order[end].0 == order[start].0 {
+        while end < n && order[end] & !index_mask == hash {
             end += 1;
         }
         // Within an equal-hash group (indices ascending), match each member to the earliest
         // member with identical angles; groups are tiny unless the file is adversarial.
         for j in start + 1..end {
-            let kj = key(order[j].1);
-            if let Some(&(_, first)) = order[start..j].iter().find(|&&(_, i)| key(i) == kj) {
-                dups.push((order[j].1, first));
+            let kj = key(index(order[j]));
+            if let Some(&first) = order[start..j].iter().find(|&&v| key(index(v)) == kj) {
+                dups.push((index(order[j]), index(first)));
             }
         }
         start = end;
@@ -251,6 +285,33 @@ fn retain_samples(ds: &mut Dataset, keep: &[bool]) {
         i += 1;
         keep[i - 1]
     });
+}
+
+/// Give back reserved room when the estimate was well above the accepted count, so memory stays
+/// proportional to the accepted samples.
+fn shrink_if_loose(ds: &mut Dataset) {
+    let loose = |v: &Vec<f64>| v.capacity() > v.len() + v.len() / 8 + 1024;
+    if loose(&ds.theta_i) {
+        for v in [
+            &mut ds.theta_i,
+            &mut ds.phi_i,
+            &mut ds.theta_r,
+            &mut ds.phi_r,
+        ] {
+            v.shrink_to_fit();
+        }
+        for v in [
+            Some(&mut ds.radiance),
+            ds.sigma.as_mut(),
+            ds.weight.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            v.shrink_to_fit();
+        }
+        ds.source_line.shrink_to_fit();
+    }
 }
 
 /// Count accepted samples with a negative radiance in any channel.

@@ -181,6 +181,23 @@ fn parse_fixed(options: &LoadOptions, targets: &[Target]) -> Result<[Option<f64>
     Ok(fixed)
 }
 
+/// A fixed θ on or past the axis would reject every row; say so once instead.
+fn check_fixed_theta(fixed: &[Option<f64>; 4], unit: AngleUnit) -> Result<()> {
+    let (limit, name) = match unit {
+        AngleUnit::Deg => (90.0, "90"),
+        AngleUnit::Rad => (std::f64::consts::FRAC_PI_2, "pi/2"),
+    };
+    for a in [0, 2] {
+        if let Some(v) = fixed[a].filter(|v| v.abs() >= limit) {
+            return Err(option_error(format!(
+                "--fixed {}={v}: |theta| must be below {name} (the fiber axis is degenerate)",
+                ANGLE_NAMES[a]
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// `--map NAME=EXPR`, one linear map per column (identity where none is given).
 fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Target]) -> Result<Vec<Linear>> {
     let mut maps = vec![Linear::IDENTITY; names.len()];
@@ -248,6 +265,7 @@ fn trim_bytes(mut s: &[u8]) -> &[u8] {
 pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
     let lay = layout(options)?;
     let unit = options.angles.unwrap_or(AngleUnit::Deg);
+    check_fixed_theta(&lay.fixed, unit)?;
     let mut rows = Rows::new(
         lay.channels.clone(),
         lay.has_sigma,

@@ -30,7 +30,7 @@ pub struct FitArgs {
     /// Seed of the start design and the subsample.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Global stage between multi-start and polish: none or nelder-mead.
+    /// Global stage between multi-start and polish: none, pso or nelder-mead.
     #[arg(long, default_value = "none")]
     pub global: Global,
     /// Fix a parameter, NAME=VALUE (MODEL.md names, degrees for *_deg); repeatable.
@@ -67,19 +67,24 @@ impl FitArgs {
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
         let cfg = self.model.config()?;
         let default_lobes = crate::model::Lobes::default();
-        let explicit =
-            cfg.effects.lobes != default_lobes || self.model.no_glints || self.model.no_eccentricity;
+        let explicit = cfg.effects.lobes != default_lobes
+            || self.model.no_glints
+            || self.model.no_eccentricity;
         let effects = if explicit {
             EffectsChoice::Explicit(cfg.effects)
         } else {
-            match self.effects.as_deref().map(|s| s.trim().to_ascii_lowercase()) {
+            match self
+                .effects
+                .as_deref()
+                .map(|s| s.trim().to_ascii_lowercase())
+            {
                 None => EffectsChoice::Auto,
                 Some(s) if s == "auto" => EffectsChoice::Auto,
                 Some(s) if s == "all" => EffectsChoice::All,
                 Some(s) => {
                     return Err(Error::Other(format!(
-                        "--effects `{s}`: use auto or all (or --lobes/--no-glints/--no-eccentricity)"
-                    )))
+                    "--effects `{s}`: use auto or all (or --lobes/--no-glints/--no-eccentricity)"
+                )))
                 }
             }
         };

@@ -26,7 +26,11 @@ impl Bound {
     pub fn of(name: ParamName) -> Bound {
         match name {
             ParamName::Eta => Bound::Both(1.0 + OPEN_MARGIN, 2.5),
-            ParamName::SigmaA(_) | ParamName::KG => Bound::Lower(0.0),
+            // Upper limits far beyond MODEL.md's typical ranges (σ_a = 50 already removes all
+            // transmitted light): they only stop a direction the data leave flat from running
+            // away, so the solver converges and the covariance names the parameter.
+            ParamName::SigmaA(_) => Bound::Both(0.0, 50.0),
+            ParamName::KG => Bound::Both(0.0, 100.0),
             ParamName::AlphaR => Bound::Free,
             ParamName::BetaR => Bound::Both(TINY_ANGLE, 30f64.to_radians()),
             ParamName::WC => Bound::Both(TINY_ANGLE, 60f64.to_radians()),
@@ -191,7 +195,10 @@ mod tests {
         ] {
             for x in [0.75, 0.8, 0.99] {
                 // 1e-12: asin/sin and sqrt round trips lose a few ulps of the span only.
-                assert!((b.to_natural(b.to_internal(x)) - x).abs() < 1e-12, "{b:?} {x}");
+                assert!(
+                    (b.to_natural(b.to_internal(x)) - x).abs() < 1e-12,
+                    "{b:?} {x}"
+                );
             }
             for u in [-1e3, -3.0, -1.0, 0.0, 0.5, 2.0, 1e3] {
                 let x = b.to_natural(u);

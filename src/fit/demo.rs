@@ -1,5 +1,6 @@
-//! `hairfit demo`: a realistic 3-channel dataset synthesised from the model (2% relative noise,
-//! a goniometer-style scan), fitted from the default start design and written to `fits/demo/`.
+//! `hairfit demo`: a realistic 3-channel dataset from the project's synthesizer (2% relative
+//! noise, a goniometer-style scan), fitted from the default start design, written to `fits/demo/`.
+//! [`synthesize`] is a small in-memory twin used by the fit tests and benchmark.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -84,35 +85,18 @@ pub fn synthesize(
     }
 }
 
-/// Write `data` as a loader-readable CSV (degrees; `radiance_<ch>` and `sigma_<ch>` columns).
-fn write_data_csv(data: &FitData, path: &Path) -> Result<()> {
-    let nc = data.n_channels();
-    crate::atomic::write_atomically(path, |w| {
-        let io = |e| crate::Error::io(path, e);
-        let mut head = vec!["theta_i".to_string(), "phi_i".into(), "theta_r".into(), "phi_r".into()];
-        head.extend(data.channels.iter().map(|c| format!("radiance_{c}")));
-        if data.sigma.is_some() {
-            head.extend(data.channels.iter().map(|c| format!("sigma_{c}")));
-        }
-        writeln!(w, "{}", head.join(",")).map_err(io)?;
-        for (i, a) in data.angles.iter().enumerate() {
-            let mut row = vec![
-                format!("{}", a.theta_i.to_degrees()),
-                format!("{}", a.phi_i.to_degrees()),
-                format!("{}", a.theta_r.to_degrees()),
-                format!("{}", a.phi_r.to_degrees()),
-            ];
-            row.extend((0..nc).map(|c| format!("{:e}", data.values[i * nc + c])));
-            if let Some(s) = &data.sigma {
-                row.extend((0..nc).map(|c| format!("{:e}", s[i * nc + c])));
-            }
-            writeln!(w, "{}", row.join(",")).map_err(io)?;
-        }
-        Ok(())
-    })
+/// The demo geometry as `[θ_i, φ_i, θ_r, φ_r]` in degrees (for the synthesizer).
+pub fn demo_directions() -> Vec<[f64; 4]> {
+    demo_geometry()
+        .iter()
+        .map(|a| {
+            [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(|x| (x.to_degrees() * 1e9).round() / 1e9)
+        })
+        .collect()
 }
 
-/// `hairfit demo --out DIR`: synthesize, write `data.csv` and `truth.json`, fit, write, summarise.
+/// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
+/// `data.csv` and `truth.json`, fit from the default start design, write, summarise.
 pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>) -> Result<String> {
     let opts = args.options(cancel)?;
     let truth = demo_truth();
@@ -120,22 +104,32 @@ pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>)
         mode: opts.mode,
         ..ModelConfig::default()
     };
-    let data = synthesize(&truth, &config, &demo_geometry(), &DEMO_SCALE, DEMO_NOISE, opts.seed);
+    let noise = crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}"))?;
+    let (dataset, truth_record) = crate::synth::synthesize_directions(
+        &truth,
+        &config,
+        &demo_directions(),
+        "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
+        &noise,
+        &DEMO_SCALE,
+        opts.seed,
+    )?;
     std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;
     let data_path = out.join("data.csv");
-    write_data_csv(&data, &data_path)?;
+    crate::data::write_csv(&dataset, &data_path)?;
     let truth_path = out.join("truth.json");
     crate::atomic::write_atomically(&truth_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &crate::params::ParamFile::from_params(&truth))
+        serde_json::to_writer_pretty(&mut *w, &truth_record)
             .map_err(|e| crate::Error::Other(format!("{}: {e}", truth_path.display())))
     })?;
     let report = serde_json::json!({
         "file": data_path.display().to_string(),
         "format": "synthetic",
-        "rows_read": data.len(),
-        "accepted": data.len(),
-        "notes": [format!("hairfit demo: model evaluation, {}% relative Gaussian noise, seed {}", DEMO_NOISE * 100.0, opts.seed)],
+        "rows_read": dataset.len(),
+        "accepted": dataset.len(),
+        "notes": [format!("hairfit demo: crate::synth, noise {noise}, seed {}", opts.seed)],
     });
+    let data = super::fit_data(&dataset);
     let outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
     output::write_outputs(out, &outcome)?;
     let mut s = output::summary(&outcome, Some(out));

@@ -83,7 +83,11 @@ impl Loss {
         let (rho, drho) = self.rho(r * r / c2);
         let rt = r.signum() * (c2 * rho).max(0.0).sqrt();
         // r̃ ≈ r near 0, where ρ′ → 1: the ratio ρ′ r / r̃ tends to 1.
-        let factor = if rt.abs() > 1e-300 { drho * r / rt } else { 1.0 };
+        let factor = if rt.abs() > 1e-300 {
+            drho * r / rt
+        } else {
+            1.0
+        };
         (rt, factor, drho)
     }
 }

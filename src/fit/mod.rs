@@ -54,6 +54,8 @@ pub enum Global {
     None,
     /// argmin's Nelder–Mead on the subsample cost, from the best multi-start point.
     NelderMead,
+    /// argmin's particle swarm on the subsample cost over the start box (seeded).
+    Pso,
 }
 
 impl std::str::FromStr for Global {
@@ -62,8 +64,9 @@ impl std::str::FromStr for Global {
         match s.trim().to_ascii_lowercase().as_str() {
             "none" => Ok(Global::None),
             "nelder-mead" | "neldermead" | "nm" => Ok(Global::NelderMead),
+            "pso" => Ok(Global::Pso),
             other => Err(Error::Other(format!(
-                "unknown global stage `{other}`: use none or nelder-mead"
+                "unknown global stage `{other}`: use none, pso or nelder-mead"
             ))),
         }
     }
@@ -169,12 +172,18 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>>
         })?;
         let name = name.trim();
         let v: f64 = value.trim().parse().map_err(|_| {
-            Error::Other(format!("--fix `{item}`: `{}` is not a number", value.trim()))
+            Error::Other(format!(
+                "--fix `{item}`: `{}` is not a number",
+                value.trim()
+            ))
         })?;
         let names: Vec<ParamName> = if name == "sigma_a" {
             (0..nc).map(ParamName::SigmaA).collect()
         } else {
-            match all_parameters(nc).into_iter().find(|p| p.json_name() == name) {
+            match all_parameters(nc)
+                .into_iter()
+                .find(|p| p.json_name() == name)
+            {
                 Some(p) => vec![p],
                 None => {
                     let known: Vec<String> =
@@ -316,7 +325,11 @@ pub fn fit(
             ));
         }
     }
-    let sub_idx = design::subsample(data.len(), opts.subsample.max(1), opts.seed ^ 0x5b5b_0000_0001);
+    let sub_idx = design::subsample(
+        data.len(),
+        opts.subsample.max(1),
+        opts.seed ^ 0x5b5b_0000_0001,
+    );
     let sub_data = data.subset(&sub_idx);
     let (ev_sub, _) = Evaluator::new(
         &forward,
@@ -361,17 +374,63 @@ pub fn fit(
         wall_s: ts.elapsed().as_secs_f64(),
         history: runs[order[0]].history.clone(),
     });
-    let mut candidates: Vec<Vec<f64>> = order
-        .iter()
-        .take(opts.polish.max(1))
-        .map(|&k| runs[k].u.clone())
-        .collect();
+    // The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
+    // typical range) are polished once, so the full-data stage is not spent twice on one basin.
+    let mut candidates: Vec<Vec<f64>> = Vec::new();
+    let mut chosen_x: Vec<Vec<f64>> = Vec::new();
+    for &k in &order {
+        if candidates.len() >= opts.polish.max(1) {
+            break;
+        }
+        let x = ev_sub.natural(&runs[k].u[..free.len()]);
+        let same = chosen_x.iter().any(|y| {
+            x.iter()
+                .zip(y)
+                .zip(&ranges)
+                .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
+        });
+        if !same {
+            chosen_x.push(x);
+            candidates.push(runs[k].u.clone());
+        }
+    }
 
     if opts.global == Global::NelderMead && !is_cancelled(&opts.cancel) {
         let tg = Instant::now();
-        let (u, cost, iters, history) = solve::nelder_mead(&ev_sub, &candidates[0], 200 * free.len() as u64);
+        let (u, cost, iters, history) =
+            solve::nelder_mead(&ev_sub, &candidates[0], 200 * free.len() as u64);
         trace.push(StageTrace {
             stage: "global-nelder-mead".into(),
+            iterations: iters,
+            cost,
+            wall_s: tg.elapsed().as_secs_f64(),
+            history,
+        });
+        candidates.insert(0, u);
+    }
+    if opts.global == Global::Pso && !is_cancelled(&opts.cancel) {
+        let tg = Instant::now();
+        // The swarm's box is the start design's box in internal coordinates (plus ±3 in ln s
+        // around the projected scale when the scale is explicit).
+        let lo_x: Vec<f64> = ranges.iter().map(|r| r.0).collect();
+        let hi_x: Vec<f64> = ranges.iter().map(|r| r.1).collect();
+        let (mut lo, mut hi) = (ev_sub.internal(&lo_x), ev_sub.internal(&hi_x));
+        for (a, b) in lo.iter_mut().zip(hi.iter_mut()) {
+            if a > b {
+                std::mem::swap(a, b);
+            }
+        }
+        if ev_sub.explicit_scale {
+            let mid: Vec<f64> = lo_x.iter().zip(&hi_x).map(|(a, b)| 0.5 * (a + b)).collect();
+            for ls in to_u(&ev_sub, &mid)[free.len()..].iter() {
+                lo.push(ls - 3.0);
+                hi.push(ls + 3.0);
+            }
+        }
+        let (u, cost, iters, history) =
+            solve::particle_swarm(&ev_sub, &lo, &hi, 24, 60, opts.seed);
+        trace.push(StageTrace {
+            stage: "global-pso".into(),
             iterations: iters,
             cost,
             wall_s: tg.elapsed().as_secs_f64(),
@@ -442,21 +501,19 @@ pub fn fit(
         "scale": if ev_full.explicit_scale { "explicit (robust loss)" } else { "variable projection" },
         "log_floored": floored,
     });
-    output::assemble(
-        output::Assembly {
-            data,
-            file,
-            load_report,
-            config,
-            ev: &ev_full,
-            u: &best.u,
-            status,
-            options,
-            warnings,
-            trace,
-            started: t0,
-        },
-    )
+    output::assemble(output::Assembly {
+        data,
+        file,
+        load_report,
+        config,
+        ev: &ev_full,
+        u: &best.u,
+        status,
+        options,
+        warnings,
+        trace,
+        started: t0,
+    })
 }
 
 /// A progress bar on stderr when asked for (indicatif hides it when stderr is not a terminal).

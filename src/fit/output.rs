@@ -8,7 +8,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::bounds::{get, is_angle, report_factor, Bound};
+use super::bounds::{get, report_factor, typical_range, Bound};
+
+/// A standard error above this fraction of the typical range earns a "poorly determined" warning.
+pub const POORLY_DETERMINED: f64 = 0.2;
 use super::problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode};
 use super::solve::RunStatus;
 use super::{all_parameters, FitOutcome, StageTrace};
@@ -138,15 +141,17 @@ fn wrap(x: f64) -> f64 {
     }
 }
 
-/// Samples within 2 w_c of a glint azimuth ±φ_c(θ_d) (exact caustic, circular fiber, index η).
-fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> usize {
-    data.angles
+/// Samples within 2 w_c of a glint azimuth ±φ_c(θ_d) (exact caustic, circular fiber, index η),
+/// and the span of |φ| they cover.
+fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> (usize, f64) {
+    let near: Vec<f64> = data
+        .angles
         .iter()
         .filter(|a| {
             let td = 0.5 * (a.theta_r - a.theta_i);
             let (s, c) = td.sin_cos();
             let ep = (eta * eta - s * s).sqrt() / c;
-            if !(ep < 2.0) {
+            if ep.is_nan() || ep >= 2.0 {
                 return false;
             }
             let hc = ((4.0 - ep * ep) / 3.0).sqrt();
@@ -154,7 +159,11 @@ fn samples_near_glint(data: &FitData, eta: f64, w_c: f64) -> usize {
             let phi = wrap(a.phi_r - a.phi_i).abs();
             (phi - phic).abs() < 2.0 * w_c
         })
-        .count()
+        .map(|a| wrap(a.phi_r - a.phi_i).abs())
+        .collect();
+    let span = near.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - near.iter().copied().fold(f64::INFINITY, f64::min);
+    (near.len(), if near.is_empty() { 0.0 } else { span })
 }
 
 /// Why the data cannot determine `p` (geometry first, else the correlated partners).
@@ -171,15 +180,24 @@ fn why_undetermined(
     };
     match p {
         ParamName::KG | ParamName::WC => {
-            let n = samples_near_glint(data, params.eta, params.w_c);
+            let (n, span) = samples_near_glint(data, params.eta, params.w_c);
             if n == 0 {
                 format!("no sample near the glint (|phi - phi_c| < 2 w_c){tail}")
+            } else if span < params.w_c {
+                format!(
+                    "the {n} sample(s) near the glint span only {:.1} deg of |phi|: its width and height trade off{tail}",
+                    span.to_degrees()
+                )
             } else {
-                format!("only {n} sample(s) near the glint (|phi - phi_c| < 2 w_c){tail}")
+                format!("{n} sample(s) near the glint (|phi - phi_c| < 2 w_c){tail}")
             }
         }
         ParamName::Eccentricity => {
-            let c2: Vec<f64> = data.angles.iter().map(|a| (a.phi_i + a.phi_r).cos()).collect();
+            let c2: Vec<f64> = data
+                .angles
+                .iter()
+                .map(|a| (a.phi_i + a.phi_r).cos())
+                .collect();
             let spread = c2.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                 - c2.iter().copied().fold(f64::INFINITY, f64::min);
             format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
@@ -190,7 +208,9 @@ fn why_undetermined(
                 .iter()
                 .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * PI)
                 .count();
-            format!("absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}")
+            format!(
+                "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
+            )
         }
         ParamName::AlphaR | ParamName::BetaR => {
             let th: Vec<f64> = data
@@ -261,6 +281,12 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         }
         finite(c.matrix[(j, j)].max(0.0).sqrt())
     };
+    // Statistically undetermined: the standard error exceeds the whole typical range (the data
+    // say less than the prior box does), even when JᵀJ is numerically invertible.
+    let range_width = |p: ParamName| {
+        let (a, b) = typical_range(p);
+        (b - a) * report_factor(p)
+    };
     let corr = cov.as_ref().map(|c| crate::lm::correlation(&c.matrix));
 
     let mut parameters = Vec::new();
@@ -269,35 +295,57 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         let value = get(&params, p) * f;
         let entry = match ev.free.iter().position(|q| *q == p) {
             Some(j) => {
+                let se = std_of(j);
+                let too_wide = se.is_some_and(|e| e > range_width(p));
                 let undetermined =
-                    col_zero[j] || cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                    col_zero[j] || too_wide || cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                let partners: Vec<String> = match &corr {
+                    Some(r) => (0..nf)
+                        .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
+                        .map(|k| ev.free[k].json_name())
+                        .collect(),
+                    None => Vec::new(),
+                };
                 let status = if undetermined {
-                    let partners: Vec<String> = match &corr {
-                        Some(r) => (0..nf)
-                            .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
-                            .map(|k| ev.free[k].json_name())
-                            .collect(),
-                        None => Vec::new(),
-                    };
                     warnings.push(format!(
                         "{}: not determined by the data ({}); value is the best fit but has no standard error",
                         p.json_name(),
                         if col_zero[j] {
                             "S does not depend on it at any sample".to_string()
+                        } else if too_wide {
+                            format!(
+                                "standard error {:.3e} exceeds its whole typical range; {}",
+                                se.unwrap_or(f64::NAN),
+                                why_undetermined(p, data, &params, &partners)
+                            )
                         } else {
                             why_undetermined(p, data, &params, &partners)
                         }
                     ));
                     "undetermined"
                 } else if Bound::of(p).at_bound(get(&params, p)) {
+                    warnings.push(format!(
+                        "{}: at its bound {:.6} (the data push it there; its standard error is one-sided; {})",
+                        p.json_name(),
+                        value,
+                        why_undetermined(p, data, &params, &partners)
+                    ));
                     "at_bound"
                 } else {
+                    if let Some(e) = se.filter(|&e| e > POORLY_DETERMINED * range_width(p)) {
+                        warnings.push(format!(
+                            "{}: poorly determined (standard error {e:.3e} is {:.0}% of its typical range; {})",
+                            p.json_name(),
+                            100.0 * e / range_width(p),
+                            why_undetermined(p, data, &params, &partners)
+                        ));
+                    }
                     "free"
                 };
                 ParamEntry {
                     name: p.json_name(),
                     value: finite(value),
-                    std_error: if undetermined { None } else { std_of(j) },
+                    std_error: if undetermined { None } else { se },
                     status: status.into(),
                 }
             }
@@ -309,7 +357,10 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             },
         };
         if entry.value.is_none() {
-            warnings.push(format!("{}: value is not finite; written as null", p.json_name()));
+            warnings.push(format!(
+                "{}: value is not finite; written as null",
+                p.json_name()
+            ));
         }
         parameters.push(entry);
     }
@@ -391,11 +442,13 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             });
         }
     }
-    if curves
-        .iter()
-        .any(|r| ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight].iter().all(|v| v.is_finite()))
-    {
-        warnings.push("curves.csv: some fitted values are not finite; written as empty cells".into());
+    if curves.iter().any(|r| {
+        ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
+            .iter()
+            .all(|v| v.is_finite())
+    }) {
+        warnings
+            .push("curves.csv: some fitted values are not finite; written as empty cells".into());
     }
 
     let json = FitJson {
@@ -421,27 +474,11 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         trace,
         wall_time_s: started.elapsed().as_secs_f64(),
     };
-    let _ = is_angle;
     Ok(FitOutcome {
         json,
         params,
         curves,
     })
-}
-
-/// Replace non-finite numbers in a JSON value by null (serde_json would write them as null too,
-/// but this keeps the guarantee explicit whatever the serializer).
-fn scrub(v: &mut serde_json::Value) {
-    match v {
-        serde_json::Value::Array(a) => a.iter_mut().for_each(scrub),
-        serde_json::Value::Object(o) => o.values_mut().for_each(scrub),
-        serde_json::Value::Number(n) => {
-            if n.as_f64().is_some_and(|x| !x.is_finite()) {
-                *v = serde_json::Value::Null;
-            }
-        }
-        _ => {}
-    }
 }
 
 fn json_err(path: &Path, e: serde_json::Error) -> Error {
@@ -461,10 +498,10 @@ fn cell(x: f64) -> String {
 pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let fit_path = dir.join("fit.json");
-    let mut v = serde_json::to_value(&out.json).map_err(|e| json_err(&fit_path, e))?;
-    scrub(&mut v);
+    // Serialised straight from the struct to keep contracts.md's field order; serde_json writes
+    // any non-finite f64 as null, and the Option fields already carry null + warning.
     write_atomically(&fit_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &v).map_err(|e| json_err(&fit_path, e))?;
+        serde_json::to_writer_pretty(&mut *w, &out.json).map_err(|e| json_err(&fit_path, e))?;
         w.write_all(b"\n").map_err(|e| Error::io(&fit_path, e))
     })?;
     let params_path = dir.join("params.json");
@@ -539,7 +576,11 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         j.model.mode,
         lobes.join("+"),
         if j.model.effects.glints { "on" } else { "off" },
-        if j.model.effects.eccentricity { "on" } else { "off" },
+        if j.model.effects.eccentricity {
+            "on"
+        } else {
+            "off"
+        },
         j.options["effects_choice"].as_str().unwrap_or("?")
     );
     if let Some(reasons) = j.options["effects_reasons"].as_array() {
@@ -549,10 +590,20 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     }
     s += "parameters:\n";
     for p in &j.parameters {
-        s += &format!("  {:<16} {}  {}\n", p.name, pm(p.value, p.std_error), p.status);
+        s += &format!(
+            "  {:<16} {}  {}\n",
+            p.name,
+            pm(p.value, p.std_error),
+            p.status
+        );
     }
     for c in &j.scale {
-        s += &format!("  scale[{}]{:<8} {}\n", c.channel, "", pm(c.value, c.std_error));
+        s += &format!(
+            "  scale[{}]{:<8} {}\n",
+            c.channel,
+            "",
+            pm(c.value, c.std_error)
+        );
     }
     let r = &j.residuals;
     s += &format!(
@@ -574,7 +625,10 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     }
     s += &format!("wall time {:.2} s", j.wall_time_s);
     if let Some(d) = dir {
-        s += &format!("; wrote {}/{{fit.json,params.json,curves.csv}}", d.display());
+        s += &format!(
+            "; wrote {}/{{fit.json,params.json,curves.csv}}",
+            d.display()
+        );
     }
     s.push('\n');
     s

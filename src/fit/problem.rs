@@ -373,7 +373,12 @@ impl<'f, F: Forward> Evaluator<'f, F> {
 
     /// Number of solver parameters (free shape parameters, plus scales when explicit).
     pub fn n_params(&self) -> usize {
-        self.free.len() + if self.explicit_scale { self.n_channels } else { 0 }
+        self.free.len()
+            + if self.explicit_scale {
+                self.n_channels
+            } else {
+                0
+            }
     }
 
     /// Residual weights (for reports).
@@ -442,7 +447,11 @@ impl<'f, F: Forward> Evaluator<'f, F> {
 
         // Model pass: q = S (linear) or ln S (log), dq = ∂q/∂u (row (i,c), column j).
         let mut model = vec![0.0; n * nc];
-        let mut dq = if jac { vec![0.0; n * nc * nf] } else { Vec::new() };
+        let mut dq = if jac {
+            vec![0.0; n * nc * nf]
+        } else {
+            Vec::new()
+        };
         if jac && nf > 0 {
             model
                 .par_chunks_mut(CHUNK * nc)
@@ -527,7 +536,11 @@ impl<'f, F: Forward> Evaluator<'f, F> {
             *rw = drho;
             if let Some(jrow) = jrow {
                 let f = if ok { factor } else { 0.0 };
-                let g = if nf > 0 { &dq[k * nf..(k + 1) * nf] } else { &[][..] };
+                let g = if nf > 0 {
+                    &dq[k * nf..(k + 1) * nf]
+                } else {
+                    &[][..]
+                };
                 for j in 0..nf {
                     let d = match space {
                         Space::Linear => -w * (scale_q[c] * g[j] + qk * ds[c * nf + j]),
@@ -561,7 +574,13 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 .for_each(|(ci, (((r, rw), rr), jr))| {
                     for k in 0..r.len() {
                         let jrow = &mut jr[k * n_cols..(k + 1) * n_cols];
-                        fill(ci * CHUNK * nc + k, &mut r[k], &mut rw[k], &mut rr[k], Some(jrow));
+                        fill(
+                            ci * CHUNK * nc + k,
+                            &mut r[k],
+                            &mut rw[k],
+                            &mut rr[k],
+                            Some(jrow),
+                        );
                     }
                 });
         } else {

@@ -45,10 +45,23 @@ impl RunStatus {
     }
 }
 
-/// Wraps a solver so that a shared flag stops it at the next iteration boundary.
+/// Trial steps over which a fit must still make statistically visible progress.
+pub const STALL_WINDOW: usize = 20;
+/// Progress below this many χ² units over [`STALL_WINDOW`] steps counts as converged: Δχ² = 1 is
+/// one standard error along one direction, so what is left moves nothing the data can see. This
+/// ends LM's crawl along directions the data leave (nearly) flat, where its relative tolerances
+/// would exhaust the iteration limit instead.
+pub const STALL_CHI2: f64 = 1e-3;
+
+/// Wraps a solver so that a shared flag stops it at the next iteration boundary, and so that a
+/// statistically invisible crawl ([`STALL_CHI2`]) stops it as converged.
 pub struct Cancellable<S> {
     pub inner: S,
     pub flag: Option<Arc<AtomicBool>>,
+    /// Degrees of freedom of the residuals (0: no stall test).
+    pub dof: usize,
+    /// Cost after each step so far.
+    pub costs: Vec<f64>,
 }
 
 impl<O, S: Solver<O, LsqState>> Solver<O, LsqState> for Cancellable<S> {
@@ -67,11 +80,21 @@ impl<O, S: Solver<O, LsqState>> Solver<O, LsqState> for Cancellable<S> {
         problem: &mut Problem<O>,
         state: LsqState,
     ) -> Result<(LsqState, Option<KV>), ArgminError> {
-        self.inner.next_iter(problem, state)
+        let out = self.inner.next_iter(problem, state)?;
+        self.costs.push(out.0.get_cost());
+        Ok(out)
     }
     fn terminate_internal(&mut self, state: &LsqState) -> TerminationStatus {
         if is_cancelled(&self.flag) {
             return TerminationStatus::Terminated(TerminationReason::Interrupt);
+        }
+        let k = self.costs.len();
+        if self.dof > 0 && k > STALL_WINDOW {
+            let (then, now) = (self.costs[k - 1 - STALL_WINDOW], self.costs[k - 1]);
+            // Δχ² = 2Δcost/s² with s² = 2·cost/dof.
+            if now > 0.0 && (then - now) * self.dof as f64 / now < STALL_CHI2 {
+                return TerminationStatus::Terminated(TerminationReason::SolverConverged);
+            }
         }
         self.inner.terminate_internal(state)
     }
@@ -111,9 +134,17 @@ pub struct LocalRun {
     pub wall_s: f64,
 }
 
+/// Relative cost-reduction tolerance of the fit's LM runs. At 1e-12 a noisy fit stops when a
+/// further step would move parameters by ~1e-5 standard errors, and a parameter creeping onto a
+/// bound (the sin transform flattens there) stops instead of exhausting the iteration limit;
+/// noise-free fits are unaffected (their cost falls by O(1) factors down to rounding).
+pub const FTOL: f64 = 1e-12;
+
 /// The local least-squares solver: Moré–MINPACK Levenberg–Marquardt (`crate::lm`).
 pub fn local_solver() -> crate::lm::LevenbergMarquardt {
     crate::lm::LevenbergMarquardt::new()
+        .with_tolerances(FTOL, crate::lm::DEFAULT_XTOL, 0.0)
+        .unwrap_or_default()
 }
 
 /// Run the local solver from `u0` for at most `max_iters` iterations.
@@ -129,6 +160,10 @@ pub fn run_local<F: Forward>(
     let solver = Cancellable {
         inner: local_solver(),
         flag: cancel.clone(),
+        dof: ev
+            .n_residuals()
+            .saturating_sub(ev.n_params() + ev.n_channels),
+        costs: Vec::new(),
     };
     let result = Executor::new(LsqProblem { ev }, solver)
         .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
@@ -234,5 +269,49 @@ pub fn nelder_mead<F: Forward>(
             }
         }
         Err(_) => (u0.to_vec(), start_cost, 0, history),
+    }
+}
+
+/// argmin's particle swarm over the box `lower..upper` of internal coordinates, seeded (ChaCha8,
+/// so a seed means the same swarm on every platform); returns `(u, cost, iterations, history)`.
+/// argmin evaluates the swarm sequentially here; the cost itself is parallel over samples.
+pub fn particle_swarm<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    lower: &[f64],
+    upper: &[f64],
+    particles: usize,
+    max_iters: u64,
+    seed: u64,
+) -> (Vec<f64>, f64, u64, Vec<f64>) {
+    use rand_chacha::rand_core::SeedableRng;
+    let history = Arc::new(Mutex::new(Vec::new()));
+    let solver = argmin::solver::particleswarm::ParticleSwarm::new(
+        (
+            DVector::from_column_slice(lower),
+            DVector::from_column_slice(upper),
+        ),
+        particles,
+    )
+    .with_rng_generator(rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    let res = Executor::new(CostOnly { ev }, solver)
+        .configure(|s| s.max_iters(max_iters))
+        .add_observer(NmTrace(history.clone()), ObserverMode::Always)
+        .run();
+    let history = history.lock().map(|h| h.clone()).unwrap_or_default();
+    let mid: Vec<f64> = lower.iter().zip(upper).map(|(a, b)| 0.5 * (a + b)).collect();
+    match res {
+        Ok(r) => {
+            let st = r.state();
+            let u = st
+                .get_best_param()
+                .map(|p| p.position.as_slice().to_vec())
+                .unwrap_or(mid);
+            let c = ev.eval_internal(&u, false).cost();
+            (u, c, st.get_iter(), history)
+        }
+        Err(_) => {
+            let c = ev.eval_internal(&mid, false).cost();
+            (mid, c, 0, history)
+        }
     }
 }

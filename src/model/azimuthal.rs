@@ -8,7 +8,7 @@ use super::bravais::Bravais;
 use super::exit_angle::ExitMap;
 use super::fresnel::{absorption, chord, cos_gamma_t, fresnel, fresnel_attenuation};
 use super::instrument;
-use super::longitudinal::gaussian;
+use super::longitudinal::INV_SQRT_TAU;
 use super::roots::{exit_roots, lift_root};
 use super::RootMode;
 
@@ -161,8 +161,8 @@ pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
     let dm = wrap_t(-gl.phi_c.clone() + phi);
     let dp = wrap_t(gl.phi_c.clone() + phi);
     // At φ = ±φ_c with t = 1 this factor is exactly 0, so N_2 (∞ there) contributes 0.
-    let fade = (-(gl.t.clone() * bump(dm.clone(), w_c)) + 1.0)
-        * (-(gl.t.clone() * bump(dp.clone(), w_c)) + 1.0);
+    let (g_m, g_p) = (bump(dm, w_c), bump(dp, w_c));
+    let fade = (-(gl.t.clone() * g_m.clone()) + 1.0) * (-(gl.t.clone() * g_p.clone()) + 1.0);
     add_root_sum(2, map, br, phi, sigma_a, &(fade * scale.clone()), sink);
     if gl.t.re() == 0.0 {
         return;
@@ -171,7 +171,8 @@ pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
     let (h_c, cos_gc) = gl.gamma_c.sin_cos();
     let cos_gt = cos_gamma_t(&h_c, &br.eta_p);
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gc, &cos_gt);
-    let lobes = gaussian(dm, w_c) + gaussian(dp, w_c);
+    // g(x; w_c) = G(x)/(w_c·√(2π)): reuse the two G values of the fade.
+    let lobes = (g_m + g_p) / w_c.clone() * INV_SQRT_TAU;
     let base = fresnel_attenuation(2, f) * gl.t * k_g.clone() * gl.delta_h * lobes * scale.clone();
     let ch = chord(&cos_gt, &br.cos_theta_t);
     for (c, s) in sigma_a.iter().enumerate() {

@@ -3,7 +3,7 @@
 use num_dual::DualNum;
 
 /// `1/√(2π)`.
-const INV_SQRT_TAU: f64 = 0.398_942_280_401_432_7;
+pub const INV_SQRT_TAU: f64 = 0.398_942_280_401_432_7;
 
 /// Unit-area Gaussian `g(x; s) = exp(−x²/(2s²)) / (s√(2π))`.
 #[inline]

@@ -68,6 +68,7 @@ impl fmt::Display for RootMode {
 
 /// Which lobes contribute to `S`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Lobes {
     pub r: bool,
     pub tt: bool,
@@ -86,6 +87,7 @@ impl Default for Lobes {
 
 /// Lobes and effects switched on; disabled ones are not computed at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Effects {
     pub lobes: Lobes,
     pub glints: bool,
@@ -160,6 +162,7 @@ impl Effects {
 
 /// Root mode and effect switches for one evaluation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct ModelConfig {
     pub mode: RootMode,
     pub effects: Effects,
@@ -282,6 +285,34 @@ pub struct Angles {
 }
 
 impl Angles {
+    /// Check `θ ∈ (−90°, 90°)` (|θ| = 90° puts the direction on the fiber axis) and all finite;
+    /// the error names the angle and its value in degrees.
+    pub fn validate(&self) -> Result<()> {
+        let check = |name: &str, v: f64, limit: Option<f64>| {
+            let ok = v.is_finite() && limit.is_none_or(|l| v.abs() < l);
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::Parameter {
+                    name: name.into(),
+                    value: v.to_degrees(),
+                    message: match limit {
+                        Some(_) => {
+                            "an inclination must be finite and strictly between -90 and 90 degrees"
+                                .into()
+                        }
+                        None => "an azimuth must be finite".into(),
+                    },
+                })
+            }
+        };
+        let half_pi = Some(std::f64::consts::FRAC_PI_2);
+        check("theta_i", self.theta_i, half_pi)?;
+        check("phi_i", self.phi_i, None)?;
+        check("theta_r", self.theta_r, half_pi)?;
+        check("phi_r", self.phi_r, None)
+    }
+
     /// Angles from degrees.
     pub fn from_degrees(theta_i: f64, phi_i: f64, theta_r: f64, phi_r: f64) -> Angles {
         Angles {

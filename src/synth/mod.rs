@@ -1,0 +1,396 @@
+//! `hairfit synth`: synthetic measurements from known parameters — a rig's geometry
+//! ([`Rig`]), the model × a per-channel scale, seeded noise ([`Noise`]) — written as a loader CSV
+//! plus a `FILE.truth.json` sidecar ([`Truth`]) holding everything needed to check a fit.
+//!
+//! Reproducibility: every random number comes from ChaCha8 keyed by the seed with one stream
+//! per purpose (see [`random`]), so a seed gives the same draws on any machine and any future
+//! build; the model values themselves can differ in the last digit with the platform's `libm`.
+
+mod noise;
+pub mod random;
+mod rig;
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::atomic::write_atomically;
+use crate::cli::ModelArgs;
+use crate::data::{write_csv, Dataset};
+use crate::error::{Error, Result};
+use crate::model::{scattering, Angles, ModelConfig, Params};
+use crate::params::{ParamFile, SigmaA};
+
+pub use self::noise::{Noise, Noisy, OUTLIER_FACTOR};
+pub use self::rig::{Rig, MAX_THETA_DEG};
+
+/// Generator description recorded in every truth file.
+pub const RNG_DESCRIPTION: &str = "ChaCha8 (rand_chacha 0.9), key = seed as u64 little-endian \
+    zero-padded, stream 0 angles, 1 photon, 2 relative, 3 floor, 4 outliers";
+
+/// Line of the first sample in the CSV that [`write_csv`] writes (two comment lines, then the
+/// header): a synthesized dataset's `source_line` is what loading its file gives back.
+pub const CSV_FIRST_DATA_LINE: u64 = 4;
+
+/// One channel's scale factor (the same shape as `fit.json`'s `scale` entries).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelScale {
+    pub channel: String,
+    pub value: f64,
+}
+
+/// The sidecar `FILE.truth.json`: the exact inputs of a synthetic dataset.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    pub hairfit_version: String,
+    /// The exact parameters (a parameter file: degrees, MODEL.md names).
+    pub params: ParamFile,
+    pub channels: Vec<String>,
+    /// Measured value = scale × S, per channel.
+    pub scale: Vec<ChannelScale>,
+    /// Canonical rig spec with every option spelled out.
+    pub rig: String,
+    /// Canonical noise spec.
+    pub noise: String,
+    /// True when the CSV has `sigma` columns (photon, relative or floor noise).
+    pub sigma_written: bool,
+    pub seed: u64,
+    pub rng: String,
+    pub model: ModelConfig,
+    pub n_samples: usize,
+    /// 0-based sample indices multiplied by an outlier factor (empty without outlier noise).
+    pub outliers: Vec<usize>,
+    /// Choices made on the user's behalf (e.g. a scalar sigma_a replicated over channels).
+    pub notes: Vec<String>,
+    /// The command that made the files (absent when made through the library).
+    pub command_line: Option<String>,
+}
+
+impl Truth {
+    /// Read a truth file.
+    pub fn load(path: &Path) -> Result<Truth> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        serde_json::from_str(&text).map_err(|e| {
+            Error::input(
+                path,
+                e.line() as u64,
+                e.column() as u64,
+                format!("not a hairfit truth file: {e}"),
+            )
+        })
+    }
+}
+
+/// Channel names for `n` channels: `radiance` (one column `radiance`), `r,g,b`, or `c0…`.
+pub fn channel_names(n: usize) -> Vec<String> {
+    match n {
+        1 => vec!["radiance".into()],
+        3 => vec!["r".into(), "g".into(), "b".into()],
+        _ => (0..n).map(|c| format!("c{c}")).collect(),
+    }
+}
+
+/// Synthesize a dataset: the rig's directions (degrees, converted to radians once with
+/// `to_radians`), value = `scale[c] · S_c` from [`scattering`] under `config`, then `noise`
+/// seeded by `seed`. One channel per `params.sigma_a` entry; `scale` has one positive entry
+/// per channel. With `Noise::default()` the values are exactly `scale[c] * S_c` at the stored
+/// radians, so a written and reloaded dataset reproduces the model bit for bit.
+/// `Truth::params` is `ParamFile::from_params(params)` and `command_line` is `None`.
+pub fn synthesize(
+    params: &Params<f64>,
+    config: &ModelConfig,
+    rig: &Rig,
+    noise: &Noise,
+    scale: &[f64],
+    seed: u64,
+) -> Result<(Dataset, Truth)> {
+    let directions = rig.angles(&mut random::generator(seed, random::Stream::Angles));
+    synthesize_directions(
+        params,
+        config,
+        &directions,
+        &rig.to_string(),
+        noise,
+        scale,
+        seed,
+    )
+}
+
+/// [`synthesize`] at explicit directions `[θ_i, φ_i, θ_r, φ_r]` in degrees (for geometries no
+/// [`Rig`] describes, e.g. a demo's scan); `label` is recorded as the truth's `rig`. Each |θ|
+/// must be below 90° and every angle finite.
+pub fn synthesize_directions(
+    params: &Params<f64>,
+    config: &ModelConfig,
+    directions: &[[f64; 4]],
+    label: &str,
+    noise: &Noise,
+    scale: &[f64],
+    seed: u64,
+) -> Result<(Dataset, Truth)> {
+    if let Some((i, a)) = directions
+        .iter()
+        .enumerate()
+        .find(|(_, a)| !(a.iter().all(|x| x.is_finite()) && a[0].abs() < 90.0 && a[2].abs() < 90.0))
+    {
+        return Err(Error::Other(format!(
+            "direction {i} = {a:?} (degrees): angles must be finite and |theta| < 90"
+        )));
+    }
+    params.validate()?;
+    let nc = params.sigma_a.len();
+    if scale.len() != nc {
+        return Err(Error::Other(format!(
+            "--scale: {} values for {nc} channels; give one per channel (or one for all)",
+            scale.len()
+        )));
+    }
+    if let Some(bad) = scale.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+        return Err(Error::Other(format!(
+            "--scale: {bad} is not a positive finite number"
+        )));
+    }
+    let radians: Vec<[f64; 4]> = directions.iter().map(|a| a.map(f64::to_radians)).collect();
+    let clean = clean_values(params, config, &radians, scale)?;
+    let noisy = noise.apply(&clean, nc, seed);
+
+    let channels = channel_names(nc);
+    let column = |k: usize| radians.iter().map(|a| a[k]).collect();
+    let dataset = Dataset {
+        channels: channels.clone(),
+        theta_i: column(0),
+        phi_i: column(1),
+        theta_r: column(2),
+        phi_r: column(3),
+        radiance: noisy.values,
+        sigma: noisy.sigma,
+        weight: None,
+        source_line: (0..radians.len() as u64)
+            .map(|i| CSV_FIRST_DATA_LINE + i)
+            .collect(),
+        meta: serde_json::Map::new(),
+    };
+    let truth = Truth {
+        hairfit_version: env!("CARGO_PKG_VERSION").into(),
+        params: ParamFile::from_params(params),
+        scale: channels
+            .iter()
+            .zip(scale)
+            .map(|(c, &v)| ChannelScale {
+                channel: c.clone(),
+                value: v,
+            })
+            .collect(),
+        channels,
+        rig: label.to_string(),
+        noise: noise.to_string(),
+        sigma_written: dataset.sigma.is_some(),
+        seed,
+        rng: RNG_DESCRIPTION.into(),
+        model: *config,
+        n_samples: dataset.len(),
+        outliers: noisy.outliers,
+        notes: Vec::new(),
+        command_line: None,
+    };
+    let mut dataset = dataset;
+    record_truth(&mut dataset, &truth)?;
+    Ok((dataset, truth))
+}
+
+/// Keep the truth in the dataset's metadata too (key `truth`), for in-memory users.
+fn record_truth(dataset: &mut Dataset, truth: &Truth) -> Result<()> {
+    let value = serde_json::to_value(truth).map_err(|e| Error::Other(e.to_string()))?;
+    dataset.meta.insert("truth".into(), value);
+    Ok(())
+}
+
+/// `scale[c] · S_c` at every direction (row-major), evaluated in parallel; a value that is not
+/// finite and ≥ 0 is a model bug and reported with its angles.
+fn clean_values(
+    params: &Params<f64>,
+    config: &ModelConfig,
+    radians: &[[f64; 4]],
+    scale: &[f64],
+) -> Result<Vec<f64>> {
+    let nc = scale.len();
+    let mut values = vec![0.0; radians.len() * nc];
+    values
+        .par_chunks_mut(nc)
+        .zip(radians.par_iter())
+        .for_each(|(out, a)| {
+            let angles = Angles {
+                theta_i: a[0],
+                phi_i: a[1],
+                theta_r: a[2],
+                phi_r: a[3],
+            };
+            scattering(params, config, &angles, out);
+            for (v, s) in out.iter_mut().zip(scale) {
+                *v *= s;
+            }
+        });
+    if let Some(j) = values.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+        let a = radians[j / nc].map(f64::to_degrees);
+        return Err(Error::Other(format!(
+            "the model returned {} at theta_i={}, phi_i={}, theta_r={}, phi_r={} (degrees): \
+             a model bug, please report it",
+            values[j], a[0], a[1], a[2], a[3]
+        )));
+    }
+    Ok(values)
+}
+
+/// Options of `hairfit synth`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SynthArgs {
+    /// Parameter file with the true parameters (JSON, MODEL.md's names).
+    #[arg(long)]
+    pub params: PathBuf,
+    /// Sample geometry: azimuthal, longitudinal, sphere or photo, with options, e.g.
+    /// `azimuthal:incidences=15,30,45:steps=180` (see data/README.md).
+    #[arg(long)]
+    pub rig: String,
+    /// Noise: `none`, or terms joined by `+`: relative:R, photon:N, floor:F, outliers:P.
+    #[arg(long, default_value = "none")]
+    pub noise: String,
+    /// Seed of every random draw (same seed, same bytes).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Number of colour channels; a scalar sigma_a is replicated to every channel, an array
+    /// must have exactly this many entries [default: sigma_a's length].
+    #[arg(long)]
+    pub channels: Option<usize>,
+    /// Scale factor(s): one for all channels, or one per channel, comma-separated.
+    #[arg(
+        long,
+        default_value = "1",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub scale: Vec<f64>,
+    /// Output CSV (`FILE.csv`); the truth goes to `FILE.truth.json`. Both written atomically.
+    #[arg(long)]
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+/// What `hairfit synth` wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthSummary {
+    pub csv: PathBuf,
+    pub truth: PathBuf,
+    pub n_samples: usize,
+    pub n_outliers: usize,
+    /// Choices made on the user's behalf (also in the truth file).
+    pub notes: Vec<String>,
+}
+
+/// The sidecar path: `FILE.csv` → `FILE.truth.json`.
+pub fn truth_path(csv: &Path) -> PathBuf {
+    csv.with_extension("truth.json")
+}
+
+/// Run `hairfit synth`: load and reconcile the inputs, synthesize, write the CSV and the truth
+/// file. `command_line` is recorded in the truth file.
+pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummary> {
+    let is_csv = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    if !is_csv {
+        return Err(Error::Other(format!(
+            "--output {}: name the file FILE.csv (the loader picks the format by extension; the \
+             truth goes to FILE.truth.json)",
+            args.output.display()
+        )));
+    }
+    let rig = Rig::parse(&args.rig)?;
+    let noise = Noise::parse(&args.noise)?;
+    let config = args.model.config()?;
+    let file = ParamFile::load(&args.params).map_err(|e| match e {
+        Error::Parameter { .. } => Error::Other(format!("{}: {e}", args.params.display())),
+        other => other,
+    })?;
+    let (file, notes) = reconcile_channels(file, args.channels, &args.params)?;
+    let nc = file.n_channels();
+    let scale = match args.scale.len() {
+        1 => vec![args.scale[0]; nc],
+        n if n == nc => args.scale.clone(),
+        n => {
+            return Err(Error::Other(format!(
+                "--scale has {n} values but there are {nc} channels: give one value for all \
+                 channels or exactly {nc}"
+            )))
+        }
+    };
+    let (mut dataset, mut truth) =
+        synthesize(&file.to_params(), &config, &rig, &noise, &scale, args.seed)?;
+    truth.params = file;
+    truth.notes = notes;
+    truth.command_line = command_line;
+    record_truth(&mut dataset, &truth)?;
+
+    let truth_file = truth_path(&args.output);
+    write_csv(&dataset, &args.output)?;
+    write_atomically(&truth_file, |w| {
+        serde_json::to_writer_pretty(&mut *w, &truth).map_err(|e| Error::Other(e.to_string()))?;
+        w.write_all(b"\n").map_err(|e| Error::io(&truth_file, e))
+    })?;
+    Ok(SynthSummary {
+        csv: args.output.clone(),
+        truth: truth_file,
+        n_samples: truth.n_samples,
+        n_outliers: truth.outliers.len(),
+        notes: truth.notes,
+    })
+}
+
+/// Apply `--channels`: a scalar sigma_a is replicated (with a note), an array must match.
+fn reconcile_channels(
+    mut file: ParamFile,
+    channels: Option<usize>,
+    path: &Path,
+) -> Result<(ParamFile, Vec<String>)> {
+    let mut notes = Vec::new();
+    match (channels, file.sigma_a.clone()) {
+        (Some(0), _) => {
+            return Err(Error::Other(
+                "--channels 0: give at least one colour channel".into(),
+            ))
+        }
+        (Some(n), SigmaA::Scalar(s)) if n > 1 => {
+            file.sigma_a = SigmaA::PerChannel(vec![s; n]);
+            notes.push(format!(
+                "sigma_a = {s} (a scalar in {}) replicated to all {n} channels",
+                path.display()
+            ));
+        }
+        (Some(n), SigmaA::PerChannel(v)) if v.len() != n => {
+            return Err(Error::Other(format!(
+                "--channels {n}, but sigma_a in {} has {} values: give one sigma_a per channel, \
+                 or a single number to use in every channel",
+                path.display(),
+                v.len()
+            )))
+        }
+        _ => {}
+    }
+    Ok((file, notes))
+}
+
+/// The command line as one string, arguments with spaces or quotes single-quoted.
+pub fn command_line_string(args: impl IntoIterator<Item = String>) -> String {
+    args.into_iter()
+        .map(|a| {
+            if a.is_empty() || a.contains([' ', '\'', '"', '\t']) {
+                format!("'{}'", a.replace('\'', r"'\''"))
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
