@@ -15,7 +15,7 @@ use proptest::prelude::*;
 /// θ strictly inside (−90°, 90°), reaching within ~1e-9 rad of the ends.
 fn theta() -> impl Strategy<Value = f64> {
     prop_oneof![
-        3 => (-FRAC_PI_2 + 1e-9..FRAC_PI_2 - 1e-9),
+        3 => -FRAC_PI_2 + 1e-9..FRAC_PI_2 - 1e-9,
         1 => (1e-9f64..1e-3).prop_map(|d| FRAC_PI_2 - d),
         1 => (1e-9f64..1e-3).prop_map(|d| d - FRAC_PI_2),
     ]
@@ -23,7 +23,7 @@ fn theta() -> impl Strategy<Value = f64> {
 
 /// Azimuths anywhere (inputs need not be wrapped), plus the exact ends ±π and 0.
 fn phi() -> impl Strategy<Value = f64> {
-    prop_oneof![4 => (-10.0f64..10.0), 1 => Just(PI), 1 => Just(-PI), 1 => Just(0.0)]
+    prop_oneof![4 => -10.0f64..10.0, 1 => Just(PI), 1 => Just(-PI), 1 => Just(0.0)]
 }
 
 /// A value of `b` inside its fit bounds: uniform over the box, or exactly on a bound.
@@ -32,12 +32,12 @@ fn in_bound(b: Bound, free_range: (f64, f64)) -> BoxedStrategy<f64> {
     match b {
         Bound::Free => (free_range.0..free_range.1).boxed(),
         Bound::Lower(lo) => prop_oneof![
-            3 => (lo..lo + free_range.1),
+            3 => lo..lo + free_range.1,
             1 => Just(lo),
             1 => Just(lo + 1e6),
         ]
         .boxed(),
-        Bound::Both(lo, hi) => prop_oneof![3 => (lo..hi), 1 => Just(lo), 1 => Just(hi)].boxed(),
+        Bound::Both(lo, hi) => prop_oneof![3 => lo..hi, 1 => Just(lo), 1 => Just(hi)].boxed(),
     }
 }
 
