@@ -13,9 +13,12 @@ use hard_common::*;
 /// Keys whose values are measured times, not results.
 const TIMES: [&str; 2] = ["wall_s", "wall_time_s"];
 
-/// Every output of a run in `out`: fit.json numbers (with paths), the other JSON text, and the
+/// Every output of a run: fit.json numbers (with paths), the rest of fit.json as text, and the
 /// bytes of params.json and curves.csv.
-fn outputs(out: &Path) -> (Vec<(String, f64)>, String, Vec<u8>, Vec<u8>) {
+type Outputs = (Vec<(String, f64)>, String, Vec<u8>, Vec<u8>);
+
+/// The [`Outputs`] of the run in `out`.
+fn outputs(out: &Path) -> Outputs {
     let fit: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("fit.json")).unwrap()).unwrap();
     let mut nums = Vec::new();

@@ -22,7 +22,7 @@ fn big_dataset(path: &Path) {
     let base = demo_geometry();
     let mut rng = SplitMix64::new(5);
     let angles: Vec<Angles> = (0..43)
-        .flat_map(|_| base.iter().copied().collect::<Vec<_>>())
+        .flat_map(|_| base.to_vec())
         .map(|a| Angles {
             phi_r: a.phi_r + (rng.uniform() - 0.5) * 0.1,
             ..a
