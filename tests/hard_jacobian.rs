@@ -244,6 +244,7 @@ fn jacobian_finite_at_every_hard_case() {
     });
     // Enough cases that the sweep cannot be vacuous.
     assert!(n > 5000, "only {n} cases");
+    eprintln!("Jacobian finite at {n} hard cases (11 parameters × 2 channels each)");
     report(n, &failures);
 }
 
@@ -361,6 +362,7 @@ fn jacobian_matches_finite_differences_at_bounds() {
             }
         }
     }
+    eprintln!("AD = FD at {n} resolved comparisons ({unresolved} unresolved by FD, skipped)");
     // The referee must have judged nearly everything, or the test would be vacuous.
     assert!(
         unresolved * 20 < n,
