@@ -111,17 +111,18 @@ fn same_seed_same_bits_for_any_thread_count_and_run() {
     ]);
 }
 
-/// The Nelder–Mead global stage too (~20 s per run on 2 cores, hence ignored):
-/// `cargo test --release --test reliability_determinism -- --ignored`
+/// The global stages too: Nelder–Mead (with a robust loss) and the seeded particle swarm.
 #[test]
-#[ignore]
-fn same_seed_same_bits_with_the_global_stage() {
-    assert_deterministic(&[&[
-        "--starts",
-        "4",
-        "--loss",
-        "cauchy",
-        "--global",
-        "nelder-mead",
-    ]]);
+fn same_seed_same_bits_with_the_global_stages() {
+    assert_deterministic(&[
+        &[
+            "--starts",
+            "4",
+            "--loss",
+            "cauchy",
+            "--global",
+            "nelder-mead",
+        ],
+        &["--starts", "4", "--global", "pso"],
+    ]);
 }
