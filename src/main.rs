@@ -117,10 +117,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Load(args) => {
-            print!(
-                "{}",
-                hairfit::data::load_command(&args.file, &args.options, args.json)?
-            );
+            let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
+            print!("{text}");
         }
         Command::Synth(args) => {
             remove_partial_output_on_interrupt();

@@ -51,6 +51,32 @@ fn demo_is_bit_identical_with_one_and_two_threads() {
 }
 
 #[test]
+fn robust_loss_and_particle_swarm_are_bit_identical_with_one_and_two_threads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("t1"), tmp.path().join("t2"));
+    let args = |d: &Path| {
+        vec![
+            "demo".to_string(),
+            "--out".into(),
+            d.to_str().unwrap().into(),
+            "--global".into(),
+            "pso".into(),
+            "--loss".into(),
+            "cauchy".into(),
+            "--starts".into(),
+            "4".into(),
+        ]
+    };
+    let run = |d: &Path, t: &str| {
+        let v = args(d);
+        hairfit(&v.iter().map(String::as_str).collect::<Vec<_>>(), t)
+    };
+    run(&a, "1");
+    run(&b, "2");
+    assert_eq!(numbers(&a), numbers(&b));
+}
+
+#[test]
 fn fit_of_the_demo_csv_writes_the_contract_files() {
     let tmp = tempfile::tempdir().unwrap();
     let demo = tmp.path().join("demo");

@@ -112,8 +112,8 @@ fn no_glint_region_with_every_effect_forced() {
 }
 
 #[test]
-fn no_glint_and_no_tt_region_under_auto_effects() {
-    // 100° ≤ |φ| ≤ 130°: no caustic, and short of the TT lobe around φ = 180°.
+fn no_glint_region_under_auto_effects() {
+    // 100° ≤ |φ| ≤ 130°, |θ_h| < 15°: no caustic in reach; auto must switch the glints off.
     let angles: Vec<Angles> = fit_support::random_sphere(6000, 9)
         .into_iter()
         .filter(|a| {
@@ -153,5 +153,27 @@ fn cancelled_fit_returns_the_best_so_far_as_interrupted() {
     };
     let out = fit(&data, "cancelled", serde_json::Value::Null, &opts).expect("fit returns");
     assert_eq!(out.json.status, "interrupted");
+    assert_clean(&out);
+}
+
+#[test]
+fn constant_phi_h_switches_eccentricity_off_under_auto_effects() {
+    // One incidence plane (φ_i = φ_r = 0): φ_h never changes, so eccentricity is not fitted.
+    let angles = (0..61)
+        .flat_map(|j| {
+            [10.0, 30.0].map(|ti| Angles::from_degrees(ti, 0.0, -60.0 + 2.0 * j as f64, 0.0))
+        })
+        .collect();
+    let out = fit_angles(angles, EffectsChoice::Auto);
+    assert!(!out.json.model.effects.eccentricity);
+    assert_eq!(status_of(&out, "eccentricity"), "fixed");
+    let reasons = out.json.options["effects_reasons"].as_array().unwrap();
+    assert!(
+        reasons
+            .iter()
+            .any(|r| r.as_str().unwrap().starts_with("eccentricity off")),
+        "{reasons:?}"
+    );
+    assert!(warned(&out, "eccentricity"));
     assert_clean(&out);
 }

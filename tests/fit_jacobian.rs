@@ -8,9 +8,23 @@ use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, Space};
 use hairfit::model::{Effects, ModelConfig, RootMode};
 
 fn check(space: Space, loss: Loss, mode: RootMode, seed: u64) {
+    check_with(space, loss, mode, seed, false)
+}
+
+/// `zeros`: every 7th value is 0 and every 11th negative, so log space has linear-fallback rows.
+fn check_with(space: Space, loss: Loss, mode: RootMode, seed: u64, zeros: bool) {
     let truth = fit_support::random_params(seed, 3);
     let angles = fit_support::random_sphere(60, seed);
-    let data = fit_support::data(&truth, &angles, 0.05, seed);
+    let mut data = fit_support::data(&truth, &angles, 0.05, seed);
+    if zeros {
+        for (k, v) in data.values.iter_mut().enumerate() {
+            if k % 7 == 3 {
+                *v = 0.0;
+            } else if k % 11 == 5 {
+                *v = -0.5 * v.abs();
+            }
+        }
+    }
     let fwd = ModelForward {
         config: ModelConfig {
             mode,
@@ -79,4 +93,10 @@ fn jacobian_matches_finite_differences_with_robust_losses_and_explicit_scale() {
     check(Space::Log, Loss::Cauchy, RootMode::Cubic, 4);
     check(Space::Linear, Loss::Huber, RootMode::Cubic, 5);
     check(Space::Log, Loss::SoftL1, RootMode::Cubic, 6);
+}
+
+#[test]
+fn jacobian_matches_finite_differences_with_linear_fallback_rows_in_log_space() {
+    check_with(Space::Log, Loss::L2, RootMode::Cubic, 7, true);
+    check_with(Space::Log, Loss::Huber, RootMode::Exact, 8, true);
 }

@@ -200,3 +200,26 @@ fn reported_standard_errors_match_the_spread_heavy() {
     }
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
+
+#[test]
+fn freed_eta_is_recovered_from_noise_free_data() {
+    for (set, eta) in [(0usize, 1.52), (2, 1.58)] {
+        let seed = 4000 + set as u64;
+        let mut truth = fit_support::random_params(seed, 3);
+        truth.eta = eta;
+        let (_, angles) = fit_support::geometry(set, seed);
+        let data = fit_support::data(&truth, &angles, 0.0, seed);
+        let opts = FitOptions {
+            free_eta: true,
+            ..options()
+        };
+        let out = fit(&data, "eta", serde_json::Value::Null, &opts).unwrap();
+        let (got, _, status) = reported(&out, ParamName::Eta);
+        assert_eq!(status, "free");
+        // Same 1e-6 relative as every other noise-free recovery.
+        assert!(
+            (got - eta).abs() <= 1e-6 * eta,
+            "set {set}: eta {got} want {eta}"
+        );
+    }
+}

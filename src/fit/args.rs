@@ -139,7 +139,14 @@ pub fn fit_command(
     let report_json = serde_json::to_value(&report)
         .map_err(|e| Error::Other(format!("cannot serialise the load report: {e}")))?;
     let data = fit_data(&ds);
-    let outcome = fit(&data, &data_path.display().to_string(), report_json, &opts)?;
+    let mut outcome = fit(&data, &data_path.display().to_string(), report_json, &opts)?;
+    // The loader's settings are options of this fit too.
+    if let Some(o) = outcome.json.options.as_object_mut() {
+        o.insert(
+            "load".into(),
+            serde_json::json!(format!("{load_options:?}")),
+        );
+    }
     output::write_outputs(out, &outcome)?;
     Ok(output::summary(&outcome, Some(out)))
 }

@@ -35,6 +35,10 @@ use crate::model::{Effects, ModelConfig, ParamName, Params, RootMode};
 use bounds::{get, report_factor, set, typical_range, Bound};
 use solve::{is_cancelled, run_local, LocalRun};
 
+/// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
+/// best subsample cost (25: a 5-standard-error gap along one direction).
+pub const POLISH_CHI2: f64 = 25.0;
+
 /// How the lobes/effects of the fit are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EffectsChoice {
@@ -320,8 +324,14 @@ pub fn fit(
     for (c, &k) in floored.count.iter().enumerate() {
         if k > 0 {
             warnings.push(format!(
-                "channel {}: {k} value(s) <= 0 cannot be logged; floored at {:.4e} (half the smallest positive value). Consider --space linear",
-                data.channels[c], floored.floor[c]
+                "channel {}: {k} value(s) not significantly positive (<= 0, or below {} sigma) cannot be logged; they are fitted as linear residuals (y - s*S)/sigma{} inside the log-space fit. Consider --space linear",
+                data.channels[c],
+                problem::LOG_MIN_SNR,
+                if data.sigma.is_some() {
+                    String::new()
+                } else {
+                    format!(" with sigma = {:.4e} (half the smallest positive value)", floored.floor[c])
+                }
             ));
         }
     }
@@ -389,7 +399,15 @@ pub fn fit(
                 .zip(&ranges)
                 .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
         });
-        if !same {
+        // A runner-up whose subsample cost is worse by more than POLISH_CHI2 χ² units would
+        // need that much improvement from data it has not seen: skip its full-data polish.
+        let best_cost = runs[order[0]].cost;
+        let dof_sub = ev_sub
+            .n_residuals()
+            .saturating_sub(ev_sub.n_params())
+            .max(1) as f64;
+        let far = best_cost > 0.0 && (runs[k].cost - best_cost) * dof_sub / best_cost > POLISH_CHI2;
+        if !same && (!far || candidates.is_empty()) {
             chosen_x.push(x);
             candidates.push(runs[k].u.clone());
         }
@@ -427,8 +445,7 @@ pub fn fit(
                 hi.push(ls + 3.0);
             }
         }
-        let (u, cost, iters, history) =
-            solve::particle_swarm(&ev_sub, &lo, &hi, 24, 60, opts.seed);
+        let (u, cost, iters, history) = solve::particle_swarm(&ev_sub, &lo, &hi, 24, 60, opts.seed);
         trace.push(StageTrace {
             stage: "global-pso".into(),
             iterations: iters,

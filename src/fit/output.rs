@@ -6,6 +6,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 use std::time::Instant;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::bounds::{get, report_factor, typical_range, Bound};
@@ -19,6 +20,43 @@ use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 use crate::model::{Effects, ModelConfig, ParamName, RootMode};
 use crate::params::ParamFile;
+
+/// A parameter whose unit column-scaled direction has at least this weight (squared component)
+/// in the numerical null space of the Jacobian moves along a direction the data do not see:
+/// 1e-6 is a component of 1e-3, far above the rounding of an SVD (~1e-15) yet catching partners
+/// of an undetermined parameter that would otherwise get a meaningless tiny standard error.
+const NULL_WEIGHT: f64 = 1e-6;
+
+/// Per column of `j`, the weight of its unit vector in the numerical null space of the
+/// column-scaled `j` (singular values below `lm::DEFAULT_RCOND`·σ_max), via QR then SVD of R.
+fn null_space_weights(j: &nalgebra::DMatrix<f64>) -> Vec<f64> {
+    let n = j.ncols();
+    if n == 0 || j.nrows() < n || j.iter().any(|v| !v.is_finite()) {
+        return vec![0.0; n];
+    }
+    let mut scaled = j.clone();
+    for mut col in scaled.column_iter_mut() {
+        let norm = col.norm();
+        if norm > 0.0 {
+            col /= norm;
+        }
+    }
+    let r = scaled.qr().r();
+    let svd = r.svd(false, true);
+    let Some(v_t) = svd.v_t else {
+        return vec![0.0; n];
+    };
+    let smax = svd.singular_values.max();
+    let mut w = vec![0.0; n];
+    for (k, &s) in svd.singular_values.iter().enumerate() {
+        if s <= crate::lm::DEFAULT_RCOND * smax {
+            for (j, wj) in w.iter_mut().enumerate() {
+                *wj += v_t[(k, j)].powi(2);
+            }
+        }
+    }
+    w
+}
 
 /// `Some(x)` when finite.
 fn finite(x: f64) -> Option<f64> {
@@ -271,12 +309,13 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             m, ncol
         ));
     }
+    let null_w = null_space_weights(&jm);
     let col_zero: Vec<bool> = (0..ncol)
         .map(|j| jm.column(j).iter().all(|v| *v == 0.0))
         .collect();
     let std_of = |j: usize| -> Option<f64> {
         let c = cov.as_ref()?;
-        if c.undetermined[j] || col_zero[j] {
+        if c.undetermined[j] || col_zero[j] || null_w[j] >= NULL_WEIGHT {
             return None;
         }
         finite(c.matrix[(j, j)].max(0.0).sqrt())
@@ -297,8 +336,10 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             Some(j) => {
                 let se = std_of(j);
                 let too_wide = se.is_some_and(|e| e > range_width(p));
-                let undetermined =
-                    col_zero[j] || too_wide || cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                let undetermined = col_zero[j]
+                    || too_wide
+                    || null_w[j] >= NULL_WEIGHT
+                    || cov.as_ref().is_some_and(|c| c.undetermined[j]);
                 let partners: Vec<String> = match &corr {
                     Some(r) => (0..nf)
                         .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
@@ -371,6 +412,12 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             std_error: std_of(nf + c),
         })
         .collect();
+    for e in scale_entries.iter().filter(|e| e.std_error.is_none()) {
+        warnings.push(format!(
+            "scale[{}]: no standard error: it trades off with parameters the data do not determine",
+            e.channel
+        ));
+    }
     let correlation = Correlation {
         names: ev.free.iter().map(|p| p.json_name()).collect(),
         matrix: (0..nf)
@@ -409,19 +456,25 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     };
 
     // Curves.
-    let mut curves = Vec::with_capacity(m);
-    let mut lobes = vec![[0.0; 3]; nc];
     let fwd = ModelForward { config };
+    // Per-lobe values in parallel, one Vec per sample, collected in sample order.
+    let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
+        .angles
+        .par_iter()
+        .map(|ang| {
+            let mut lobes = vec![[0.0; 3]; nc];
+            fwd.by_lobe(&params, ang, &mut lobes).then_some(lobes)
+        })
+        .collect();
+    let mut curves = Vec::with_capacity(m);
     for (i, ang) in data.angles.iter().enumerate() {
-        let have = fwd.by_lobe(&params, ang, &mut lobes);
         for c in 0..nc {
             let k = i * nc + c;
             let s = scale[c];
             let fit = s * e.model[k];
-            let (fr, ft, ftrt) = if have {
-                (s * lobes[c][0], s * lobes[c][1], s * lobes[c][2])
-            } else {
-                (f64::NAN, f64::NAN, f64::NAN)
+            let (fr, ft, ftrt) = match &lobes_all[i] {
+                Some(l) => (s * l[c][0], s * l[c][1], s * l[c][2]),
+                None => (f64::NAN, f64::NAN, f64::NAN),
             };
             curves.push(CurveRow {
                 sample: i,

@@ -260,10 +260,14 @@ pub struct Evaluator<'f, F: Forward> {
     pub space: Space,
     pub loss: Loss,
     pub loss_scale: f64,
-    /// `y` (linear) or `ln y` (log, non-positive values floored).
+    /// `y` (linear) or `ln y` (log; `y` itself for linear-fallback rows).
     target: Vec<f64>,
     /// Residual weight `1/σ` (log: `y/σ`), `√weight`, or 1.
     w: Vec<f64>,
+    /// Log space only: rows whose value is not significantly positive (`y ≤ 0`, or `y < 2σ`),
+    /// fitted as linear residuals `w (y − s·S)` — a log would turn a zero reading into an
+    /// arbitrary, hugely weighted outlier. They do not enter the closed-form scale.
+    lin: Vec<bool>,
     /// Fixed parameters (and the start values of free ones).
     pub base: Params<f64>,
     pub free: Vec<ParamName>,
@@ -272,19 +276,23 @@ pub struct Evaluator<'f, F: Forward> {
     pub explicit_scale: bool,
 }
 
-/// Non-positive values met when preparing log-space targets.
+/// A reading below this many σ is not significantly positive: its log is not approximately
+/// Gaussian (the log-normal approximation σ_log = σ/y needs y ≫ σ), so it is fitted linearly.
+pub const LOG_MIN_SNR: f64 = 5.0;
+
+/// Values a log-space fit cannot take the logarithm of, met when preparing the targets.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Floored {
-    /// Per channel: how many values ≤ 0 were replaced by the floor.
+    /// Per channel: how many values (`y ≤ 0`, or `y < 2σ`) are fitted as linear residuals.
     pub count: Vec<usize>,
-    /// Per channel: the floor (half the smallest positive value).
+    /// Per channel: the noise unit of those residuals when σ is unknown (half the smallest
+    /// positive value: a reading at or below zero is below the detector's noise).
     pub floor: Vec<f64>,
 }
 
 impl<'f, F: Forward> Evaluator<'f, F> {
-    /// Prepare `data` for `space`; in log space values ≤ 0 are floored at half the channel's
-    /// smallest positive value (a reading at or below zero is below the detector's noise) and
-    /// counted in the returned [`Floored`].
+    /// Prepare `data` for `space`; in log space values that are not significantly positive
+    /// become linear residuals (see `lin`), counted in the returned [`Floored`].
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         forward: &'f F,
@@ -317,34 +325,37 @@ impl<'f, F: Forward> Evaluator<'f, F> {
         }
         let mut target = Vec::with_capacity(data.values.len());
         let mut w = Vec::with_capacity(data.values.len());
+        let mut lin = Vec::with_capacity(data.values.len());
         for (k, &y) in data.values.iter().enumerate() {
             let c = k % nc;
-            let y_eff = match space {
-                Space::Linear => y,
-                Space::Log => {
-                    if y <= 0.0 {
-                        floored.count[c] += 1;
-                        floored.floor[c]
-                    } else {
-                        y
-                    }
-                }
+            let sigma = data.sigma.as_ref().map(|s| s[k]);
+            let weight = data.weight.as_ref().map(|wt| wt[k].max(0.0).sqrt());
+            let fallback =
+                space == Space::Log && (y <= 0.0 || sigma.is_some_and(|s| y < LOG_MIN_SNR * s));
+            let wk = match (space, fallback) {
+                (Space::Linear, _) | (Space::Log, true) => match (sigma, weight) {
+                    (Some(s), _) => 1.0 / s,
+                    (None, Some(wt)) if space == Space::Linear => wt,
+                    (None, Some(wt)) => wt / floored.floor[c],
+                    (None, None) if space == Space::Linear => 1.0,
+                    (None, None) => 1.0 / floored.floor[c],
+                },
+                (Space::Log, false) => match (sigma, weight) {
+                    (Some(s), _) => y / s,
+                    (None, Some(wt)) => wt,
+                    (None, None) => 1.0,
+                },
             };
-            let wk = if let Some(s) = &data.sigma {
-                match space {
-                    Space::Linear => 1.0 / s[k],
-                    Space::Log => y_eff / s[k],
-                }
-            } else if let Some(wt) = &data.weight {
-                wt[k].max(0.0).sqrt()
+            if fallback {
+                floored.count[c] += 1;
+            }
+            target.push(if space == Space::Log && !fallback {
+                y.ln()
             } else {
-                1.0
-            };
-            target.push(match space {
-                Space::Linear => y_eff,
-                Space::Log => y_eff.ln(),
+                y
             });
             w.push(if wk.is_finite() { wk } else { 0.0 });
+            lin.push(fallback);
         }
         let bounds = free.iter().map(|&n| Bound::of(n)).collect();
         Ok((
@@ -357,6 +368,7 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 loss_scale,
                 target,
                 w,
+                lin,
                 base,
                 free,
                 bounds,
@@ -525,8 +537,12 @@ impl<'f, F: Forward> Evaluator<'f, F> {
         let fill = |k: usize, r: &mut f64, rw: &mut f64, rr: &mut f64, jrow: Option<&mut [f64]>| {
             let c = k % nc;
             let (w, y, qk) = (self.w[k], self.target[k], q[k]);
+            let lin_row = self.lin[k];
+            // A linear-fallback row of a log fit: w (y − s·S), with S = e^q and s = e^{ln s}.
+            let sm = scale[c] * model[k];
             let res = match space {
                 Space::Linear => w * (y - scale_q[c] * qk),
+                Space::Log if lin_row => w * (y - sm),
                 Space::Log => w * (y - scale_q[c] - qk),
             };
             let (rt, factor, drho) = loss.apply(res, cscale);
@@ -544,6 +560,8 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 for j in 0..nf {
                     let d = match space {
                         Space::Linear => -w * (scale_q[c] * g[j] + qk * ds[c * nf + j]),
+                        // g = ∂ln S, ds = ∂ln s: ∂(s·S) = s·S·(g + ds).
+                        Space::Log if lin_row => -w * sm * (g[j] + ds[c * nf + j]),
                         Space::Log => -w * (g[j] + ds[c * nf + j]),
                     };
                     jrow[j] = f * d;
@@ -551,8 +569,10 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 if extra > 0 {
                     let d = match (space, mode) {
                         (Space::Linear, ScaleMode::ExplicitLog(_)) => -w * scale_q[c] * qk,
+                        (Space::Log, ScaleMode::ExplicitLog(_)) if lin_row => -w * sm,
                         (Space::Log, ScaleMode::ExplicitLog(_)) => -w,
                         (Space::Linear, _) => -w * qk,
+                        (Space::Log, _) if lin_row => -w * model[k],
                         (Space::Log, _) => -w / scale[c],
                     };
                     jrow[nf + c] = f * d;
@@ -622,6 +642,9 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 let lo = ci * CHUNK * nc;
                 let hi = (lo + CHUNK * nc).min(q.len());
                 for k in lo..hi {
+                    if self.lin[k] {
+                        continue;
+                    }
                     let c = k % nc;
                     let a = &mut acc[c * width..(c + 1) * width];
                     let (w2, y, qk) = (self.w[k] * self.w[k], self.target[k], q[k]);

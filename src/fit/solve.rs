@@ -298,7 +298,11 @@ pub fn particle_swarm<F: Forward>(
         .add_observer(NmTrace(history.clone()), ObserverMode::Always)
         .run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
-    let mid: Vec<f64> = lower.iter().zip(upper).map(|(a, b)| 0.5 * (a + b)).collect();
+    let mid: Vec<f64> = lower
+        .iter()
+        .zip(upper)
+        .map(|(a, b)| 0.5 * (a + b))
+        .collect();
     match res {
         Ok(r) => {
             let st = r.state();
