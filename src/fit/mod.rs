@@ -370,6 +370,20 @@ pub fn fit(
     let runs: Vec<LocalRun> = starts
         .par_iter()
         .map(|x0| {
+            // After Ctrl-C, starts not yet begun are skipped rather than initialised on the data
+            // (each costs a Jacobian evaluation before it would see the flag).
+            if is_cancelled(&opts.cancel) {
+                let mut u = ev_sub.internal(x0);
+                u.resize(ev_sub.n_params(), 0.0);
+                return LocalRun {
+                    u,
+                    cost: f64::INFINITY,
+                    iterations: 0,
+                    history: Vec::new(),
+                    status: RunStatus::Interrupted,
+                    wall_s: 0.0,
+                };
+            }
             let r = run_local(&ev_sub, &to_u(&ev_sub, x0), opts.start_iters, &opts.cancel);
             bar.inc(1);
             r
