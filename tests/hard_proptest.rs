@@ -91,11 +91,25 @@ proptest! {
             prop_assert!(v[c].is_finite() && v[c] >= 0.0, "S = {:?}", v);
             prop_assert!(j[c].iter().all(|d| d.is_finite()), "J[{}] = {:?}", c, j[c]);
             prop_assert!(jr[c].iter().all(|d| d.is_finite()), "reverse J[{}] = {:?}", c, jr[c]);
-            // Swapping mirrors every root (γ → −γ); results agree to rounding. Next to a fold of
-            // TRT without glints N ~ 1/sqrt(δ) amplifies rounding of φ (and its derivative
-            // ~ δ^(-3/2) more so): 1e-6 of the row's magnitude there, 1e-9 elsewhere.
+            // Swapping mirrors every root (γ → −γ); results agree to rounding, which is
+            // amplified (1) next to a fold of TRT without glints, where N ~ 1/sqrt(δ) and its
+            // derivative ~ δ^(-3/2): 1e-6; (2) for a barely refracting fiber, η or TRT's η*
+            // within 1e-3 of 1 (the fit's bounds allow η = 1 + 1e-6 with a = 1/√2 + 1e-6, i.e.
+            // η* − 1 ≈ 3e-12), where the mismatch grows as 1/(η* − 1): measured 7.7e-9 at
+            // η* − 1 = 3e-12 with glints, 1.2e-5 there next to a fold, 1e-15 at η = 1.55: 1e-4.
+            // Elsewhere 1e-9 of the row's magnitude.
+            let a2 = p.eccentricity * p.eccentricity;
+            let eta_star_min = (2.0 * (p.eta - 1.0) * a2 - p.eta + 2.0)
+                .min(2.0 * (p.eta - 1.0) / a2 - p.eta + 2.0)
+                .min(p.eta);
             let near_fold_possible = cfg.effects.lobes.trt && !cfg.effects.glints;
-            let tol = if near_fold_possible { 1e-6 } else { 1e-9 };
+            let tol = if eta_star_min - 1.0 < 1e-3 {
+                1e-4
+            } else if near_fold_possible {
+                1e-6
+            } else {
+                1e-9
+            };
             prop_assert!((v[c] - vr[c]).abs() <= tol * v[c].max(vr[c]) + 1e-300,
                 "S {:?} vs reversed {:?}", v, vr);
             let row = j[c].iter().chain(&jr[c]).fold(0.0f64, |m, d| m.max(d.abs()));
