@@ -11,10 +11,13 @@
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
+//! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
+//! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
 pub mod cli;
+pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;
@@ -23,6 +26,7 @@ pub mod lm;
 pub mod model;
 pub mod nist;
 pub mod params;
+pub mod report;
 pub mod synth;
 
 pub use error::{Error, Result};

@@ -35,6 +35,23 @@ enum Command {
     Demo(DemoArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
     Synth(hairfit::synth::SynthArgs),
+    /// Plot a fit: SVG/PNG figures and an offline index.html in the fit's directory.
+    Report {
+        /// The fit's directory (holds fit.json and curves.csv, written by `hairfit fit`).
+        dir: PathBuf,
+        /// Linear instead of logarithmic value axes.
+        #[arg(long)]
+        linear: bool,
+    },
+    /// Measure what each accuracy knob costs on this machine: cost.csv, cost.json, cost.svg/png.
+    Cost {
+        /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
+        #[arg(long)]
+        quick: bool,
+        /// Output directory.
+        #[arg(long, default_value = "fits/cost")]
+        out: PathBuf,
+    },
 }
 
 #[derive(clap::Args)]
@@ -136,6 +153,28 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             for note in &summary.notes {
                 eprintln!("hairfit: note: {note}");
             }
+        }
+        Command::Report { dir, linear } => {
+            let summary = hairfit::report::write_report_with(
+                &dir,
+                &hairfit::report::ReportOptions { linear },
+            )?;
+            for note in &summary.notes {
+                eprintln!("hairfit: note: {note}");
+            }
+            eprintln!(
+                "hairfit: wrote {} files; open {}",
+                summary.files.len(),
+                dir.join("index.html").display()
+            );
+        }
+        Command::Cost { quick, out } => {
+            let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
+            print!("{}", hairfit::cost::summary_text(&ledger));
+            eprintln!(
+                "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
+                out.display()
+            );
         }
         Command::Fit(a) => {
             let cancel = Some(ctrl_c_flag());

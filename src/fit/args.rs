@@ -148,5 +148,5 @@ pub fn fit_command(
         );
     }
     output::write_outputs(out, &outcome)?;
-    Ok(output::summary(&outcome, Some(out)))
+    Ok(output::summary(&outcome, Some(out)) + &output::write_report_line(out))
 }

@@ -133,6 +133,7 @@ pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>)
     let outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
     output::write_outputs(out, &outcome)?;
     let mut s = output::summary(&outcome, Some(out));
+    s += &output::write_report_line(out);
     s += &format!(
         "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
         truth.sigma_a,

@@ -548,6 +548,15 @@ fn cell(x: f64) -> String {
 }
 
 /// Write `fit.json`, `params.json` and `curves.csv` into `dir` (each atomically).
+/// Draw the plotted report of the fit just written to `dir`; the fit's files stand whatever
+/// happens here, so a drawing failure is a line in the summary, not an error.
+pub fn write_report_line(dir: &Path) -> String {
+    match crate::report::write_report(dir) {
+        Ok(_) => format!("report: {}\n", dir.join("index.html").display()),
+        Err(e) => format!("warning: the plotted report could not be drawn: {e}\n"),
+    }
+}
+
 pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let fit_path = dir.join("fit.json");

@@ -1,0 +1,227 @@
+//! `index.html`: the whole report on one offline page — summary numbers, warnings, parameter
+//! and scale tables, every figure (PNG, linked to its SVG), solver stages and the options used.
+//! Inline CSS, relative links only, no scripts and no network resources.
+
+use std::fmt::Write as _;
+
+use super::figures::fmt_num;
+use super::fit_file::{FitResult, FitStatus, ParamStatus};
+use super::{ReportOptions, ReportSummary};
+
+/// Escape text for HTML/XML content and attribute values.
+pub fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for ch in s.chars() {
+        match ch {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:24px auto;max-width:1720px;color:#222;background:#fff;padding:0 16px}\
+h1{font-size:1.6em;margin-bottom:4px}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:4px;margin-top:32px}\
+table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:4px 10px;text-align:left}\
+th{background:#f0f2f5}td.num{text-align:right;font-variant-numeric:tabular-nums}\
+.ok{color:#176117;font-weight:bold}.bad{color:#a11;font-weight:bold}.muted{color:#777}\
+.warn{background:#fff6e0;border-left:4px solid #e0a000;padding:6px 12px;margin:4px 0}\
+.note{background:#eef3fb;border-left:4px solid #5b7fc0;padding:6px 12px;margin:4px 0}\
+figure{margin:12px 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}\
+figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;overflow:auto;font-size:.85em}\
+.grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}";
+
+/// The page for `fit` and the figures in `summary`.
+pub fn index_html(fit: &FitResult, summary: &ReportSummary, options: &ReportOptions) -> String {
+    let mut h = String::new();
+    let file = escape(&fit.data.file);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <title>hairfit report: {file}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n\
+         <h1>hairfit fit report</h1>\n<p class=\"muted\">data: {file} — hairfit {} — value axes: {}</p>\n",
+        escape(&fit.hairfit_version),
+        if options.linear { "linear" } else { "logarithmic" }
+    );
+    summary_section(&mut h, fit);
+    if !fit.warnings.is_empty() || !summary.notes.is_empty() {
+        h.push_str("<h2>Warnings and notes</h2>\n");
+        for w in &fit.warnings {
+            let _ = writeln!(h, "<div class=\"warn\">{}</div>", escape(w));
+        }
+        for n in &summary.notes {
+            let _ = writeln!(h, "<div class=\"note\">report: {}</div>", escape(n));
+        }
+    }
+    h.push_str("<div class=\"grid\">\n");
+    parameter_table(&mut h, fit);
+    scale_table(&mut h, fit);
+    stage_table(&mut h, fit);
+    h.push_str("</div>\n");
+    for f in &summary.figures {
+        let _ = writeln!(
+            h,
+            "<h2>{title}</h2>\n<figure><a href=\"{stem}.svg\"><img src=\"{stem}.png\" width=\"{w}\" height=\"{hh}\" alt=\"{title}\"></a>\
+             <figcaption>{title} — click for the vector version ({stem}.svg)</figcaption></figure>",
+            title = escape(&f.title),
+            stem = escape(&f.stem),
+            w = f.width,
+            hh = f.height
+        );
+    }
+    h.push_str("<h2>Options used by the fit</h2>\n<pre>");
+    h.push_str(&escape(
+        &serde_json::to_string_pretty(&fit.options).unwrap_or_default(),
+    ));
+    h.push_str("</pre>\n<h2>Data loading</h2>\n<pre>");
+    h.push_str(&escape(
+        &serde_json::to_string_pretty(&fit.data.load_report).unwrap_or_default(),
+    ));
+    h.push_str("</pre>\n</body>\n</html>\n");
+    h
+}
+
+/// Optional number for a table cell.
+fn opt(v: Option<f64>) -> String {
+    v.map_or("—".into(), fmt_num)
+}
+
+fn summary_section(h: &mut String, fit: &FitResult) {
+    let status_class = if fit.status == FitStatus::Converged {
+        "ok"
+    } else {
+        "bad"
+    };
+    let e = &fit.model.effects;
+    let lobes: Vec<&str> = [(e.lobes.r, "R"), (e.lobes.tt, "TT"), (e.lobes.trt, "TRT")]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+    let r = &fit.residuals;
+    h.push_str("<h2>Summary</h2>\n<table>\n");
+    let mut row = |k: &str, v: String| {
+        let _ = writeln!(h, "<tr><th>{}</th><td>{v}</td></tr>", escape(k));
+    };
+    row(
+        "status",
+        format!(
+            "<span class=\"{status_class}\">{}</span>",
+            fit.status.as_str()
+        ),
+    );
+    row("data file", escape(&fit.data.file));
+    row("samples", fit.data.n_samples.to_string());
+    row("channels", escape(&fit.data.channels.join(", ")));
+    row(
+        "model",
+        format!(
+            "{} roots; lobes {}; glints {}; eccentricity {}",
+            fit.model.mode,
+            lobes.join("+"),
+            if e.glints { "on" } else { "off" },
+            if e.eccentricity { "on" } else { "off" }
+        ),
+    );
+    row(
+        "residuals",
+        format!("space {}, loss {}", escape(&r.space), escape(&r.loss)),
+    );
+    row("RMS normalised residual", opt(r.rms));
+    row("reduced χ²", opt(r.reduced_chi2));
+    row(
+        "degrees of freedom",
+        r.dof.map_or("—".into(), |d| d.to_string()),
+    );
+    for c in &r.per_channel {
+        row(
+            &format!("channel {}", c.channel),
+            format!("RMS {}, reduced χ² {}", opt(c.rms), opt(c.reduced_chi2)),
+        );
+    }
+    row("wall time", format!("{} s", fmt_num(fit.wall_time_s)));
+    h.push_str("</table>\n");
+}
+
+fn parameter_table(h: &mut String, fit: &FitResult) {
+    h.push_str(
+        "<section><h2>Parameters</h2>\n<table>\n<tr><th>parameter</th><th>value</th><th>std. error</th><th>unit</th><th>status</th></tr>\n",
+    );
+    for p in &fit.parameters {
+        let unit = if p.name.ends_with("_deg") { "deg" } else { "" };
+        let err = match p.status {
+            ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
+            ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),
+            _ => opt(p.std_error),
+        };
+        let status = match p.status {
+            ParamStatus::Undetermined | ParamStatus::AtBound => {
+                format!("<span class=\"bad\">{}</span>", p.status.as_str())
+            }
+            s => s.as_str().to_string(),
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{err}</td><td>{unit}</td><td>{status}</td></tr>",
+            escape(&with_channel(&p.name, &fit.data.channels)),
+            opt(p.value)
+        );
+    }
+    h.push_str("</table></section>\n");
+}
+
+/// `sigma_a[1]` → `sigma_a[1] (g)`: name the channel of a per-channel parameter.
+fn with_channel(name: &str, channels: &[String]) -> String {
+    let channel = name
+        .strip_prefix("sigma_a[")
+        .and_then(|r| r.strip_suffix(']'))
+        .and_then(|i| i.parse::<usize>().ok())
+        .and_then(|i| channels.get(i));
+    match channel {
+        Some(c) => format!("{name} ({c})"),
+        None => name.to_string(),
+    }
+}
+
+fn scale_table(h: &mut String, fit: &FitResult) {
+    if fit.scale.is_empty() {
+        return;
+    }
+    h.push_str(
+        "<section><h2>Scale per channel</h2>\n<table>\n<tr><th>channel</th><th>scale</th><th>std. error</th></tr>\n",
+    );
+    for s in &fit.scale {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
+            escape(&s.channel),
+            opt(s.value),
+            opt(s.std_error)
+        );
+    }
+    h.push_str("</table></section>\n");
+}
+
+fn stage_table(h: &mut String, fit: &FitResult) {
+    if fit.trace.is_empty() {
+        return;
+    }
+    h.push_str(
+        "<section><h2>Solver stages</h2>\n<table>\n<tr><th>stage</th><th>iterations</th><th>final cost</th><th>wall time (s)</th></tr>\n",
+    );
+    for t in &fit.trace {
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
+            escape(&t.stage),
+            t.iterations,
+            opt(t.cost),
+            fmt_num(t.wall_s)
+        );
+    }
+    h.push_str("</table></section>\n");
+}

@@ -1,0 +1,289 @@
+//! Samples and slices: `curves.csv` rows regrouped by sample, and the samples grouped into
+//! measurement slices — azimuthal scans (fixed θ_i, φ_i, θ_r; φ_r swept) or longitudinal scans
+//! (fixed θ_i, φ_i, φ_r; θ_r swept) — detected from the data, with the rest left as scattered.
+
+use std::collections::BTreeMap;
+
+use super::fit_file::CurveRow;
+
+/// Fewest distinct swept values that make a slice worth drawing as a curve.
+pub const MIN_SLICE_POINTS: usize = 3;
+
+/// One sample (one direction pair) and its rows in `curves.csv`, one per channel.
+#[derive(Debug, Clone)]
+pub struct Sample {
+    pub id: u64,
+    /// θ_i, φ_i, θ_r, φ_r in degrees.
+    pub angles: [f64; 4],
+    /// Indices into the row list, one per channel present.
+    pub rows: Vec<usize>,
+}
+
+/// Which angle a slice sweeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SliceKind {
+    /// φ_r swept at fixed θ_r (degrees); plotted against φ = wrap(φ_r − φ_i).
+    Azimuthal { theta_r: f64 },
+    /// θ_r swept at fixed φ_r (degrees); plotted against θ_r.
+    Longitudinal { phi_r: f64 },
+}
+
+/// A set of samples sharing the incidence and one outgoing angle.
+#[derive(Debug, Clone)]
+pub struct Slice {
+    pub kind: SliceKind,
+    pub theta_i: f64,
+    pub phi_i: f64,
+    /// Sample indices, sorted by the swept coordinate.
+    pub samples: Vec<usize>,
+}
+
+impl Slice {
+    /// The plotted coordinate of a sample in degrees: φ for azimuthal slices, θ_r otherwise.
+    pub fn x_of(&self, angles: &[f64; 4]) -> f64 {
+        match self.kind {
+            SliceKind::Azimuthal { .. } => wrap_deg(angles[3] - angles[1]),
+            SliceKind::Longitudinal { .. } => angles[2],
+        }
+    }
+
+    /// Angles (degrees) of the point at plotted coordinate `x` of this slice.
+    pub fn angles_at(&self, x: f64) -> [f64; 4] {
+        match self.kind {
+            SliceKind::Azimuthal { theta_r } => [self.theta_i, self.phi_i, theta_r, self.phi_i + x],
+            SliceKind::Longitudinal { phi_r } => [self.theta_i, self.phi_i, x, phi_r],
+        }
+    }
+
+    /// A title naming the slice: its kind and fixed angles.
+    pub fn title(&self) -> String {
+        match self.kind {
+            SliceKind::Azimuthal { theta_r } => format!(
+                "azimuthal: θi={}°, φi={}°, θr={}°",
+                short(self.theta_i),
+                short(self.phi_i),
+                short(theta_r)
+            ),
+            SliceKind::Longitudinal { phi_r } => format!(
+                "longitudinal: θi={}°, φi={}°, φr={}°",
+                short(self.theta_i),
+                short(self.phi_i),
+                short(phi_r)
+            ),
+        }
+    }
+
+    /// The x-axis label with units.
+    pub fn x_label(&self) -> &'static str {
+        match self.kind {
+            SliceKind::Azimuthal { .. } => "φ = φr − φi (deg)",
+            SliceKind::Longitudinal { .. } => "θr (deg)",
+        }
+    }
+}
+
+/// An angle in degrees with at most two decimals and no trailing zeros.
+pub fn short(v: f64) -> String {
+    let s = format!("{v:.2}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.into()
+    }
+}
+
+/// MODEL.md's `wrap`, in degrees: to (−180, 180].
+pub fn wrap_deg(x: f64) -> f64 {
+    let mut y = x % 360.0;
+    if y <= -180.0 {
+        y += 360.0;
+    } else if y > 180.0 {
+        y -= 360.0;
+    }
+    y
+}
+
+/// θ_h = (θ_i + θ_r)/2 in degrees.
+pub fn theta_h_deg(angles: &[f64; 4]) -> f64 {
+    0.5 * (angles[0] + angles[2])
+}
+
+/// Regroup rows by sample id, in order of first appearance.
+pub fn collect_samples(rows: &[CurveRow]) -> Vec<Sample> {
+    let mut index: std::collections::HashMap<u64, usize> = std::collections::HashMap::new();
+    let mut samples: Vec<Sample> = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let k = *index.entry(row.sample).or_insert_with(|| {
+            samples.push(Sample {
+                id: row.sample,
+                angles: [row.theta_i, row.phi_i, row.theta_r, row.phi_r],
+                rows: Vec::new(),
+            });
+            samples.len() - 1
+        });
+        samples[k].rows.push(i);
+    }
+    samples
+}
+
+/// A grouping key for an angle in degrees: equal to 1e-6° count as the same setting.
+fn key(v: f64) -> i64 {
+    (v * 1e6).round() as i64
+}
+
+/// Group samples into slices; returns the slices (sorted by kind and fixed angles) and the
+/// indices of samples in no slice.
+pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
+    let mut incidences: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
+    for (i, s) in samples.iter().enumerate() {
+        if s.angles.iter().all(|a| a.is_finite()) {
+            incidences
+                .entry((key(s.angles[0]), key(s.angles[1])))
+                .or_default()
+                .push(i);
+        }
+    }
+    let mut slices = Vec::new();
+    let mut scattered: Vec<usize> = samples
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !s.angles.iter().all(|a| a.is_finite()))
+        .map(|(i, _)| i)
+        .collect();
+    for members in incidences.values() {
+        let first = samples[members[0]].angles;
+        // Azimuthal candidates share θ_r and sweep φ_r; longitudinal ones share φ_r and sweep θ_r.
+        let azimuthal = sub_slices(samples, members, 2, 3);
+        let longitudinal = sub_slices(samples, members, 3, 2);
+        let covered = |c: &Vec<(f64, Vec<usize>)>| c.iter().map(|(_, m)| m.len()).sum::<usize>();
+        let (chosen, is_azimuthal) = if covered(&azimuthal) >= covered(&longitudinal) {
+            (azimuthal, true)
+        } else {
+            (longitudinal, false)
+        };
+        let mut in_slice = vec![false; samples.len()];
+        for (fixed, mut m) in chosen {
+            let kind = if is_azimuthal {
+                SliceKind::Azimuthal { theta_r: fixed }
+            } else {
+                SliceKind::Longitudinal { phi_r: fixed }
+            };
+            let slice = Slice {
+                kind,
+                theta_i: first[0],
+                phi_i: first[1],
+                samples: Vec::new(),
+            };
+            m.sort_by(|&a, &b| {
+                slice
+                    .x_of(&samples[a].angles)
+                    .total_cmp(&slice.x_of(&samples[b].angles))
+            });
+            m.iter().for_each(|&i| in_slice[i] = true);
+            slices.push(Slice {
+                samples: m,
+                ..slice
+            });
+        }
+        scattered.extend(members.iter().copied().filter(|&i| !in_slice[i]));
+    }
+    slices.sort_by(|a, b| {
+        let rank = |s: &Slice| match s.kind {
+            SliceKind::Azimuthal { theta_r } => (0, theta_r),
+            SliceKind::Longitudinal { phi_r } => (1, phi_r),
+        };
+        let (ka, fa) = rank(a);
+        let (kb, fb) = rank(b);
+        ka.cmp(&kb)
+            .then(a.theta_i.total_cmp(&b.theta_i))
+            .then(a.phi_i.total_cmp(&b.phi_i))
+            .then(fa.total_cmp(&fb))
+    });
+    scattered.sort_unstable();
+    (slices, scattered)
+}
+
+/// Sub-groups of `members` sharing angle `fixed` whose angle `swept` takes at least
+/// [`MIN_SLICE_POINTS`] distinct values: (fixed value, members).
+fn sub_slices(
+    samples: &[Sample],
+    members: &[usize],
+    fixed: usize,
+    swept: usize,
+) -> Vec<(f64, Vec<usize>)> {
+    let mut groups: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
+    for &i in members {
+        groups
+            .entry(key(samples[i].angles[fixed]))
+            .or_default()
+            .push(i);
+    }
+    groups
+        .into_values()
+        .filter(|m| {
+            let mut values: Vec<i64> = m.iter().map(|&i| key(samples[i].angles[swept])).collect();
+            values.sort_unstable();
+            values.dedup();
+            values.len() >= MIN_SLICE_POINTS
+        })
+        .map(|m| (samples[m[0]].angles[fixed], m))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(id: u64, angles: [f64; 4]) -> Sample {
+        Sample {
+            id,
+            angles,
+            rows: vec![id as usize],
+        }
+    }
+
+    #[test]
+    fn azimuthal_and_longitudinal_scans_are_told_apart() {
+        let mut s = Vec::new();
+        // An azimuthal scan at θ_i = −20, θ_r = 25 over φ_r.
+        for k in 0..10 {
+            s.push(sample(
+                s.len() as u64,
+                [-20.0, 0.0, 25.0, -90.0 + 20.0 * k as f64],
+            ));
+        }
+        // A longitudinal scan at θ_i = 10, φ_r = 180 over θ_r.
+        for k in 0..7 {
+            s.push(sample(
+                s.len() as u64,
+                [10.0, 0.0, -60.0 + 20.0 * k as f64, 180.0],
+            ));
+        }
+        // Two isolated samples.
+        s.push(sample(s.len() as u64, [33.0, 5.0, 1.0, 2.0]));
+        s.push(sample(s.len() as u64, [33.0, 5.0, 7.0, 9.0]));
+        let (slices, scattered) = find_slices(&s);
+        assert_eq!(slices.len(), 2);
+        assert_eq!(slices[0].kind, SliceKind::Azimuthal { theta_r: 25.0 });
+        assert_eq!(slices[0].samples.len(), 10);
+        assert_eq!(slices[1].kind, SliceKind::Longitudinal { phi_r: 180.0 });
+        assert_eq!(slices[1].samples.len(), 7);
+        assert_eq!(scattered, vec![17, 18]);
+        // Sorted along the swept coordinate.
+        let xs: Vec<f64> = slices[1]
+            .samples
+            .iter()
+            .map(|&i| slices[1].x_of(&s[i].angles))
+            .collect();
+        assert!(xs.windows(2).all(|w| w[0] <= w[1]));
+    }
+
+    #[test]
+    fn wrap_maps_into_the_half_open_interval() {
+        assert_eq!(wrap_deg(190.0), -170.0);
+        assert_eq!(wrap_deg(-180.0), 180.0);
+        assert_eq!(wrap_deg(180.0), 180.0);
+        assert_eq!(wrap_deg(-530.0), -170.0);
+    }
+}
