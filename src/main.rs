@@ -155,6 +155,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Report { dir, linear } => {
+            remove_partial_output_on_interrupt();
             let summary = hairfit::report::write_report_with(
                 &dir,
                 &hairfit::report::ReportOptions { linear },
@@ -169,6 +170,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             );
         }
         Command::Cost { quick, out } => {
+            remove_partial_output_on_interrupt();
             let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
             print!("{}", hairfit::cost::summary_text(&ledger));
             eprintln!(
