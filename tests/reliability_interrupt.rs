@@ -301,3 +301,30 @@ fn sigint_during_eval_leaves_no_temporary_file() {
     }
     assert_no_temp_files(&out_dir, "interrupted eval");
 }
+
+/// A second Ctrl-C means "stop now" (the first one lets the fit write its best so far, which can
+/// take a while on large data): the process exits promptly with 130 and leaves no temp file.
+#[test]
+fn a_second_sigint_exits_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("big.csv");
+    big_dataset(&data);
+    let out = dir.path().join("fit");
+    let child = start_fit(&data, &out);
+    std::thread::sleep(Duration::from_millis(2500));
+    sigint(&child);
+    std::thread::sleep(Duration::from_millis(100));
+    sigint(&child);
+    let t = std::time::Instant::now();
+    let f = wait_with_deadline(child, Duration::from_secs(60), "twice interrupted fit");
+    assert_eq!(f.status.code(), Some(130), "{:?} {}", f.status, f.stderr);
+    // The exit happens in the signal handler: far below a fit's 1–4 s wind-down.
+    assert!(
+        t.elapsed() < Duration::from_secs(1),
+        "took {:?}",
+        t.elapsed()
+    );
+    if out.exists() {
+        assert_no_temp_files(&out, "twice interrupted fit");
+    }
+}
