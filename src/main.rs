@@ -196,11 +196,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far.
+/// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far; a
+/// second Ctrl-C exits at once.
 fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let f = flag.clone();
-    if let Err(e) = ctrlc::set_handler(move || f.store(true, std::sync::atomic::Ordering::SeqCst)) {
+    // A second signal means stop now (the first lets the fit write its best so far, which on
+    // large data can take a while): remove partial files and exit as the signal would.
+    if let Err(e) = ctrlc::set_handler(move || {
+        if f.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            hairfit::atomic::remove_in_flight();
+            std::process::exit(130);
+        }
+    }) {
         eprintln!("hairfit: warning: Ctrl-C will not stop the fit cleanly: {e}");
     }
     flag
