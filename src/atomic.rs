@@ -2,9 +2,42 @@
 //! place only when complete, so an error or an interruption never leaves a half-written file.
 
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use crate::error::{Error, Result};
+
+/// Temporary files being written right now: a process ending by a signal runs no destructors,
+/// so a signal handler removes them with [`remove_in_flight`] before it exits.
+static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Remove every temporary file still being written (for a signal handler that then exits).
+pub fn remove_in_flight() {
+    let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+    for p in list.iter() {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+/// Registers a temporary file in [`IN_FLIGHT`] for as long as it lives.
+struct InFlight(PathBuf);
+
+impl InFlight {
+    fn new(path: &Path) -> InFlight {
+        let mut list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+        list.push(path.to_path_buf());
+        InFlight(path.to_path_buf())
+    }
+}
+
+impl Drop for InFlight {
+    fn drop(&mut self) {
+        let mut list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = list.iter().position(|p| *p == self.0) {
+            list.swap_remove(i);
+        }
+    }
+}
 
 /// Write `path` atomically: `fill` writes the whole content; on success the temporary file is
 /// renamed over `path`, on error it is removed and `path` is left untouched.
@@ -17,11 +50,16 @@ where
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let tmp = tempfile::Builder::new()
-        .prefix(".hairfit-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(dir, e))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".hairfit-").suffix(".tmp");
+    // tempfile creates 0600; an output is an ordinary file: 0666 minus the umask, as File::create.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
+    let _in_flight = InFlight::new(tmp.path());
     {
         let mut out = BufWriter::new(tmp.as_file());
         fill(&mut out)?;

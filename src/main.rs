@@ -116,6 +116,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Eval(args) => {
+            remove_partial_output_on_interrupt();
             let file =
                 ParamFile::load(&args.params).map_err(|e| name_parameter_file(e, &args.params))?;
             let request = EvalRequest {
@@ -137,6 +138,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             print!("{text}");
         }
         Command::Synth(args) => {
+            remove_partial_output_on_interrupt();
             // argv[0] varies with the install; record the command as a user types it.
             let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
             let command_line = hairfit::synth::command_line_string(argv);
@@ -153,6 +155,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Report { dir, linear } => {
+            remove_partial_output_on_interrupt();
             let summary = hairfit::report::write_report_with(
                 &dir,
                 &hairfit::report::ReportOptions { linear },
@@ -167,6 +170,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             );
         }
         Command::Cost { quick, out } => {
+            remove_partial_output_on_interrupt();
             let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
             print!("{}", hairfit::cost::summary_text(&ledger));
             eprintln!(
@@ -192,14 +196,33 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far.
+/// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far; a
+/// second Ctrl-C exits at once.
 fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let f = flag.clone();
-    if let Err(e) = ctrlc::set_handler(move || f.store(true, std::sync::atomic::Ordering::SeqCst)) {
+    // A second signal means stop now (the first lets the fit write its best so far, which on
+    // large data can take a while): remove partial files and exit as the signal would.
+    if let Err(e) = ctrlc::set_handler(move || {
+        if f.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            hairfit::atomic::remove_in_flight();
+            std::process::exit(130);
+        }
+    }) {
         eprintln!("hairfit: warning: Ctrl-C will not stop the fit cleanly: {e}");
     }
     flag
+}
+
+/// Ctrl-C/SIGTERM in a command with no best-so-far to keep: remove the partial output's
+/// temporary file, then exit as the signal would have (130).
+fn remove_partial_output_on_interrupt() {
+    if let Err(e) = ctrlc::set_handler(|| {
+        hairfit::atomic::remove_in_flight();
+        std::process::exit(130);
+    }) {
+        eprintln!("hairfit: warning: Ctrl-C may leave a temporary file: {e}");
+    }
 }
 
 /// Domain errors come from the values, not a position in the file: say which file they are in.

@@ -376,6 +376,20 @@ pub fn fit(
     let runs: Vec<LocalRun> = starts
         .par_iter()
         .map(|x0| {
+            // After Ctrl-C, starts not yet begun are skipped rather than initialised on the data
+            // (each costs a Jacobian evaluation before it would see the flag).
+            if is_cancelled(&opts.cancel) {
+                let mut u = ev_sub.internal(x0);
+                u.resize(ev_sub.n_params(), 0.0);
+                return LocalRun {
+                    u,
+                    cost: f64::INFINITY,
+                    iterations: 0,
+                    history: Vec::new(),
+                    status: RunStatus::Interrupted,
+                    wall_s: 0.0,
+                };
+            }
             let r = run_local(&ev_sub, &to_u(&ev_sub, x0), opts.start_iters, &opts.cancel);
             bar.inc(1);
             r
@@ -486,8 +500,20 @@ pub fn fit(
         wall_s: tp.elapsed().as_secs_f64(),
         history: best.history.clone(),
     });
+    // An infinite cost (e.g. linear-space residuals of values near 1e300 overflow when squared)
+    // means no step was ever accepted: say so instead of reporting the start as converged.
+    let overflowed = !best.cost.is_finite();
+    if overflowed {
+        let big = data.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        warnings.push(format!(
+            "the cost is not finite at any point tried ({} space, largest |value| {big:.3e}): the residuals overflow, so the parameters are the start values, not a fit; use --space log or rescale the data",
+            opts.space
+        ));
+    }
     let status = if is_cancelled(&opts.cancel) {
         RunStatus::Interrupted
+    } else if overflowed {
+        RunStatus::Failed
     } else {
         best.status
     };

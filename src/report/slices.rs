@@ -151,6 +151,9 @@ pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
         .filter(|(_, s)| !s.angles.iter().all(|a| a.is_finite()))
         .map(|(i, _)| i)
         .collect();
+    // Incidence groups are disjoint, so one mark array serves them all (allocating it per
+    // group made scattered directions, one group per sample, quadratic).
+    let mut in_slice = vec![false; samples.len()];
     for members in incidences.values() {
         let first = samples[members[0]].angles;
         // Azimuthal candidates share θ_r and sweep φ_r; longitudinal ones share φ_r and sweep θ_r.
@@ -162,7 +165,6 @@ pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
         } else {
             (longitudinal, false)
         };
-        let mut in_slice = vec![false; samples.len()];
         for (fixed, mut m) in chosen {
             let kind = if is_azimuthal {
                 SliceKind::Azimuthal { theta_r: fixed }
