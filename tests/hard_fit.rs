@@ -308,6 +308,7 @@ fn local_runs_started_on_the_bounds_stay_finite_and_inside() {
     let data = model_data(grid());
     let forward = ModelForward {
         config: ModelConfig::default(),
+        measurement: Default::default(),
     };
     let free = free_parameters(&Effects::default(), 1, true);
     let (ev, _) = Evaluator::new(

@@ -166,7 +166,7 @@ fn hard_params() -> Vec<(String, Params<f64>)> {
             }
             with(
                 format!("{} at its {which} fit bound {x}", name.json_name()),
-                &|p| hairfit::fit::bounds::set(p, name, x),
+                &|p| p.set(name, x),
             );
         }
     }
@@ -181,14 +181,14 @@ fn hard_params() -> Vec<(String, Params<f64>)> {
     with("all at lower bounds".into(), &|p| {
         for name in all_parameters(2) {
             if let Bound::Lower(lo) | Bound::Both(lo, _) = Bound::of(name) {
-                hairfit::fit::bounds::set(p, name, lo);
+                p.set(name, lo);
             }
         }
     });
     with("all at upper bounds".into(), &|p| {
         for name in all_parameters(2) {
             if let Bound::Both(_, hi) = Bound::of(name) {
-                hairfit::fit::bounds::set(p, name, hi);
+                p.set(name, hi);
             }
         }
     });
@@ -300,7 +300,7 @@ fn jacobian_matches_finite_differences_at_bounds() {
                 for (aname, a) in &cases {
                     let (v0, jac) = scattering_jacobian(&p, &cfg, a, &all);
                     for (j, &name) in all.iter().enumerate() {
-                        let x = hairfit::fit::bounds::get(&p, name);
+                        let x = p.get(name);
                         // Step 1e-6 of the parameter's own scale: truncation O(h²)·S''' and
                         // rounding O(ε/h)·S both stay near 1e-10·scale, far below the 1e-4
                         // relative tolerance below. η's scale is η − 1 (Fresnel ∝ (η − 1)²).
@@ -312,7 +312,7 @@ fn jacobian_matches_finite_differences_at_bounds() {
                         let h = (1e-6 * own).max(1e-12 * x.abs());
                         let s_at = |xv: f64| {
                             let mut q = p.clone();
-                            hairfit::fit::bounds::set(&mut q, name, xv);
+                            q.set(name, xv);
                             if q.validate().is_err() {
                                 return None;
                             }

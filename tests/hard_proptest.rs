@@ -8,7 +8,7 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use hairfit::fit::all_parameters;
-use hairfit::fit::bounds::{set, Bound};
+use hairfit::fit::bounds::Bound;
 use hairfit::model::{scattering_jacobian, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
 use proptest::prelude::*;
 
@@ -51,7 +51,7 @@ fn params() -> impl Strategy<Value = Params<f64>> {
     strategies.prop_map(move |values| {
         let mut p = hairfit::fit::bounds::reference_params(3);
         for (&n, v) in names.iter().zip(values) {
-            set(&mut p, n, v);
+            p.set(n, v);
         }
         p
     })
