@@ -83,13 +83,14 @@ fn with_values(angles: Vec<Angles>, f: impl Fn(usize) -> f64) -> FitData {
     }
 }
 
-/// θ_d within 1e-6 rad (and 1e-3, 0.1) of ±90°, θ_h = 0 or 5°, φ all round.
+/// θ_d within 1e-6 rad (and 1e-3, 0.1) of ±90°, θ_h = 0 or half the margin (so both |θ| stay
+/// below 90°, as valid input must), φ all round.
 fn grazing_angles() -> Vec<Angles> {
     let mut v = Vec::new();
     for d in [1e-6, 1e-3, 0.1] {
         for sign in [1.0, -1.0] {
             let td = sign * (FRAC_PI_2 - d);
-            for th in [0.0, 5f64.to_radians()] {
+            for th in [0.0, d / 2.0] {
                 for k in -9..=9 {
                     v.push(Angles {
                         theta_i: th - td,
