@@ -19,8 +19,7 @@ use crate::model::{scattering, Angles, ModelConfig, Params};
 /// memory does not grow with the file.
 const CHUNK_ROWS: usize = 16_384;
 
-/// The four angle columns every angles file must have, in degrees.
-pub const ANGLE_COLUMNS: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+pub use crate::data::ANGLE_COLUMNS;
 
 /// What `hairfit eval` needs besides the files.
 #[derive(Debug, Clone)]

@@ -8,23 +8,9 @@ use std::path::Path;
 
 use super::lines::LineCounter;
 use super::rows::{Cell, Rows};
-use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
+use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-
-const ANGLE_NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
-
-/// What one CSV column holds.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Role {
-    Angle(usize),
-    /// Radiance of channel k.
-    Radiance(usize),
-    /// Sigma of channel k, or of every channel (`None`, broadcast).
-    Sigma(Option<usize>),
-    Weight(Option<usize>),
-    Ignored,
-}
 
 /// The columns of a CSV file, from its header.
 #[derive(Debug)]
@@ -186,7 +172,7 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
                 .strip_prefix(prefix)
                 .map(|_| name[prefix.len()..].to_string())
         };
-        if let Some(a) = ANGLE_NAMES.iter().position(|&n| n == lower) {
+        if let Some(a) = ANGLE_COLUMNS.iter().position(|&n| n == lower) {
             roles[k] = Role::Angle(a);
         } else if lower == "radiance" {
             plain_radiance = true;
@@ -207,7 +193,7 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
             ignored.push(name.to_string());
         }
     }
-    for (a, angle) in ANGLE_NAMES.iter().enumerate() {
+    for (a, angle) in ANGLE_COLUMNS.iter().enumerate() {
         if !roles.contains(&Role::Angle(a)) {
             return Err(err(
                 0,
@@ -524,7 +510,7 @@ pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
         )));
     }
     let nc = dataset.n_channels();
-    let mut header: Vec<String> = ANGLE_NAMES.iter().map(|s| s.to_string()).collect();
+    let mut header: Vec<String> = ANGLE_COLUMNS.iter().map(|s| s.to_string()).collect();
     let extra = |prefix: &str| {
         (0..nc)
             .map(|c| channel_column(prefix, &dataset.channels, c))

@@ -6,6 +6,24 @@
 //! a bad value is a rejection counted in the report, never silently dropped.
 
 mod csv;
+
+/// The four angle columns every dataset has, in this order.
+pub const ANGLE_COLUMNS: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+
+/// What one column of a CSV or scan file holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Role {
+    /// Angle k of [`ANGLE_COLUMNS`].
+    Angle(usize),
+    /// Radiance of channel k.
+    Radiance(usize),
+    /// Sigma of channel k, or of every channel (`None`, broadcast).
+    Sigma(Option<usize>),
+    /// Weight of channel k, or of every channel (`None`, broadcast).
+    Weight(Option<usize>),
+    /// Not used.
+    Ignored,
+}
 mod expr;
 mod json;
 pub(crate) mod lines;

@@ -8,25 +8,13 @@ use std::path::Path;
 use super::csv::parse_cell;
 use super::expr::Linear;
 use super::rows::{Cell, Rows};
-use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
+use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::error::{Error, Result};
-
-const ANGLE_NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
-
-/// Where a scan column's value goes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Target {
-    Angle(usize),
-    Radiance(usize),
-    Sigma(Option<usize>),
-    Weight(Option<usize>),
-    Skip,
-}
 
 /// The scan layout resolved from `--columns`, `--fixed` and `--map`.
 #[derive(Debug)]
 struct Layout {
-    targets: Vec<Target>,
+    targets: Vec<Role>,
     names: Vec<String>,
     maps: Vec<Linear>,
     fixed: [Option<f64>; 4],
@@ -61,22 +49,22 @@ fn layout(options: &LoadOptions) -> Result<Layout> {
             return Err(option_error(format!("--columns names `{name}` twice")));
         }
         let suffix = |p: &str| lower.strip_prefix(p).map(|_| name[p.len()..].to_string());
-        let target = if let Some(a) = ANGLE_NAMES.iter().position(|&n| n == lower) {
-            Target::Angle(a)
+        let target = if let Some(a) = ANGLE_COLUMNS.iter().position(|&n| n == lower) {
+            Role::Angle(a)
         } else if lower == "_" || lower == "skip" {
-            Target::Skip
+            Role::Ignored
         } else if lower == "radiance" {
             channels.push("radiance".into());
-            Target::Radiance(channels.len() - 1)
+            Role::Radiance(channels.len() - 1)
         } else if let Some(ch) = suffix("radiance_").filter(|c| !c.is_empty()) {
             channels.push(ch);
-            Target::Radiance(channels.len() - 1)
+            Role::Radiance(channels.len() - 1)
         } else if lower == "sigma" || lower.starts_with("sigma_") {
             sigma_cols.push((targets.len(), suffix("sigma_")));
-            Target::Skip
+            Role::Ignored
         } else if lower == "weight" || lower.starts_with("weight_") {
             weight_cols.push((targets.len(), suffix("weight_")));
-            Target::Skip
+            Role::Ignored
         } else {
             return Err(option_error(format!(
                 "--columns: unknown column name `{name}` (valid: {VALID})"
@@ -110,9 +98,9 @@ fn layout(options: &LoadOptions) -> Result<Layout> {
                 })?),
             };
             targets[*k] = if is_sigma {
-                Target::Sigma(c)
+                Role::Sigma(c)
             } else {
-                Target::Weight(c)
+                Role::Weight(c)
             };
         }
         let broadcast = cols.iter().any(|(_, ch)| ch.is_none());
@@ -124,8 +112,8 @@ fn layout(options: &LoadOptions) -> Result<Layout> {
     }
     let fixed = parse_fixed(options, &targets)?;
     let maps = parse_maps(options, &names, &targets)?;
-    for (a, angle) in ANGLE_NAMES.iter().enumerate() {
-        if fixed[a].is_none() && !targets.contains(&Target::Angle(a)) {
+    for (a, angle) in ANGLE_COLUMNS.iter().enumerate() {
+        if fixed[a].is_none() && !targets.contains(&Role::Angle(a)) {
             return Err(option_error(format!(
                 "angle `{angle}` is not given: add it to --columns or fix it with \
                  --fixed {angle}=VALUE"
@@ -144,7 +132,7 @@ fn layout(options: &LoadOptions) -> Result<Layout> {
 }
 
 /// `--fixed NAME=VALUE` for angles not in the columns.
-fn parse_fixed(options: &LoadOptions, targets: &[Target]) -> Result<[Option<f64>; 4]> {
+fn parse_fixed(options: &LoadOptions, targets: &[Role]) -> Result<[Option<f64>; 4]> {
     let mut fixed = [None; 4];
     for item in &options.fixed {
         let (name, value) = item.split_once('=').ok_or_else(|| {
@@ -153,12 +141,15 @@ fn parse_fixed(options: &LoadOptions, targets: &[Target]) -> Result<[Option<f64>
             ))
         })?;
         let name = name.trim().to_ascii_lowercase();
-        let a = ANGLE_NAMES.iter().position(|&n| n == name).ok_or_else(|| {
-            option_error(format!(
-                "--fixed `{item}`: `{name}` is not an angle (theta_i, phi_i, theta_r, phi_r)"
-            ))
-        })?;
-        if targets.contains(&Target::Angle(a)) {
+        let a = ANGLE_COLUMNS
+            .iter()
+            .position(|&n| n == name)
+            .ok_or_else(|| {
+                option_error(format!(
+                    "--fixed `{item}`: `{name}` is not an angle (theta_i, phi_i, theta_r, phi_r)"
+                ))
+            })?;
+        if targets.contains(&Role::Angle(a)) {
             return Err(option_error(format!(
                 "--fixed `{item}`: `{name}` is also a column in --columns; give it once"
             )));
@@ -191,7 +182,7 @@ fn check_fixed_theta(fixed: &[Option<f64>; 4], unit: AngleUnit) -> Result<()> {
         if let Some(v) = fixed[a].filter(|v| v.abs() >= limit) {
             return Err(option_error(format!(
                 "--fixed {}={v}: |theta| must be below {name} (the fiber axis is degenerate)",
-                ANGLE_NAMES[a]
+                ANGLE_COLUMNS[a]
             )));
         }
     }
@@ -199,7 +190,7 @@ fn check_fixed_theta(fixed: &[Option<f64>; 4], unit: AngleUnit) -> Result<()> {
 }
 
 /// `--map NAME=EXPR`, one linear map per column (identity where none is given).
-fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Target]) -> Result<Vec<Linear>> {
+fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Role]) -> Result<Vec<Linear>> {
     let mut maps = vec![Linear::IDENTITY; names.len()];
     let mut mapped = vec![false; names.len()];
     for item in &options.maps {
@@ -212,7 +203,7 @@ fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Target]) -> Re
         let k = names
             .iter()
             .position(|n| *n == name)
-            .filter(|&k| targets[k] != Target::Skip)
+            .filter(|&k| targets[k] != Role::Ignored)
             .ok_or_else(|| {
                 option_error(format!(
                     "--map `{item}`: `{name}` is not one of the --columns ({})",
@@ -273,7 +264,7 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         unit,
         options.negative_tolerance,
     );
-    let fixed: Vec<String> = ANGLE_NAMES
+    let fixed: Vec<String> = ANGLE_COLUMNS
         .iter()
         .zip(lay.fixed)
         .filter_map(|(n, v)| v.map(|v| format!("{n}={v}")))
@@ -328,7 +319,7 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         let mut angles: [Cell; 4] = lay.fixed;
         for (k, field) in fields.iter().enumerate() {
             let target = lay.targets[k];
-            if target == Target::Skip {
+            if target == Role::Ignored {
                 continue;
             }
             let cell = parse_cell(
@@ -341,13 +332,13 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
             )?
             .map(|x| lay.maps[k].apply(x));
             match target {
-                Target::Angle(a) => angles[a] = cell,
-                Target::Radiance(c) => radiance[c] = cell,
-                Target::Sigma(Some(c)) => sigma[c] = cell,
-                Target::Sigma(None) => sigma.fill(cell),
-                Target::Weight(Some(c)) => weight[c] = cell,
-                Target::Weight(None) => weight.fill(cell),
-                Target::Skip => {}
+                Role::Angle(a) => angles[a] = cell,
+                Role::Radiance(c) => radiance[c] = cell,
+                Role::Sigma(Some(c)) => sigma[c] = cell,
+                Role::Sigma(None) => sigma.fill(cell),
+                Role::Weight(Some(c)) => weight[c] = cell,
+                Role::Weight(None) => weight.fill(cell),
+                Role::Ignored => {}
             }
         }
         rows.row(line_no, angles, &radiance, &sigma, &weight);
