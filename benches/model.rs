@@ -9,18 +9,11 @@ use hairfit::model::{
 
 const BATCH: usize = 1024;
 
+/// MODEL.md's known-values parameter set, as shipped in `data/true_1ch.json`.
 fn params() -> Params<f64> {
-    Params {
-        eta: 1.55,
-        sigma_a: vec![0.4],
-        alpha_r: (-7.0f64).to_radians(),
-        beta_r: 8.0f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15.0f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
-    }
+    hairfit::params::ParamFile::load("data/true_1ch.json")
+        .expect("data/true_1ch.json is shipped with the crate")
+        .to_params()
 }
 
 /// Deterministic spread of angles over the whole domain (θ in (−85°, 85°), φ any).

@@ -11,8 +11,7 @@ use hairfit::fit::all_parameters;
 use hairfit::fit::bounds::Bound;
 use hairfit::model::azimuthal::caustic_position;
 use hairfit::model::{
-    scattering_jacobian, Angles, Effects, Lobes, ModelConfig, ParamName, Params, RootMode,
-    StaticJacobian,
+    scattering_jacobian, Angles, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
 };
 
 const MODES: [RootMode; 2] = [RootMode::Cubic, RootMode::Exact];
@@ -30,23 +29,6 @@ fn table_params() -> Params<f64> {
         delta_eta_prime: 0.3,
         delta_h_m: 0.5,
     }
-}
-
-/// The effect sets the task names: R; R+TT; all lobes; all + glints; all + glints + eccentricity.
-fn effect_sets() -> Vec<(&'static str, Effects)> {
-    let lobes = |r, tt, trt| Lobes { r, tt, trt };
-    let e = |l, glints, eccentricity| Effects {
-        lobes: l,
-        glints,
-        eccentricity,
-    };
-    vec![
-        ("R", e(lobes(true, false, false), false, false)),
-        ("R+TT", e(lobes(true, true, false), false, false)),
-        ("all", e(lobes(true, true, true), false, false)),
-        ("all+glints", e(lobes(true, true, true), true, false)),
-        ("all+glints+ecc", e(lobes(true, true, true), true, true)),
-    ]
 }
 
 /// θ_d at which η' = 2 for index η: `cos θ_d = sqrt((η² − 1)/3)`.
@@ -205,7 +187,7 @@ fn sweep(
     for (pname, p) in params {
         let angles = hard_angles(p.eta);
         for mode in MODES {
-            for (ename, effects) in effect_sets() {
+            for (ename, effects) in hairfit::cost::effect_ladder() {
                 let cfg = ModelConfig { mode, effects };
                 for (aname, a) in &angles {
                     n += 1;
@@ -295,7 +277,7 @@ fn jacobian_matches_finite_differences_at_bounds() {
     let mut unresolved = 0;
     for (pname, p) in hard_params() {
         for mode in MODES {
-            for (ename, effects) in effect_sets() {
+            for (ename, effects) in hairfit::cost::effect_ladder() {
                 let cfg = ModelConfig { mode, effects };
                 for (aname, a) in &cases {
                     let (v0, jac) = scattering_jacobian(&p, &cfg, a, &all);

@@ -1,20 +1,9 @@
 //! MODEL.md "Known values" table, both root modes.
 
-use hairfit::model::{scattering, Angles, ModelConfig, Params, RootMode};
+mod model_common;
 
-fn table_params() -> Params<f64> {
-    Params {
-        eta: 1.55,
-        sigma_a: vec![0.4],
-        alpha_r: (-7.0f64).to_radians(),
-        beta_r: 8.0f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15.0f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
-    }
-}
+use hairfit::model::{scattering, Angles, ModelConfig, RootMode};
+use model_common::table_params;
 
 /// (θ_i, φ_i, θ_r, φ_r) in degrees, S cubic, S exact — MODEL.md's table.
 const TABLE: [([f64; 4], f64, f64); 4] = [
