@@ -66,32 +66,22 @@ pub fn run_hairfit(args: &[&str], env: &[(&str, &str)], limit: Duration) -> Fini
     )
 }
 
-/// Write `data` as a loader CSV (degrees, shortest round-trip formatting so values survive).
+/// Write `data`'s angles and values as a loader CSV through hairfit's own writer (unweighted:
+/// sigma and weight are left out, as the fits in these tests expect).
 pub fn write_csv(data: &FitData, path: &Path) {
     let nc = data.n_channels();
-    let mut s = String::from("theta_i,phi_i,theta_r,phi_r");
-    if nc == 1 {
-        s += ",radiance";
-    } else {
-        for c in &data.channels {
-            s += &format!(",radiance_{c}");
-        }
-    }
-    s.push('\n');
+    let mut ds = hairfit::data::Dataset::with_channels(data.channels.clone(), false, false);
     for (i, a) in data.angles.iter().enumerate() {
-        s += &format!(
-            "{:?},{:?},{:?},{:?}",
-            a.theta_i.to_degrees(),
-            a.phi_i.to_degrees(),
-            a.theta_r.to_degrees(),
-            a.phi_r.to_degrees()
+        let angles = [a.theta_i, a.phi_i, a.theta_r, a.phi_r];
+        ds.push(
+            angles,
+            &data.values[i * nc..(i + 1) * nc],
+            None,
+            None,
+            i as u64 + 2,
         );
-        for c in 0..nc {
-            s += &format!(",{:?}", data.values[i * nc + c]);
-        }
-        s.push('\n');
     }
-    std::fs::write(path, s).unwrap();
+    hairfit::data::write_csv(&ds, path).expect("the test CSV is written");
 }
 
 /// True when `text` spells a non-finite number anywhere (JSON has none; a CSV cell must not).
