@@ -1,7 +1,13 @@
 //! Speed of the LM solver on NIST StRD problems of increasing size and difficulty.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use hairfit::nist::{data_dir, run_all, solve, NistProblem};
+
+#[path = "../tests/support/lm.rs"]
+mod lm;
+#[path = "../tests/support/nist.rs"]
+mod nist;
+
+use nist::{data_dir, run_all, solve, NistProblem};
 
 fn bench_nist(c: &mut Criterion) {
     for (name, start) in [

@@ -8,10 +8,10 @@
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
 //! - [`fit`]: `hairfit fit` / `hairfit demo`: least squares with exact Jacobians and uncertainties.
-//! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
-//! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
+//! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`, and the covariance of its solution.
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
+//! - [`rng`]: the seeded, platform-independent random-number generator.
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //! - [`error`]: the error type shared by the library.
 
@@ -24,9 +24,9 @@ pub mod eval;
 pub mod fit;
 pub mod lm;
 pub mod model;
-pub mod nist;
 pub mod params;
 pub mod report;
+pub mod rng;
 pub mod synth;
 
 pub use error::{Error, Result};

@@ -2,9 +2,13 @@
 
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State, KV};
-use hairfit::lm::{minimize, LevenbergMarquardt, LmOptions, LmState, LmTermination};
+use hairfit::lm::{LevenbergMarquardt, LmState, LmTermination};
+use lm::{minimize, LmOptions};
 use nalgebra::{DMatrix, DVector};
 use std::sync::{Arc, Mutex};
+
+#[path = "support/lm.rs"]
+mod lm;
 
 /// Rosenbrock as residuals: r = (10 (x2 - x1²), 1 - x1), zero at (1, 1).
 struct Rosenbrock;

@@ -1,7 +1,12 @@
 //! NIST StRD nonlinear regression: the LM solver, run through argmin's Executor, must reach the
 //! accuracy targets of hairfit issue 6 on all 27 problems.
 
-use hairfit::nist::{markdown_table, run_all, NistResult, PROBLEMS};
+#[path = "support/lm.rs"]
+mod lm;
+#[path = "support/nist.rs"]
+mod nist;
+
+use nist::{data_dir, markdown_table, run_all, solve, NistProblem, NistResult, PROBLEMS};
 
 /// Six correct significant digits is the accuracy the fit needs and NIST's usual bar for a
 /// "successful" nonlinear solver.
@@ -21,7 +26,7 @@ fn nist_strd_accuracy() {
     let table = markdown_table(&results);
     println!("{table}");
     if std::env::var_os("HAIRFIT_WRITE_NIST").is_some() {
-        let path = hairfit::nist::data_dir().join("RESULTS.md");
+        let path = data_dir().join("RESULTS.md");
         std::fs::write(
             &path,
             format!("# NIST StRD results (hairfit LM)\n\n{table}"),
@@ -38,8 +43,7 @@ fn nist_strd_accuracy() {
 
 #[test]
 fn malformed_data_is_reported_with_line_and_column() {
-    use hairfit::nist::NistProblem;
-    let path = hairfit::nist::data_dir().join("Misra1a.dat");
+    let path = data_dir().join("Misra1a.dat");
     let text = std::fs::read_to_string(&path).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     // Data starts on line 61 (header: "Data (lines 61 to 74)"); corrupt its x value.
@@ -51,8 +55,7 @@ fn malformed_data_is_reported_with_line_and_column() {
 
 #[test]
 fn parser_reads_certified_values_and_data_block() {
-    use hairfit::nist::NistProblem;
-    let p = NistProblem::load(&hairfit::nist::data_dir().join("Nelson.dat")).unwrap();
+    let p = NistProblem::load(&data_dir().join("Nelson.dat")).unwrap();
     assert_eq!(p.y.len(), 128);
     assert_eq!(p.x[0], vec![1.0, 180.0]);
     assert_eq!(p.starts[1], vec![2.5, 0.000000005, -0.05]);
@@ -63,10 +66,9 @@ fn parser_reads_certified_values_and_data_block() {
 
 #[test]
 fn ad_jacobian_matches_central_differences() {
-    use hairfit::nist::NistProblem;
     use nalgebra::DVector;
     for name in PROBLEMS {
-        let p = NistProblem::load(&hairfit::nist::data_dir().join(format!("{name}.dat"))).unwrap();
+        let p = NistProblem::load(&data_dir().join(format!("{name}.dat"))).unwrap();
         let b = DVector::from_vec(p.certified.clone());
         let j = p.jacobian(&b);
         for k in 0..b.len() {
@@ -91,9 +93,8 @@ fn ad_jacobian_matches_central_differences() {
 #[test]
 fn covariance_reproduces_certified_standard_deviations() {
     use hairfit::lm::covariance;
-    use hairfit::nist::{solve, NistProblem};
     for name in PROBLEMS {
-        let p = NistProblem::load(&hairfit::nist::data_dir().join(format!("{name}.dat"))).unwrap();
+        let p = NistProblem::load(&data_dir().join(format!("{name}.dat"))).unwrap();
         let r = solve(&p, 2).unwrap();
         let dof = p.y.len() - p.certified.len();
         let j = p.jacobian(&nalgebra::DVector::from_vec(r.param.clone()));
@@ -120,11 +121,10 @@ fn covariance_reproduces_certified_standard_deviations() {
 
 #[test]
 fn small_residual_fit_converges_past_the_cost_noise() {
-    use hairfit::nist::{solve, NistProblem};
     // Lanczos3: SS = 1.6e-8 on y ~ 1, so the last digits are invisible in the cost. Judging
     // those steps by the gradient lifts it from 6.4 (pure ratio test) to >= 10.5 digits; 9 leaves
     // room for libm differences while still failing if only the ratio test decided.
-    let p = NistProblem::load(&hairfit::nist::data_dir().join("Lanczos3.dat")).unwrap();
+    let p = NistProblem::load(&data_dir().join("Lanczos3.dat")).unwrap();
     let r = solve(&p, 2).unwrap();
     assert!(r.lre_min >= 9.0, "LRE {}", r.lre_min);
 }

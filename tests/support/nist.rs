@@ -1,15 +1,21 @@
-//! The NIST StRD nonlinear-regression suite: parsing the `.dat` files, the 27 models with exact
-//! (forward-mode AD) Jacobians, and running [`crate::lm::LevenbergMarquardt`] on all 54
-//! problem–start pairs with the log relative error (LRE) of the result.
+//! Test support: the NIST StRD nonlinear-regression suite the LM solver is validated on —
+//! parsing the `.dat` files, the 27 models with exact (forward-mode AD) Jacobians, and running
+//! the solver (through [`crate::lm::minimize`]) on all 54 problem–start pairs with the log
+//! relative error (LRE) of the result. Included with `#[path]` next to `support/lm.rs` (as
+//! crate-root module `lm`) by `tests/nist.rs` and `benches/lm.rs`.
+
+// Each including crate uses a different part of this file.
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
-use argmin::core::{Error as ArgminError, Executor, Jacobian, Operator, State};
+use argmin::core::{Error as ArgminError, Jacobian, Operator};
+use hairfit::lm::LmTermination;
+use hairfit::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{Dual64, DualNum};
 
-use crate::error::{Error, Result};
-use crate::lm::{LevenbergMarquardt, LmTermination};
+use crate::lm::{minimize, LmOptions};
 
 /// NIST certifies 11 significant digits, so no LRE above 11 is meaningful.
 pub const LRE_CAP: f64 = 11.0;
@@ -445,18 +451,17 @@ pub struct NistResult {
 /// Iteration budget per run; every StRD problem converges in far fewer trial steps.
 const MAX_ITERS: u64 = 5000;
 
-/// Fit `problem` from start `start` (1 or 2) with the LM solver in an argmin `Executor`.
+/// Fit `problem` from start `start` (1 or 2) with the LM solver at its default tolerances.
 pub fn solve(problem: &NistProblem, start: usize) -> Result<NistResult> {
     let x0 = DVector::from_vec(problem.starts[start - 1].clone());
-    let res = Executor::new(NistFit(problem), LevenbergMarquardt::new())
-        .configure(|s| s.param(x0).max_iters(MAX_ITERS))
-        .run()
+    let options = LmOptions {
+        max_iters: MAX_ITERS,
+        ..LmOptions::default()
+    };
+    let run = minimize(NistFit(problem), x0, options)
         .map_err(|e| Error::Other(format!("{} start {start}: {e}", problem.name)))?;
-    let termination = res.solver().termination();
-    let state = res.state();
-    let param = state.get_param().cloned().unwrap_or_default();
-    let iterations = state.get_iter();
-    let ss = 2.0 * state.get_cost();
+    let (param, iterations, termination) = (run.param, run.iterations, run.termination);
+    let ss = 2.0 * run.cost;
     let lres: Vec<f64> = param
         .iter()
         .zip(&problem.certified)

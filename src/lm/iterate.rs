@@ -1,0 +1,263 @@
+//! One Levenberg–Marquardt iteration as argmin's `Solver`: `init` evaluates the start, each
+//! `next_iter` tries one step, accepts or rejects it and updates the trust radius.
+
+use argmin::core::{
+    Error as ArgminError, Jacobian, Operator, Problem, Solver, State, TerminationReason,
+    TerminationStatus, KV,
+};
+use nalgebra::{DMatrix, DVector};
+
+use super::step::{
+    all_finite, column_norms, gradient_cosine, scaled_gradient, svd_with_projection,
+    trust_region_step,
+};
+use super::{LevenbergMarquardt, LmState, LmTermination};
+
+impl LevenbergMarquardt {
+    /// Update the scaling from a new Jacobian, factor it and run the gradient test.
+    fn refresh(&mut self, jacobian: &DMatrix<f64>, residuals: &DVector<f64>) {
+        let n = jacobian.ncols();
+        let col_norms = column_norms(jacobian);
+        if self.diag.len() != n {
+            self.diag = col_norms.map(|c| if c > 0.0 { c } else { 1.0 });
+        } else {
+            self.diag.zip_apply(&col_norms, |d, c| *d = d.max(c));
+        }
+        let fnorm = residuals.norm();
+        if fnorm == 0.0 {
+            // Also covers m = 0; nothing to factor.
+            self.status = Some(LmTermination::ZeroResidual);
+            return;
+        } else if gradient_cosine(jacobian, residuals, &col_norms) <= self.gtol {
+            self.status = Some(LmTermination::GradientConverged);
+        }
+        let mut scaled = jacobian.clone();
+        for (j, mut col) in scaled.column_iter_mut().enumerate() {
+            col /= self.diag[j];
+        }
+        self.svd = Some(svd_with_projection(scaled, residuals));
+    }
+}
+
+impl<O> Solver<O, LmState> for LevenbergMarquardt
+where
+    O: Operator<Param = DVector<f64>, Output = DVector<f64>>
+        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+{
+    fn name(&self) -> &str {
+        "Levenberg-Marquardt (Moré)"
+    }
+
+    fn init(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: LmState,
+    ) -> std::result::Result<(LmState, Option<KV>), ArgminError> {
+        let x0 = state.take_param().ok_or_else(|| {
+            anyhow_error("LevenbergMarquardt needs an initial parameter vector: configure the Executor with `.param(x0)`")
+        })?;
+        if x0.is_empty() {
+            return Err(anyhow_error(
+                "LevenbergMarquardt needs at least one parameter",
+            ));
+        }
+        let r = problem.apply(&x0)?;
+        if r.iter().any(|v| !v.is_finite()) {
+            return Err(anyhow_error(
+                "residuals at the initial parameters are not finite; choose another start",
+            ));
+        }
+        let j = problem.jacobian(&x0)?;
+        if !all_finite(j.as_slice()) {
+            return Err(anyhow_error(
+                "Jacobian at the initial parameters is not finite; choose another start",
+            ));
+        }
+        if j.nrows() != r.len() || j.ncols() != x0.len() {
+            return Err(anyhow_error(&format!(
+                "Jacobian is {}x{} but residuals have {} rows and parameters {} entries",
+                j.nrows(),
+                j.ncols(),
+                r.len(),
+                x0.len()
+            )));
+        }
+        self.diag = DVector::zeros(0);
+        self.svd = None;
+        self.status = None;
+        self.first_step = true;
+        self.lambda = 0.0;
+        self.refresh(&j, &r);
+        let xnorm = self.diag.component_mul(&x0).norm();
+        self.delta = if xnorm > 0.0 {
+            self.radius_factor * xnorm
+        } else {
+            self.radius_factor
+        };
+        let cost = 0.5 * r.norm_squared();
+        let kv = argmin::kv!("cost" => cost; "delta" => self.delta;);
+        Ok((
+            state.param(x0).residuals(r).jacobian(j).cost(cost),
+            Some(kv),
+        ))
+    }
+
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<O>,
+        mut state: LmState,
+    ) -> std::result::Result<(LmState, Option<KV>), ArgminError> {
+        let svd = self.svd.as_ref().ok_or_else(|| {
+            anyhow_error("LevenbergMarquardt: no factorisation; was init run and not converged?")
+        })?;
+        let x = state
+            .get_param()
+            .ok_or_else(|| anyhow_error("LevenbergMarquardt: param not set"))?
+            .clone();
+        let fnorm = (2.0 * state.get_cost()).sqrt();
+        let rows = state.get_residuals().map_or(0, |r| r.len());
+
+        let step = trust_region_step(svd, self.delta, self.lambda, rows);
+        let p = step.z.component_div(&self.diag);
+        let pnorm = step.z.norm();
+        if self.first_step {
+            self.delta = self.delta.min(pnorm);
+            self.first_step = false;
+        }
+        let x_new = &x + &p;
+        let r_new = problem.apply(&x_new)?;
+        if r_new.len() != rows {
+            return Err(anyhow_error(&format!(
+                "residual vector changed length from {rows} to {} between evaluations",
+                r_new.len()
+            )));
+        }
+        // A step into a region where the model is undefined is a failed step, not an error.
+        let fnorm1 = if r_new.iter().all(|v| v.is_finite()) {
+            r_new.norm()
+        } else {
+            f64::INFINITY
+        };
+
+        let actred = if 0.1 * fnorm1 < fnorm {
+            1.0 - (fnorm1 / fnorm).powi(2)
+        } else {
+            -1.0
+        };
+        let f2 = fnorm * fnorm;
+        let prered = (step.jp2 + 2.0 * step.lambda * pnorm * pnorm) / f2;
+        let dirder = -(step.jp2 + step.lambda * pnorm * pnorm) / f2;
+        let ratio = if prered > 0.0 { actred / prered } else { 0.0 };
+
+        // Moré's radius update: shrink on poor agreement, double on good agreement.
+        if ratio <= 0.25 {
+            let mut temp = if actred >= 0.0 {
+                0.5
+            } else {
+                0.5 * dirder / (dirder + 0.5 * actred)
+            };
+            if 0.1 * fnorm1 >= fnorm || temp < 0.1 || !temp.is_finite() {
+                temp = 0.1;
+            }
+            self.delta = temp * self.delta.min(pnorm / 0.1);
+            self.lambda = step.lambda / temp;
+        } else if step.lambda == 0.0 || ratio >= 0.75 {
+            self.delta = pnorm / 0.5;
+            self.lambda = 0.5 * step.lambda;
+        } else {
+            self.lambda = step.lambda;
+        }
+
+        // Near a minimum of a small-residual problem the cost change falls below its rounding
+        // noise (r = f - y cancels), so the ratio test rejects steps that are still accurate.
+        // There the gradient, which shrinks linearly rather than quadratically with the
+        // distance to the minimum, decides instead.
+        let mut accepted = ratio >= 1e-4;
+        let mut noise_accepted = false;
+        let mut j_new = None;
+        if !accepted && fnorm1.is_finite() && prered <= self.noise && actred >= -self.noise {
+            let j = problem.jacobian(&x_new)?;
+            let old = match (state.get_jacobian(), state.get_residuals()) {
+                (Some(jo), Some(ro)) => scaled_gradient(jo, ro, &self.diag),
+                _ => f64::INFINITY,
+            };
+            if all_finite(j.as_slice()) && scaled_gradient(&j, &r_new, &self.diag) < old {
+                accepted = true;
+                noise_accepted = true;
+            }
+            j_new = Some(j);
+        }
+        if accepted {
+            let j = match j_new {
+                Some(j) => j,
+                None => problem.jacobian(&x_new)?,
+            };
+            if !all_finite(j.as_slice()) {
+                return Err(anyhow_error(&format!(
+                    "Jacobian is not finite at parameters {:?} where the residuals are finite; \
+                     check the model's derivatives",
+                    x_new.as_slice()
+                )));
+            }
+            self.refresh(&j, &r_new);
+            let cost = 0.5 * fnorm1 * fnorm1;
+            state = state
+                .param(x_new.clone())
+                .residuals(r_new)
+                .jacobian(j)
+                .cost(cost);
+        }
+        let xnorm = self
+            .diag
+            .component_mul(if accepted { &x_new } else { &x })
+            .norm();
+
+        if self.status.is_none() {
+            let eps = f64::EPSILON;
+            self.status = if actred.abs() <= self.ftol && prered <= self.ftol && 0.5 * ratio <= 1.0
+            {
+                Some(LmTermination::CostConverged)
+            } else if self.delta <= self.xtol * xnorm || self.delta <= f64::MIN_POSITIVE {
+                Some(LmTermination::StepConverged)
+            } else if (self.ftol > 0.0
+                && actred.abs() <= eps
+                && prered <= eps
+                && 0.5 * ratio <= 1.0)
+                || self.delta <= eps * xnorm
+            {
+                Some(LmTermination::MachinePrecision)
+            } else {
+                None
+            };
+        }
+
+        let kv = argmin::kv!(
+            "cost" => state.get_cost();
+            "lambda" => step.lambda;
+            "delta" => self.delta;
+            "step_norm" => pnorm;
+            "gain_ratio" => ratio;
+            "accepted" => accepted;
+            "noise_accepted" => noise_accepted;
+        );
+        Ok((state, Some(kv)))
+    }
+
+    fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
+        match self.status {
+            Some(s) => TerminationStatus::Terminated(match s {
+                LmTermination::CostConverged
+                | LmTermination::StepConverged
+                | LmTermination::GradientConverged
+                | LmTermination::ZeroResidual => TerminationReason::SolverConverged,
+                LmTermination::MachinePrecision => TerminationReason::SolverExit(s.text().into()),
+            }),
+            None => TerminationStatus::NotTerminated,
+        }
+    }
+}
+
+/// An argmin error carrying `msg`.
+fn anyhow_error(msg: &str) -> ArgminError {
+    ArgminError::msg(msg.to_string())
+}
