@@ -7,25 +7,32 @@
 //!   parameter vector and call [`StaticJacobian::eval`] per sample with no allocation (fast path
 //!   for a fit).
 
-use nalgebra::{Const, Dyn, U1};
-use num_dual::{DualDVec64, DualNum, DualSVec64};
+use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
+use num_dual::{Derivative, DualDVec64, DualNum, DualSVec64, DualVec64};
 
 use super::{scattering, Angles, ModelConfig, ParamName, Params};
 
-/// `params` as dual numbers, parameter `which[j]` seeded as direction j.
-fn seeded<D: DualNum<f64>>(
+/// `params` as dual numbers with `dim` derivative directions, parameter `which[j]` seeded as
+/// direction j (the one seeding of the crate: this module's Jacobians and the fit's gradients).
+/// Panics if `which` names a channel `SigmaA(c)` that `params` does not have.
+pub(crate) fn seeded<D: Dim>(
     params: &Params<f64>,
     which: &[ParamName],
-    seed: impl Fn(f64, Option<usize>) -> D,
-) -> Params<D> {
+    dim: D,
+) -> Params<DualVec64<D>>
+where
+    DefaultAllocator: Allocator<D>,
+    DualVec64<D>: DualNum<f64>,
+{
     for w in which {
         if let ParamName::SigmaA(c) = w {
             assert!(*c < params.sigma_a.len(), "sigma_a[{c}] does not exist");
         }
     }
-    let mut dual = params.map(|&v| seed(v, None));
+    let mut dual = params.map(|&v| DualVec64::from_re(v));
     for (j, &name) in which.iter().enumerate() {
-        dual.set(name, seed(params.get(name), Some(j)));
+        let direction = Derivative::derivative_generic(dim, U1, j);
+        dual.set(name, DualVec64::new(params.get(name), direction));
     }
     dual
 }
@@ -41,10 +48,7 @@ impl<const N: usize> StaticJacobian<N> {
     /// Seed `params` with one direction per entry of `which`.
     /// Panics if `which` names a channel `SigmaA(c)` that `params` does not have.
     pub fn new(params: &Params<f64>, which: &[ParamName; N]) -> Self {
-        let dual = seeded(params, which, |v, j| match j {
-            Some(j) => DualSVec64::<N>::from_re(v).derivative(j),
-            None => DualSVec64::<N>::from_re(v),
-        });
+        let dual = seeded(params, which, Const::<N>);
         let out = vec![DualSVec64::<N>::from_re(0.0); params.sigma_a.len()];
         StaticJacobian { params: dual, out }
     }
@@ -76,10 +80,7 @@ pub fn scattering_jacobian(
     which: &[ParamName],
 ) -> (Vec<f64>, Vec<Vec<f64>>) {
     let n = which.len();
-    let dual = seeded(params, which, |v, j| match j {
-        Some(j) => DualDVec64::from_re(v).derivative(n, j),
-        None => DualDVec64::from_re(v),
-    });
+    let dual = seeded(params, which, Dyn(n));
     let mut out = vec![DualDVec64::from_re(0.0); params.sigma_a.len()];
     scattering(&dual, config, angles, &mut out);
     let values = out.iter().map(|d| d.re).collect();

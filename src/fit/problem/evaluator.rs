@@ -1,0 +1,238 @@
+//! Data prepared for one fit space: the residual [`Space`], targets and weights per value
+//! (log-space values that are not significantly positive become linear residuals), and the
+//! mapping between solver parameters and natural parameter values.
+
+use serde::Serialize;
+
+use super::forward::Forward;
+use super::residual::{Evaluation, ScaleMode};
+use super::FitData;
+use crate::fit::bounds::Bound;
+use crate::fit::loss::Loss;
+use crate::model::{Angles, ParamName, Params};
+
+/// Residual space.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Space {
+    /// `w (y − s·S)`.
+    Linear,
+    /// `w (ln y − ln s − ln S)`: radiance spans orders of magnitude, so relative errors matter.
+    #[default]
+    Log,
+}
+
+impl std::str::FromStr for Space {
+    type Err = crate::Error;
+    /// The [`Display`](std::fmt::Display) name of a space, in any case.
+    fn from_str(s: &str) -> crate::Result<Self> {
+        let key = s.trim().to_ascii_lowercase();
+        [Space::Linear, Space::Log]
+            .into_iter()
+            .find(|space| space.to_string() == key)
+            .ok_or_else(|| {
+                crate::Error::Other(format!("unknown space `{key}`: use `linear` or `log`"))
+            })
+    }
+}
+
+impl std::fmt::Display for Space {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Space::Linear => "linear",
+            Space::Log => "log",
+        })
+    }
+}
+
+/// Data prepared for one fit space plus everything fixed during a fit.
+pub struct Evaluator<'f, F: Forward> {
+    pub forward: &'f F,
+    pub angles: Vec<Angles>,
+    pub n_channels: usize,
+    pub space: Space,
+    pub loss: Loss,
+    pub loss_scale: f64,
+    /// `y` (linear) or `ln y` (log; `y` itself for linear-fallback rows).
+    pub(super) target: Vec<f64>,
+    /// Residual weight `1/σ` (log: `y/σ`), `√weight`, or 1.
+    pub(super) w: Vec<f64>,
+    /// Log space only: rows whose value is not significantly positive (`y ≤ 0`, or `y < 2σ`),
+    /// fitted as linear residuals `w (y − s·S)` — a log would turn a zero reading into an
+    /// arbitrary, hugely weighted outlier. They do not enter the closed-form scale.
+    pub(super) lin: Vec<bool>,
+    /// Fixed parameters (and the start values of free ones).
+    pub base: Params<f64>,
+    pub free: Vec<ParamName>,
+    pub bounds: Vec<Bound>,
+    /// Scale is explicit (robust loss) rather than projected.
+    pub explicit_scale: bool,
+}
+
+/// A reading below this many σ is not significantly positive: its log is not approximately
+/// Gaussian (the log-normal approximation σ_log = σ/y needs y ≫ σ), so it is fitted linearly.
+pub const LOG_MIN_SNR: f64 = 5.0;
+
+/// Values a log-space fit cannot take the logarithm of, met when preparing the targets.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Floored {
+    /// Per channel: how many values (`y ≤ 0`, or `y < 2σ`) are fitted as linear residuals.
+    pub count: Vec<usize>,
+    /// Per channel: the noise unit of those residuals when σ is unknown (half the smallest
+    /// positive value: a reading at or below zero is below the detector's noise).
+    pub floor: Vec<f64>,
+}
+
+impl<'f, F: Forward> Evaluator<'f, F> {
+    /// Prepare `data` for `space`; in log space values that are not significantly positive
+    /// become linear residuals (see `lin`), counted in the returned [`Floored`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        forward: &'f F,
+        data: &FitData,
+        space: Space,
+        loss: Loss,
+        loss_scale: f64,
+        base: Params<f64>,
+        free: Vec<ParamName>,
+    ) -> crate::Result<(Self, Floored)> {
+        let nc = data.n_channels();
+        let mut floored = Floored {
+            count: vec![0; nc],
+            floor: vec![0.0; nc],
+        };
+        if space == Space::Log {
+            for c in 0..nc {
+                let min_pos = (0..data.len())
+                    .map(|i| data.values[i * nc + c])
+                    .filter(|&v| v > 0.0 && v.is_finite())
+                    .fold(f64::INFINITY, f64::min);
+                if !min_pos.is_finite() {
+                    return Err(crate::Error::Other(format!(
+                        "channel `{}` has no positive value: a log-space fit is impossible; use --space linear",
+                        data.channels[c]
+                    )));
+                }
+                floored.floor[c] = 0.5 * min_pos;
+            }
+        }
+        let mut target = Vec::with_capacity(data.values.len());
+        let mut w = Vec::with_capacity(data.values.len());
+        let mut lin = Vec::with_capacity(data.values.len());
+        for (k, &y) in data.values.iter().enumerate() {
+            let c = k % nc;
+            let sigma = data.sigma.as_ref().map(|s| s[k]);
+            let weight = data.weight.as_ref().map(|wt| wt[k].max(0.0).sqrt());
+            let fallback =
+                space == Space::Log && (y <= 0.0 || sigma.is_some_and(|s| y < LOG_MIN_SNR * s));
+            let wk = match (space, fallback) {
+                (Space::Linear, _) | (Space::Log, true) => match (sigma, weight) {
+                    (Some(s), _) => 1.0 / s,
+                    (None, Some(wt)) if space == Space::Linear => wt,
+                    (None, Some(wt)) => wt / floored.floor[c],
+                    (None, None) if space == Space::Linear => 1.0,
+                    (None, None) => 1.0 / floored.floor[c],
+                },
+                (Space::Log, false) => match (sigma, weight) {
+                    (Some(s), _) => y / s,
+                    (None, Some(wt)) => wt,
+                    (None, None) => 1.0,
+                },
+            };
+            if fallback {
+                floored.count[c] += 1;
+            }
+            target.push(if space == Space::Log && !fallback {
+                y.ln()
+            } else {
+                y
+            });
+            w.push(if wk.is_finite() { wk } else { 0.0 });
+            lin.push(fallback);
+        }
+        let bounds = free.iter().map(|&n| Bound::of(n)).collect();
+        Ok((
+            Evaluator {
+                forward,
+                angles: data.angles.clone(),
+                n_channels: nc,
+                space,
+                loss,
+                loss_scale,
+                target,
+                w,
+                lin,
+                base,
+                free,
+                bounds,
+                explicit_scale: loss != Loss::L2,
+            },
+            floored,
+        ))
+    }
+
+    /// Number of residuals.
+    pub fn n_residuals(&self) -> usize {
+        self.target.len()
+    }
+
+    /// Number of solver parameters (free shape parameters, plus scales when explicit).
+    pub fn n_params(&self) -> usize {
+        self.free.len()
+            + if self.explicit_scale {
+                self.n_channels
+            } else {
+                0
+            }
+    }
+
+    /// Residual weights (for reports).
+    pub fn weights(&self) -> &[f64] {
+        &self.w
+    }
+
+    /// Natural values of the free parameters for internal `u`.
+    pub fn natural(&self, u: &[f64]) -> Vec<f64> {
+        self.bounds
+            .iter()
+            .zip(u)
+            .map(|(b, &v)| b.to_natural(v))
+            .collect()
+    }
+
+    /// Internal `u` of natural free values `x` (scale entries, when explicit, appended as given).
+    pub fn internal(&self, x: &[f64]) -> Vec<f64> {
+        self.bounds
+            .iter()
+            .zip(x)
+            .map(|(b, &v)| b.to_internal(v))
+            .collect()
+    }
+
+    /// Full parameter set with free values `x` (natural units).
+    pub fn params_at(&self, x: &[f64]) -> Params<f64> {
+        let mut p = self.base.clone();
+        for (&n, &v) in self.free.iter().zip(x) {
+            p.set(n, v);
+        }
+        p
+    }
+
+    /// Evaluate at solver parameters `u` (transforms applied; scale per `explicit_scale`).
+    pub fn eval_internal(&self, u: &[f64], jac: bool) -> Evaluation {
+        let nf = self.free.len();
+        let x = self.natural(&u[..nf]);
+        let dxdu: Vec<f64> = self
+            .bounds
+            .iter()
+            .zip(u)
+            .map(|(b, &v)| b.derivative(v))
+            .collect();
+        let mode = if self.explicit_scale {
+            ScaleMode::ExplicitLog(&u[nf..])
+        } else {
+            ScaleMode::Projected
+        };
+        self.evaluate(&x, &dxdu, mode, jac)
+    }
+}
