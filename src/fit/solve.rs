@@ -108,11 +108,13 @@ pub fn is_cancelled(flag: &Option<Arc<AtomicBool>>) -> bool {
     flag.as_ref().is_some_and(|f| f.load(Ordering::SeqCst))
 }
 
-/// Records the cost after every iteration.
-struct TraceObserver(Arc<Mutex<Vec<f64>>>);
+/// Records the state's cost after every iteration, for each of the fit's solvers: LM's current
+/// cost (a step accepted within rounding noise may raise it slightly), Nelder–Mead's best vertex,
+/// the swarm's best particle.
+struct CostTrace(Arc<Mutex<Vec<f64>>>);
 
-impl Observe<LsqState> for TraceObserver {
-    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+impl<S: State<Float = f64>> Observe<S> for CostTrace {
+    fn observe_iter(&mut self, state: &S, _kv: &KV) -> Result<(), ArgminError> {
         if let Ok(mut h) = self.0.lock() {
             h.push(state.get_cost());
         }
@@ -167,7 +169,7 @@ pub fn run_local<F: Forward>(
     };
     let result = Executor::new(LsqProblem { ev }, solver)
         .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
-        .add_observer(TraceObserver(history.clone()), ObserverMode::Always)
+        .add_observer(CostTrace(history.clone()), ObserverMode::Always)
         .run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
     let (u, iterations, status) = match result {
@@ -220,18 +222,6 @@ impl<F: Forward> argmin::core::CostFunction for CostOnly<'_, '_, F> {
     }
 }
 
-/// Records the best cost after every Nelder–Mead iteration.
-struct NmTrace(Arc<Mutex<Vec<f64>>>);
-
-impl<S: State<Float = f64>> Observe<S> for NmTrace {
-    fn observe_iter(&mut self, state: &S, _kv: &KV) -> Result<(), ArgminError> {
-        if let Ok(mut h) = self.0.lock() {
-            h.push(state.get_best_cost());
-        }
-        Ok(())
-    }
-}
-
 /// argmin's Nelder–Mead from `u0` (initial simplex: steps of 0.2 in each internal coordinate,
 /// about a tenth of a bounded parameter's range); returns `(u, cost, iterations, history)`.
 pub fn nelder_mead<F: Forward>(
@@ -250,7 +240,7 @@ pub fn nelder_mead<F: Forward>(
     let solver = argmin::solver::neldermead::NelderMead::new(simplex);
     let res = Executor::new(CostOnly { ev }, solver)
         .configure(|s| s.max_iters(max_iters))
-        .add_observer(NmTrace(history.clone()), ObserverMode::Always)
+        .add_observer(CostTrace(history.clone()), ObserverMode::Always)
         .run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
     let start_cost = ev.eval_internal(u0, false).cost();
@@ -295,7 +285,7 @@ pub fn particle_swarm<F: Forward>(
     .with_rng_generator(rand_chacha::ChaCha8Rng::seed_from_u64(seed));
     let res = Executor::new(CostOnly { ev }, solver)
         .configure(|s| s.max_iters(max_iters))
-        .add_observer(NmTrace(history.clone()), ObserverMode::Always)
+        .add_observer(CostTrace(history.clone()), ObserverMode::Always)
         .run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
     let mid: Vec<f64> = lower
