@@ -29,16 +29,18 @@ pub enum Loss {
 
 impl FromStr for Loss {
     type Err = Error;
+    /// The [`Display`](fmt::Display) name of a loss, in any case; `_` may stand for `-`.
     fn from_str(s: &str) -> Result<Self, Error> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "l2" => Ok(Loss::L2),
-            "huber" => Ok(Loss::Huber),
-            "cauchy" => Ok(Loss::Cauchy),
-            "soft-l1" | "soft_l1" => Ok(Loss::SoftL1),
-            other => Err(Error::Other(format!(
-                "unknown loss `{other}`: use l2, huber, cauchy or soft-l1"
-            ))),
-        }
+        let key = s.trim().to_ascii_lowercase();
+        let canonical = key.replace('_', "-");
+        Loss::ALL
+            .into_iter()
+            .find(|l| l.to_string() == canonical)
+            .ok_or_else(|| {
+                Error::Other(format!(
+                    "unknown loss `{key}`: use l2, huber, cauchy or soft-l1"
+                ))
+            })
     }
 }
 
@@ -54,6 +56,9 @@ impl fmt::Display for Loss {
 }
 
 impl Loss {
+    /// Every loss.
+    pub const ALL: [Loss; 4] = [Loss::L2, Loss::Huber, Loss::Cauchy, Loss::SoftL1];
+
     /// `(ρ(s), ρ′(s))` of the unit-scale loss.
     fn rho(&self, s: f64) -> (f64, f64) {
         match self {
@@ -95,6 +100,16 @@ impl Loss {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_round_trip_and_unknown_names_are_refused() {
+        for loss in Loss::ALL {
+            assert_eq!(loss.to_string().parse::<Loss>().unwrap(), loss);
+        }
+        assert_eq!(" Soft_L1 ".parse::<Loss>().unwrap(), Loss::SoftL1);
+        let msg = "tukey".parse::<Loss>().unwrap_err().to_string();
+        assert!(msg.contains("unknown loss `tukey`"), "{msg}");
+    }
 
     #[test]
     fn square_root_residual_reproduces_the_cost_and_its_derivative() {
