@@ -14,6 +14,20 @@ pub fn wrap(x: f64) -> f64 {
     }
 }
 
+/// `wrap` in degrees: map an angle to `(−180°, 180°]` (for reports and rig geometry, which work
+/// in degrees; converting to radians and back would not round-trip exactly).
+#[inline]
+pub fn wrap_deg(x: f64) -> f64 {
+    let y = x % 360.0;
+    if y <= -180.0 {
+        y + 360.0
+    } else if y > 180.0 {
+        y - 360.0
+    } else {
+        y
+    }
+}
+
 /// `wrap` for a (dual) number: shift by the multiple of 2π found on the real part.
 #[inline]
 pub fn wrap_t<T: DualNum<f64>>(x: T) -> T {
@@ -39,5 +53,23 @@ pub fn half_angles(theta_i: f64, phi_i: f64, theta_r: f64, phi_r: f64) -> HalfAn
         theta_d: 0.5 * (theta_r - theta_i),
         phi: wrap(phi_r - phi_i),
         phi_h: 0.5 * (phi_i + phi_r),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_maps_into_the_half_open_interval() {
+        assert_eq!(wrap(PI), PI);
+        assert_eq!(wrap(-PI), PI);
+        assert_eq!(wrap(0.25), 0.25);
+        assert!((wrap(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-15);
+        assert_eq!(wrap_deg(180.0), 180.0);
+        assert_eq!(wrap_deg(-180.0), 180.0);
+        assert_eq!(wrap_deg(540.0), 180.0);
+        assert_eq!(wrap_deg(-190.0), 170.0);
+        assert_eq!(wrap_deg(359.5), -0.5);
     }
 }
