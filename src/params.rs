@@ -6,28 +6,26 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::model::Params;
+use crate::model::parameters::TABLE;
+use crate::model::{ParamName, Params};
 
-/// MODEL.md default for η.
-pub const DEFAULT_ETA: f64 = 1.55;
-/// MODEL.md default for the eccentricity a.
-pub const DEFAULT_ECCENTRICITY: f64 = 1.0;
-/// MODEL.md default for Δη'.
-pub const DEFAULT_DELTA_ETA_PRIME: f64 = 0.3;
-/// MODEL.md default for Δh_M.
-pub const DEFAULT_DELTA_H_M: f64 = 0.5;
-
+/// The parameter table's default of `name` (file units), for serde's `default = ...`.
+fn table_default(name: ParamName) -> f64 {
+    name.spec()
+        .default
+        .expect("the parameter file omits only parameters with a default in the table")
+}
 fn default_eta() -> f64 {
-    DEFAULT_ETA
+    table_default(ParamName::Eta)
 }
 fn default_eccentricity() -> f64 {
-    DEFAULT_ECCENTRICITY
+    table_default(ParamName::Eccentricity)
 }
 fn default_delta_eta_prime() -> f64 {
-    DEFAULT_DELTA_ETA_PRIME
+    table_default(ParamName::DeltaEtaPrime)
 }
 fn default_delta_h_m() -> f64 {
-    DEFAULT_DELTA_H_M
+    table_default(ParamName::DeltaHM)
 }
 
 /// `sigma_a` as written: one number (one channel) or an array (one per channel).
@@ -73,8 +71,8 @@ impl ParamFile {
                 e.line() as u64,
                 e.column() as u64,
                 format!(
-                    "{e}; a parameter file is a JSON object with keys eta, sigma_a, alpha_r_deg, \
-                     beta_r_deg, k_g, w_c_deg, eccentricity, delta_eta_prime, delta_h_m"
+                    "{e}; a parameter file is a JSON object with keys {}",
+                    TABLE.map(|s| s.json).join(", ")
                 ),
             )
         })?;
@@ -82,7 +80,7 @@ impl ParamFile {
         Ok(file)
     }
 
-    /// Check MODEL.md's domain (see [`Params::validate`]).
+    /// Check every value against the parameter table's domain (see [`Params::validate`]).
     pub fn validate(&self) -> Result<()> {
         if let SigmaA::PerChannel(v) = &self.sigma_a {
             if v.is_empty() {
@@ -109,42 +107,49 @@ impl ParamFile {
         matches!(self.sigma_a, SigmaA::Scalar(_))
     }
 
-    /// Model parameters, degrees converted to radians.
-    pub fn to_params(&self) -> Params<f64> {
-        let sigma_a = match &self.sigma_a {
-            SigmaA::Scalar(s) => vec![*s],
-            SigmaA::PerChannel(v) => v.clone(),
-        };
-        Params {
-            eta: self.eta,
-            sigma_a,
-            alpha_r: self.alpha_r_deg.to_radians(),
-            beta_r: self.beta_r_deg.to_radians(),
-            k_g: self.k_g,
-            w_c: self.w_c_deg.to_radians(),
-            eccentricity: self.eccentricity,
-            delta_eta_prime: self.delta_eta_prime,
-            delta_h_m: self.delta_h_m,
+    /// The value of `name` as written in the file (degrees for angles).
+    fn file_value(&self, name: ParamName) -> f64 {
+        match name {
+            ParamName::Eta => self.eta,
+            ParamName::SigmaA(c) => match &self.sigma_a {
+                SigmaA::Scalar(s) => *s,
+                SigmaA::PerChannel(v) => v[c],
+            },
+            ParamName::AlphaR => self.alpha_r_deg,
+            ParamName::BetaR => self.beta_r_deg,
+            ParamName::KG => self.k_g,
+            ParamName::WC => self.w_c_deg,
+            ParamName::Eccentricity => self.eccentricity,
+            ParamName::DeltaEtaPrime => self.delta_eta_prime,
+            ParamName::DeltaHM => self.delta_h_m,
         }
+    }
+
+    /// Model parameters, converted to model units by the parameter table (degrees to radians).
+    pub fn to_params(&self) -> Params<f64> {
+        Params::from_fn(self.n_channels(), |name| {
+            name.spec().unit.to_model(self.file_value(name))
+        })
     }
 
     /// The file form of `params` (radians to degrees); one channel becomes a scalar `sigma_a`.
     pub fn from_params(params: &Params<f64>) -> ParamFile {
+        let file = |name: ParamName| params.get(name) * name.spec().unit.file_factor();
         let sigma_a = if params.sigma_a.len() == 1 {
             SigmaA::Scalar(params.sigma_a[0])
         } else {
             SigmaA::PerChannel(params.sigma_a.clone())
         };
         ParamFile {
-            eta: params.eta,
+            eta: file(ParamName::Eta),
             sigma_a,
-            alpha_r_deg: params.alpha_r.to_degrees(),
-            beta_r_deg: params.beta_r.to_degrees(),
-            k_g: params.k_g,
-            w_c_deg: params.w_c.to_degrees(),
-            eccentricity: params.eccentricity,
-            delta_eta_prime: params.delta_eta_prime,
-            delta_h_m: params.delta_h_m,
+            alpha_r_deg: file(ParamName::AlphaR),
+            beta_r_deg: file(ParamName::BetaR),
+            k_g: file(ParamName::KG),
+            w_c_deg: file(ParamName::WC),
+            eccentricity: file(ParamName::Eccentricity),
+            delta_eta_prime: file(ParamName::DeltaEtaPrime),
+            delta_h_m: file(ParamName::DeltaHM),
         }
     }
 }

@@ -54,7 +54,8 @@ proptest! {
         let text = format!(
             r#"{{"eta": {eta:?}, "sigma_a": {sigma:?}, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": {a:?}}}"#
         );
-        let inside = eta > 1.0 && a > std::f64::consts::FRAC_1_SQRT_2 && a <= 1.0 && sigma >= 0.0;
+        // The parameter table's domains: η in (1, 10], a in (1/√2, 1], σ_a ≥ 0 (all finite).
+        let inside = eta > 1.0 && eta <= 10.0 && a > std::f64::consts::FRAC_1_SQRT_2 && a <= 1.0 && sigma >= 0.0;
         let parsed = ParamFile::from_json_str(&text, "fuzz.json");
         prop_assert_eq!(parsed.is_ok(), inside, "{}", text);
     }

@@ -158,3 +158,88 @@ fn model_config_serde_defaults() {
         "\"cubic\""
     );
 }
+
+#[test]
+fn domain_comes_from_the_table_and_names_the_range() {
+    // Non-finite and out-of-range values are errors naming the parameter and the allowed range.
+    let with = |patch: &str| FULL.replace('}', &format!(", {patch}}}"));
+    for (text, name, range) in [
+        (with(r#""eta": 1e155"#), "eta", "(1, 10]"),
+        (with(r#""eta": 1"#), "eta", "(1, 10]"),
+        (
+            with(r#""eccentricity": 1.0000000001"#),
+            "eccentricity",
+            "(0.70711, 1]",
+        ),
+        (
+            FULL.replace(r#""k_g": 2"#, r#""k_g": -1"#),
+            "k_g",
+            "[0, inf)",
+        ),
+        (
+            FULL.replace(r#""w_c_deg": 15"#, r#""w_c_deg": 0"#),
+            "w_c_deg",
+            "(0, inf) deg",
+        ),
+    ] {
+        match ParamFile::from_json_str(&text, "p.json") {
+            Err(Error::Parameter {
+                name: n, message, ..
+            }) => {
+                assert_eq!(n, name, "{text}");
+                assert!(message.contains(range), "{text}: {message}");
+            }
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+    // Through the model type too: every value is checked, infinities included.
+    let mut p = ParamFile::from_json_str(FULL, "p.json")
+        .unwrap()
+        .to_params();
+    p.beta_r = f64::INFINITY;
+    assert!(matches!(p.validate(), Err(Error::Parameter { name, .. }) if name == "beta_r_deg"));
+}
+
+#[test]
+fn parameter_lists_follow_the_table() {
+    use hairfit::model::parameters::{all_parameters, fitted_parameters, used_parameters};
+    // Output order: the table's order, σ_a expanded per channel.
+    assert_eq!(all_parameters(2), hairfit::fit::all_parameters(2));
+    for r in [false, true] {
+        for tt in [false, true] {
+            for trt in [false, true] {
+                for glints in [false, true] {
+                    for eccentricity in [false, true] {
+                        let e = Effects {
+                            lobes: hairfit::model::Lobes { r, tt, trt },
+                            glints,
+                            eccentricity,
+                        };
+                        assert_eq!(used_parameters(&e, 3), e.parameters(3));
+                        for free_eta in [false, true] {
+                            assert_eq!(
+                                fitted_parameters(&e, 3, free_eta),
+                                hairfit::fit::free_parameters(&e, 3, free_eta),
+                                "{e:?} free_eta={free_eta}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn units_come_from_the_table() {
+    use hairfit::model::Unit;
+    assert_eq!(ParamName::SigmaA(2).spec().unit, Unit::PerFiberRadius);
+    assert_eq!(ParamName::SigmaA(2).spec().unit.label(), "per fiber radius");
+    assert_eq!(ParamName::WC.spec().unit.label(), "deg");
+    assert_eq!(
+        ParamName::from_json_name("sigma_a[2]"),
+        Some(ParamName::SigmaA(2))
+    );
+    assert_eq!(ParamName::from_json_name("w_c_deg"), Some(ParamName::WC));
+    assert_eq!(ParamName::from_json_name("w_c"), None);
+}

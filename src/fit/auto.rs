@@ -7,6 +7,7 @@ use serde::Serialize;
 use super::bounds::reference_params;
 use super::design::subsample;
 use super::problem::FitData;
+use crate::model::eccentricity::cos_2phi_h_spread;
 use crate::model::{scattering, scattering_by_lobe, Effects, Lobes, ModelConfig, RootMode};
 
 /// A contribution counts as measurable above this fraction of S: 1%, the scale of typical
@@ -159,19 +160,14 @@ pub fn choose_effects(data: &FitData, mode: RootMode) -> AutoChoice {
         let mut p1 = p.clone();
         p1.eccentricity = 1.0;
         let (cnt, max) = measurable(&rel_change(&ecc, &round, &p, &p1));
-        let c2: Vec<f64> = angles
-            .iter()
-            .map(|a| (a.phi_i + a.phi_r).cos()) // cos 2φ_h with φ_h = (φ_i + φ_r)/2
-            .collect();
-        let spread = c2.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-            - c2.iter().copied().fold(f64::INFINITY, f64::min);
+        let spread = cos_2phi_h_spread(&angles);
         effects.eccentricity = cnt >= MIN_SAMPLES && spread >= MIN_COS2PHIH_SPREAD;
         reasons.push(format!(
             "eccentricity {}: a = 0.9 vs 1 changes S by >= {:.0}% at {cnt} of {n} samples (max {:.1}%), spread of cos(2 phi_h) {:.2} (needs >= {})",
             if effects.eccentricity { "on" } else { "off" },
             MEASURABLE * 100.0,
             max * 100.0,
-            if spread.is_finite() { spread } else { 0.0 },
+            spread,
             MIN_COS2PHIH_SPREAD
         ));
     } else {

@@ -1,14 +1,8 @@
-//! Free-parameter bookkeeping: which parameters a fit varies, their bounds, their typical search
-//! ranges (MODEL.md) and the MINUIT-style smooth transforms that keep every iterate inside bounds.
+//! The fit's bounds and the MINUIT-style smooth transforms that keep every iterate inside them.
+//! Bounds, typical ranges, reporting factors and reference values are read from the model's
+//! parameter table (`model::parameters`); this module only turns them into transforms.
 
-use std::f64::consts::FRAC_1_SQRT_2;
-
-use crate::model::{ParamName, Params};
-
-/// Smallest positive angle allowed for an open lower bound at 0 (β_R, w_c), radians: 0.01°.
-const TINY_ANGLE: f64 = 0.01 * std::f64::consts::PI / 180.0;
-/// Margin that keeps an open lower bound (a > 1/√2, η > 1) strictly open.
-const OPEN_MARGIN: f64 = 1e-6;
+use crate::model::{ParamName, Params, Unit};
 
 /// The bounds of one parameter in its natural (model, radian) units.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -22,22 +16,11 @@ pub enum Bound {
 }
 
 impl Bound {
-    /// The bounds MODEL.md and the fit's domain give `name` (natural units, radians).
+    /// The fit bounds of `name` in the parameter table (natural units, radians).
     pub fn of(name: ParamName) -> Bound {
-        match name {
-            ParamName::Eta => Bound::Both(1.0 + OPEN_MARGIN, 2.5),
-            // Upper limits far beyond MODEL.md's typical ranges (σ_a = 50 already removes all
-            // transmitted light): they only stop a direction the data leave flat from running
-            // away, so the solver converges and the covariance names the parameter.
-            ParamName::SigmaA(_) => Bound::Both(0.0, 50.0),
-            ParamName::KG => Bound::Both(0.0, 100.0),
-            // A cuticle tilt beyond ±30° is not hair (MODEL.md: −10° to −5°); unbounded, a flat
-            // direction let α_R wander to −1434° on a scan that does not span θ_h.
-            ParamName::AlphaR => Bound::Both(-(30f64.to_radians()), 30f64.to_radians()),
-            ParamName::BetaR => Bound::Both(TINY_ANGLE, 30f64.to_radians()),
-            ParamName::WC => Bound::Both(TINY_ANGLE, 60f64.to_radians()),
-            ParamName::Eccentricity => Bound::Both(FRAC_1_SQRT_2 + OPEN_MARGIN, 1.0),
-            ParamName::DeltaEtaPrime | ParamName::DeltaHM => Bound::Lower(1e-6),
+        match name.spec().fit_bounds() {
+            (lo, Some(hi)) => Bound::Both(lo, hi),
+            (lo, None) => Bound::Lower(lo),
         }
     }
 
@@ -93,55 +76,29 @@ impl Bound {
 
 /// MODEL.md's typical range of `name` in natural units (radians for angles): the start design box.
 pub fn typical_range(name: ParamName) -> (f64, f64) {
-    match name {
-        ParamName::Eta => (1.5, 1.6),
-        ParamName::SigmaA(_) => (0.05, 2.0),
-        ParamName::AlphaR => ((-10f64).to_radians(), (-5f64).to_radians()),
-        ParamName::BetaR => (5f64.to_radians(), 10f64.to_radians()),
-        ParamName::KG => (0.5, 5.0),
-        ParamName::WC => (10f64.to_radians(), 25f64.to_radians()),
-        ParamName::Eccentricity => (0.85, 1.0),
-        ParamName::DeltaEtaPrime => (0.2, 0.4),
-        ParamName::DeltaHM => (0.4, 0.6),
-    }
+    name.spec().typical_range()
 }
 
 /// True for parameters stored in radians and reported in degrees.
 pub fn is_angle(name: ParamName) -> bool {
-    matches!(name, ParamName::AlphaR | ParamName::BetaR | ParamName::WC)
+    name.spec().unit == Unit::Degrees
 }
 
 /// Factor from natural units to reporting units (degrees for angles).
 pub fn report_factor(name: ParamName) -> f64 {
-    if is_angle(name) {
-        180.0 / std::f64::consts::PI
-    } else {
-        1.0
-    }
+    name.spec().unit.file_factor()
 }
 
-/// The midpoint of every typical range: a neutral reference parameter set with `n` channels.
+/// The table's reference values (defaults, else mid typical range): a neutral parameter set with
+/// `n_channels` channels, the value of every parameter a fit does not vary.
 pub fn reference_params(n_channels: usize) -> Params<f64> {
-    let mid = |n: ParamName| {
-        let (a, b) = typical_range(n);
-        0.5 * (a + b)
-    };
-    Params {
-        eta: crate::params::DEFAULT_ETA,
-        sigma_a: vec![0.4; n_channels],
-        alpha_r: mid(ParamName::AlphaR),
-        beta_r: mid(ParamName::BetaR),
-        k_g: 1.0,
-        w_c: mid(ParamName::WC),
-        eccentricity: crate::params::DEFAULT_ECCENTRICITY,
-        delta_eta_prime: crate::params::DEFAULT_DELTA_ETA_PRIME,
-        delta_h_m: crate::params::DEFAULT_DELTA_H_M,
-    }
+    Params::from_fn(n_channels, |name| name.spec().reference_value())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_1_SQRT_2;
 
     #[test]
     fn transforms_round_trip_and_stay_inside() {

@@ -23,6 +23,7 @@ pub mod instrument;
 pub mod jacobian;
 pub mod longitudinal;
 pub mod measurement;
+pub mod parameters;
 pub mod roots;
 
 use angles::half_angles;
@@ -34,6 +35,7 @@ use longitudinal::longitudinal;
 
 pub use jacobian::{scattering_jacobian, StaticJacobian};
 pub use measurement::Measurement;
+pub use parameters::{ParamSpec, Unit};
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -134,31 +136,10 @@ impl Effects {
         Ok(lobes)
     }
 
-    /// The parameters `S` depends on under these effects (`n_channels` absorption coefficients).
+    /// The parameters `S` depends on under these effects (`n_channels` absorption coefficients),
+    /// in output order; read from the parameter table's "used by" column.
     pub fn parameters(&self, n_channels: usize) -> Vec<ParamName> {
-        let l = self.lobes;
-        let mut out = Vec::new();
-        // η enters every lobe through Fresnel / the Bravais indices.
-        out.push(ParamName::Eta);
-        // σ_a only attenuates transmitted paths (TT, TRT).
-        if l.tt || l.trt {
-            out.extend((0..n_channels).map(ParamName::SigmaA));
-        }
-        // α_R, β_R set every lobe's longitudinal Gaussian.
-        out.push(ParamName::AlphaR);
-        out.push(ParamName::BetaR);
-        if l.trt && self.glints {
-            out.push(ParamName::KG);
-            out.push(ParamName::WC);
-        }
-        if l.trt && self.eccentricity {
-            out.push(ParamName::Eccentricity);
-        }
-        if l.trt && self.glints {
-            out.push(ParamName::DeltaEtaPrime);
-            out.push(ParamName::DeltaHM);
-        }
-        out
+        parameters::used_parameters(self, n_channels)
     }
 }
 
@@ -185,18 +166,11 @@ pub enum ParamName {
 }
 
 impl ParamName {
-    /// The JSON name (`"eta"`, `"sigma_a[1]"`, `"alpha_r_deg"`, ...).
+    /// The JSON name (`"eta"`, `"sigma_a[1]"`, `"alpha_r_deg"`, ...), from the parameter table.
     pub fn json_name(&self) -> String {
         match self {
-            ParamName::Eta => "eta".into(),
-            ParamName::SigmaA(c) => format!("sigma_a[{c}]"),
-            ParamName::AlphaR => "alpha_r_deg".into(),
-            ParamName::BetaR => "beta_r_deg".into(),
-            ParamName::KG => "k_g".into(),
-            ParamName::WC => "w_c_deg".into(),
-            ParamName::Eccentricity => "eccentricity".into(),
-            ParamName::DeltaEtaPrime => "delta_eta_prime".into(),
-            ParamName::DeltaHM => "delta_h_m".into(),
+            ParamName::SigmaA(c) => format!("{}[{c}]", self.spec().json),
+            _ => self.spec().json.into(),
         }
     }
 }
@@ -239,6 +213,21 @@ impl<T: Clone> Params<T> {
 }
 
 impl<T> Params<T> {
+    /// Parameters with `n_channels` absorption coefficients, each value `f(name)`.
+    pub fn from_fn(n_channels: usize, mut f: impl FnMut(ParamName) -> T) -> Params<T> {
+        Params {
+            eta: f(ParamName::Eta),
+            sigma_a: (0..n_channels).map(|c| f(ParamName::SigmaA(c))).collect(),
+            alpha_r: f(ParamName::AlphaR),
+            beta_r: f(ParamName::BetaR),
+            k_g: f(ParamName::KG),
+            w_c: f(ParamName::WC),
+            eccentricity: f(ParamName::Eccentricity),
+            delta_eta_prime: f(ParamName::DeltaEtaPrime),
+            delta_h_m: f(ParamName::DeltaHM),
+        }
+    }
+
     /// Set parameter `name` to `value` (radians for angles).
     pub fn set(&mut self, name: ParamName, value: T) {
         match name {
@@ -271,56 +260,24 @@ impl<T> Params<T> {
 }
 
 impl Params<f64> {
-    /// Check the domain of MODEL.md; the error names the parameter and its valid range.
+    /// Check every parameter against its domain in the parameter table; the error names the
+    /// parameter, its value in file units (degrees for angles) and the allowed range.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name: &str, value: f64, message: &str| {
-            Err(Error::Parameter {
-                name: name.into(),
-                value,
-                message: message.into(),
-            })
-        };
-        let deg = f64::to_degrees;
-        if !(self.eta.is_finite() && self.eta > 1.0) {
-            return bad("eta", self.eta, "must be finite and > 1");
-        }
         if self.sigma_a.is_empty() {
-            return bad("sigma_a", f64::NAN, "give at least one colour channel");
+            return Err(Error::Parameter {
+                name: "sigma_a".into(),
+                value: f64::NAN,
+                message: "give at least one colour channel".into(),
+            });
         }
-        for (c, &s) in self.sigma_a.iter().enumerate() {
-            if !(s.is_finite() && s >= 0.0) {
-                return bad(&format!("sigma_a[{c}]"), s, "must be finite and >= 0");
-            }
-        }
-        if !self.alpha_r.is_finite() {
-            return bad("alpha_r_deg", deg(self.alpha_r), "must be finite");
-        }
-        if !(self.beta_r.is_finite() && self.beta_r > 0.0) {
-            return bad("beta_r_deg", deg(self.beta_r), "must be finite and > 0");
-        }
-        if !(self.k_g.is_finite() && self.k_g >= 0.0) {
-            return bad("k_g", self.k_g, "must be finite and >= 0");
-        }
-        if !(self.w_c.is_finite() && self.w_c > 0.0) {
-            return bad("w_c_deg", deg(self.w_c), "must be finite and > 0");
-        }
-        let a = self.eccentricity;
-        if !(a.is_finite() && a > std::f64::consts::FRAC_1_SQRT_2 && a <= 1.0) {
-            return bad(
-                "eccentricity",
-                a,
-                "must lie in (1/sqrt(2), 1] = (0.70711, 1]: below 1/sqrt(2) the TRT Bravais index can drop under 1",
-            );
-        }
-        if !(self.delta_eta_prime.is_finite() && self.delta_eta_prime > 0.0) {
-            return bad(
-                "delta_eta_prime",
-                self.delta_eta_prime,
-                "must be finite and > 0",
-            );
-        }
-        if !(self.delta_h_m.is_finite() && self.delta_h_m > 0.0) {
-            return bad("delta_h_m", self.delta_h_m, "must be finite and > 0");
+        for name in parameters::all_parameters(self.sigma_a.len()) {
+            let spec = name.spec();
+            let value = self.get(name) * spec.unit.file_factor();
+            spec.check(value).map_err(|message| Error::Parameter {
+                name: name.json_name(),
+                value,
+                message,
+            })?;
         }
         Ok(())
     }
