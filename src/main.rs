@@ -57,13 +57,15 @@ enum Command {
 }
 
 #[derive(clap::Args)]
-#[command(after_help = "The manifest is a CSV with the header `name,data` and then optional columns named after \
+#[command(
+    after_help = "The manifest is a CSV with the header `name,data` and then optional columns named after \
 `hairfit fit` options without their dashes (e.g. loss,mode,fix; repeat values with `;`), or a JSON array of \
 objects with the same keys. Data paths are relative to the manifest. Item NAME is written to --out/NAME exactly \
 as `hairfit fit DATA --out DIR/NAME` would. Items already finished with the same options are skipped.
 
 \
-Exit codes: 0 all items ran; 1 an item failed (the others still ran) or, with --merge, an item is missing; 130 interrupted.")]
+Exit codes: 0 all items ran; 1 an item failed (the others still ran) or, with --merge, an item is missing; 130 interrupted."
+)]
 struct BatchArgs {
     /// Manifest (CSV `name,data,OPTION…`, or .json).
     manifest: PathBuf,

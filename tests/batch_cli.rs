@@ -26,7 +26,9 @@ fn ok(args: &[&str]) -> Output {
 }
 
 fn shipped(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name)
 }
 
 /// fit.json without its wall-clock fields (the only values allowed to differ between runs).
@@ -95,7 +97,11 @@ fn concurrent_shards_equal_one_process_and_the_fit_command() {
         .collect();
     for c in children {
         let out = c.wait_with_output().unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     ok(&["batch", m, "--out", whole_s]);
     for name in ["sphere", "rgb", "long"] {
@@ -124,13 +130,23 @@ fn concurrent_shards_equal_one_process_and_the_fit_command() {
     let a = std::fs::read_to_string(sharded.join("summary.csv")).unwrap();
     let b = std::fs::read_to_string(whole.join("summary.csv")).unwrap();
     assert_eq!(a, b);
-    let names: Vec<&str> = a.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
+    let names: Vec<&str> = a
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
     assert_eq!(names, ["sphere", "rgb", "long"]);
     assert!(a.lines().next().unwrap().starts_with("name,data,status,"));
     let html = std::fs::read_to_string(whole.join("index.html")).unwrap();
     for name in ["sphere", "rgb", "long"] {
-        assert!(html.contains(&format!("href=\"{name}/index.html\"")), "{name}");
-        assert!(whole.join(name).join("index.html").exists(), "{name} report");
+        assert!(
+            html.contains(&format!("href=\"{name}/index.html\"")),
+            "{name}"
+        );
+        assert!(
+            whole.join(name).join("index.html").exists(),
+            "{name} report"
+        );
     }
 }
 
@@ -146,13 +162,15 @@ fn finished_items_are_skipped_and_changed_items_rerun() {
     let again = ok(&["batch", m_s, "--out", out_s, "--shard", "0/3"]);
     let err = String::from_utf8_lossy(&again.stderr);
     assert!(err.contains("sphere: skipped"), "{err}");
-    assert_eq!(std::fs::metadata(&fit_json).unwrap().modified().unwrap(), before);
+    assert_eq!(
+        std::fs::metadata(&fit_json).unwrap().modified().unwrap(),
+        before
+    );
 
     // Changing the item's options makes it run again.
-    let text = std::fs::read_to_string(&m).unwrap().replace(
-        "sphere,sphere.csv,cauchy,4",
-        "sphere,sphere.csv,huber,4",
-    );
+    let text = std::fs::read_to_string(&m)
+        .unwrap()
+        .replace("sphere,sphere.csv,cauchy,4", "sphere,sphere.csv,huber,4");
     std::fs::write(&m, text).unwrap();
     let rerun = ok(&["batch", m_s, "--out", out_s, "--shard", "0/3"]);
     let err = String::from_utf8_lossy(&rerun.stderr);
@@ -162,9 +180,15 @@ fn finished_items_are_skipped_and_changed_items_rerun() {
     let merged = run(&["batch", m_s, "--out", out_s, "--merge"]);
     assert_eq!(merged.status.code(), Some(1));
     let err = String::from_utf8_lossy(&merged.stderr);
-    assert!(err.contains("2 of 3 items") && err.contains("rgb") && err.contains("long"), "{err}");
+    assert!(
+        err.contains("2 of 3 items") && err.contains("rgb") && err.contains("long"),
+        "{err}"
+    );
     let table = std::fs::read_to_string(out.join("summary.csv")).unwrap();
-    assert!(table.contains("rgb,") && table.contains(",missing,"), "{table}");
+    assert!(
+        table.contains("rgb,") && table.contains(",missing,"),
+        "{table}"
+    );
 }
 
 #[test]
@@ -177,7 +201,10 @@ fn bad_manifests_and_items_say_where_and_exit_1() {
     let r = run(&["batch", bad.to_str().unwrap(), "--out", out_s]);
     assert_eq!(r.status.code(), Some(1));
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("bad.csv:2:3") && err.contains("`los`"), "{err}");
+    assert!(
+        err.contains("bad.csv:2:3") && err.contains("`los`"),
+        "{err}"
+    );
 
     // A missing data file fails that item only; the other item is fitted.
     std::fs::copy(shipped("sphere_1ch.csv"), tmp.path().join("s.csv")).unwrap();
@@ -186,10 +213,20 @@ fn bad_manifests_and_items_say_where_and_exit_1() {
     let r = run(&["batch", m.to_str().unwrap(), "--out", out_s]);
     assert_eq!(r.status.code(), Some(1));
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("gone: FAILED") && err.contains("1 items failed"), "{err}");
+    assert!(
+        err.contains("gone: FAILED") && err.contains("1 items failed"),
+        "{err}"
+    );
     assert!(out.join("ok").join("fit.json").exists());
 
-    let r = run(&["batch", m.to_str().unwrap(), "--out", out_s, "--shard", "2/2"]);
+    let r = run(&[
+        "batch",
+        m.to_str().unwrap(),
+        "--out",
+        out_s,
+        "--shard",
+        "2/2",
+    ]);
     assert_eq!(r.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&r.stderr).contains("0-based"));
 }

@@ -121,7 +121,10 @@ fn fit_options() -> Vec<FitOption> {
         .collect()
 }
 
-fn csv_rows(path: &Path, text: &str) -> Result<Vec<(u64, Vec<(String, String)>)>> {
+/// A manifest row: its line and its (column name, cell) pairs.
+type Row = (u64, Vec<(String, String)>);
+
+fn csv_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
     let mut reader = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
@@ -162,10 +165,9 @@ fn csv_error(path: &Path, e: csv::Error) -> Error {
     Error::input(path, line, 1, format!("not a valid CSV manifest: {e}"))
 }
 
-fn json_rows(path: &Path, text: &str) -> Result<Vec<(u64, Vec<(String, String)>)>> {
-    let value: serde_json::Value = serde_json::from_str(text).map_err(|e| {
-        Error::input(path, e.line() as u64, e.column() as u64, e.to_string())
-    })?;
+fn json_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
+    let value: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| Error::input(path, e.line() as u64, e.column() as u64, e.to_string()))?;
     let array = value.as_array().ok_or_else(|| {
         Error::input(
             path,
@@ -177,9 +179,9 @@ fn json_rows(path: &Path, text: &str) -> Result<Vec<(u64, Vec<(String, String)>)
     let mut rows = Vec::new();
     for (i, element) in array.iter().enumerate() {
         let at = i as u64 + 1;
-        let object = element.as_object().ok_or_else(|| {
-            Error::input(path, at, 1, format!("element {at} is not an object"))
-        })?;
+        let object = element
+            .as_object()
+            .ok_or_else(|| Error::input(path, at, 1, format!("element {at} is not an object")))?;
         let mut cells = Vec::new();
         for (key, v) in object {
             let text = match v {
@@ -260,9 +262,8 @@ fn item_from_cells(
                 unknown_column(cell.key, options),
             ));
         };
-        let words = option_words(option, &cell.value).map_err(|m| {
-            Error::input(path, line, cell.column, format!("`{}`: {m}", cell.key))
-        })?;
+        let words = option_words(option, &cell.value)
+            .map_err(|m| Error::input(path, line, cell.column, format!("`{}`: {m}", cell.key)))?;
         // Check each cell alone so an error points at its column.
         let mut alone = vec![argv[0].clone()];
         alone.extend(words.iter().cloned());
@@ -272,7 +273,12 @@ fn item_from_cells(
                 path,
                 line,
                 cell.column,
-                format!("`{}` = `{}`: {}", cell.key, cell.value, first_line(&e.render().to_string())),
+                format!(
+                    "`{}` = `{}`: {}",
+                    cell.key,
+                    cell.value,
+                    first_line(&e.render().to_string())
+                ),
             ));
         }
         argv.extend(words);
@@ -337,7 +343,11 @@ fn unknown_column(key: &str, options: &[FitOption]) -> String {
 }
 
 fn first_line(s: &str) -> String {
-    s.lines().next().unwrap_or("").trim_start_matches("error: ").to_string()
+    s.lines()
+        .next()
+        .unwrap_or("")
+        .trim_start_matches("error: ")
+        .to_string()
 }
 
 #[cfg(test)]
@@ -360,10 +370,22 @@ mod tests {
         .unwrap();
         assert_eq!(m.items.len(), 2);
         let a = &m.items[0];
-        assert!(a.argv[0].ends_with("a.csv") && a.argv[0] != "a.csv", "{:?}", a.argv);
+        assert!(
+            a.argv[0].ends_with("a.csv") && a.argv[0] != "a.csv",
+            "{:?}",
+            a.argv
+        );
         assert_eq!(
             &a.argv[1..],
-            ["--loss", "cauchy", "--fix", "eta=1.5", "--fix", "k_g=2", "--no-glints"]
+            [
+                "--loss",
+                "cauchy",
+                "--fix",
+                "eta=1.5",
+                "--fix",
+                "k_g=2",
+                "--no-glints"
+            ]
         );
         assert_eq!(m.items[1].argv, vec!["/abs/b.csv".to_string()]);
         assert_eq!(m.items[1].line, 3);
@@ -379,7 +401,15 @@ mod tests {
         // JSON objects are unordered: options come in key order, which means the same fit.
         assert_eq!(
             &m.items[0].argv[1..],
-            ["--fix", "eta=1.5", "--fix", "k_g=2", "--loss", "cauchy", "--no-glints"]
+            [
+                "--fix",
+                "eta=1.5",
+                "--fix",
+                "k_g=2",
+                "--loss",
+                "cauchy",
+                "--no-glints"
+            ]
         );
     }
 
@@ -391,7 +421,10 @@ mod tests {
         let e = load("name,data,loss\na,a.csv,cauchyy\n", "csv").unwrap_err();
         assert!(e.to_string().contains(":2:3:"), "{e}");
         let e = load("name,data\na,a.csv\nA,b.csv\n", "csv").unwrap_err();
-        assert!(e.to_string().contains(":3:1:") && e.to_string().contains("line 2"), "{e}");
+        assert!(
+            e.to_string().contains(":3:1:") && e.to_string().contains("line 2"),
+            "{e}"
+        );
         let e = load("name,data\n../up,a.csv\n", "csv").unwrap_err();
         assert!(e.to_string().contains("plain directory name"), "{e}");
         let e = load("data,name\n", "csv").unwrap_err();

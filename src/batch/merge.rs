@@ -31,9 +31,8 @@ impl SummaryTable {
     }
 
     pub fn read(path: &Path) -> Result<SummaryTable> {
-        let mut reader = csv::Reader::from_path(path).map_err(|e| {
-            Error::Other(format!("{}: {e}", path.display()))
-        })?;
+        let mut reader = csv::Reader::from_path(path)
+            .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
         let header = reader
             .headers()
             .map_err(|e| Error::Other(format!("{}: {e}", path.display())))?
@@ -181,7 +180,8 @@ pub fn merge(manifest: &Manifest, out: &Path) -> Result<MergeSummary> {
     let html = index_html(manifest, &table);
     let path = out.join("index.html");
     write_atomically(&path, |w| {
-        w.write_all(html.as_bytes()).map_err(|e| Error::io(&path, e))
+        w.write_all(html.as_bytes())
+            .map_err(|e| Error::io(&path, e))
     })?;
     Ok(summary)
 }
@@ -216,10 +216,7 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
         for &c in &shown {
             let cell = &row[c];
             if c == 0 && status != "missing" {
-                s += &format!(
-                    "<td><a href=\"{0}/index.html\">{0}</a></td>",
-                    escape(cell)
-                );
+                s += &format!("<td><a href=\"{0}/index.html\">{0}</a></td>", escape(cell));
             } else if let Ok(x) = cell.parse::<f64>() {
                 s += &format!("<td>{}</td>", escape(&short(x, cell)));
             } else {

@@ -99,8 +99,7 @@ impl BatchRun {
 fn already_finished(out: &Path, item: &Item) -> bool {
     let stamp_matches = ItemStamp::read(out, &item.name).is_some_and(|s| s.argv == item.argv);
     stamp_matches
-        && merge::fit_status(&out.join(&item.name))
-            .is_some_and(|status| status != "interrupted")
+        && merge::fit_status(&out.join(&item.name)).is_some_and(|status| status != "interrupted")
 }
 
 /// Run this shard's items of `manifest` into `out/NAME`, one after another (each fit uses every

@@ -129,14 +129,14 @@ mod tests {
 
     #[test]
     fn parses_k_of_n_and_refuses_bad_ones() {
-        assert_eq!(
-            Shard::parse("2/4").unwrap(),
-            Shard { index: 2, count: 4 }
-        );
+        assert_eq!(Shard::parse("2/4").unwrap(), Shard { index: 2, count: 4 });
         for bad in ["4/4", "1/0", "a/2", "3", "-1/2"] {
             assert!(Shard::parse(bad).is_err(), "{bad}");
         }
-        assert!(Shard::parse("4/4").unwrap_err().to_string().contains("0-based"));
+        assert!(Shard::parse("4/4")
+            .unwrap_err()
+            .to_string()
+            .contains("0-based"));
     }
 
     #[test]
