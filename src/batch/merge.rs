@@ -198,7 +198,7 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
         escape(&manifest.path.display().to_string())
     );
     s += "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}\
-          td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;font-size:90%}\
+          td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;font-size:90%;white-space:nowrap}\
           td:first-child,th:first-child{text-align:left}\
           .missing,.unreadable,.failed,.interrupted{color:#b00}</style></head><body>\n";
     s += &format!(
