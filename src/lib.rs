@@ -16,6 +16,7 @@
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
+pub mod batch;
 pub mod cli;
 pub mod cost;
 pub mod data;

@@ -30,7 +30,9 @@ enum Command {
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
     /// Fit the model to a data file; writes fit.json, params.json and curves.csv into --out.
-    Fit(FitCmdArgs),
+    Fit(hairfit::fit::args::FitCommandArgs),
+    /// Fit every item of a manifest (or one shard of it) into --out/NAME; --merge summarises.
+    Batch(BatchArgs),
     /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
     Demo(DemoArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
@@ -55,16 +57,29 @@ enum Command {
 }
 
 #[derive(clap::Args)]
-struct FitCmdArgs {
-    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
-    data: PathBuf,
-    #[command(flatten)]
-    load: hairfit::data::LoadOptions,
-    #[command(flatten)]
-    fit: hairfit::fit::args::FitArgs,
-    /// Output directory (e.g. fits/NAME).
+#[command(
+    after_help = "The manifest is a CSV with the header `name,data` and then optional columns named after \
+`hairfit fit` options without their dashes (e.g. loss,mode,fix; repeat values with `;`), or a JSON array of \
+objects with the same keys. Data paths are relative to the manifest. Item NAME is written to --out/NAME exactly \
+as `hairfit fit DATA --out DIR/NAME` would. Items already finished with the same options are skipped.
+
+\
+Exit codes: 0 all items ran; 1 an item failed (the others still ran) or, with --merge, an item is missing; 130 interrupted."
+)]
+struct BatchArgs {
+    /// Manifest (CSV `name,data,OPTION…`, or .json).
+    manifest: PathBuf,
+    /// Output directory: each item goes to DIR/NAME.
     #[arg(long)]
     out: PathBuf,
+    /// Run only shard K of N (0-based K, items K, K+N, K+2N, …), or `auto` from Slurm
+    /// (SLURM_ARRAY_TASK_ID/COUNT) or a Kubernetes Indexed Job (JOB_COMPLETION_INDEX with
+    /// HAIRFIT_SHARD_COUNT).
+    #[arg(long, conflicts_with = "merge")]
+    shard: Option<String>,
+    /// Do not fit: write DIR/summary.csv and DIR/index.html from the items' fit.json files.
+    #[arg(long)]
+    merge: bool,
 }
 
 #[derive(clap::Args)]
@@ -185,6 +200,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 hairfit::fit::args::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?
             );
         }
+        Command::Batch(a) => return batch(a),
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());
             print!(
@@ -192,6 +208,56 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 hairfit::fit::demo::demo_command(&a.fit, &a.out, cancel)?
             );
         }
+    }
+    Ok(())
+}
+
+/// `hairfit batch`: run a shard of a manifest, or merge the results.
+fn batch(a: BatchArgs) -> anyhow::Result<()> {
+    use hairfit::batch::{merge, run_batch, ItemOutcome, Manifest, Shard};
+    let manifest = Manifest::load(&a.manifest)?;
+    if a.merge {
+        let m = merge::merge(&manifest, &a.out)?;
+        eprintln!(
+            "hairfit: {} items: wrote {} and {}",
+            m.items,
+            a.out.join("summary.csv").display(),
+            a.out.join("index.html").display()
+        );
+        for (name, e) in &m.unreadable {
+            eprintln!("hairfit: item `{name}`: unreadable fit.json: {e}");
+        }
+        if !m.missing.is_empty() || !m.unreadable.is_empty() {
+            anyhow::bail!(
+                "{} of {} items have no result yet ({}); run their shards, then merge again",
+                m.missing.len() + m.unreadable.len(),
+                m.items,
+                m.missing.join(", ")
+            );
+        }
+        return Ok(());
+    }
+    let shard = match &a.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::ALL,
+    };
+    let cancel = ctrl_c_flag();
+    let run = run_batch(&manifest, &a.out, shard, Some(cancel), |item, outcome| {
+        let what = match outcome {
+            ItemOutcome::Fitted { status } => status.clone(),
+            ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
+            ItemOutcome::Failed(e) => format!("FAILED: {e}"),
+            ItemOutcome::Interrupted => "interrupted".into(),
+        };
+        eprintln!("hairfit: [{shard}] {}: {what}", item.name);
+    })?;
+    eprintln!("hairfit: {}", run.summary_line());
+    if run.interrupted() {
+        std::process::exit(130);
+    }
+    let failed = run.count(|o| matches!(o, ItemOutcome::Failed(_)));
+    if failed > 0 {
+        anyhow::bail!("{failed} items failed (listed above); the others are written");
     }
     Ok(())
 }

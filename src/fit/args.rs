@@ -153,3 +153,19 @@ pub fn fit_command(
     output::write_outputs(out, &outcome)?;
     Ok(output::summary(&outcome, Some(out)) + &output::write_report_line(out))
 }
+
+/// Everything `hairfit fit` takes: the data file, the loader's options, the fit's options and
+/// the output directory. `hairfit batch` parses each manifest item with this same type, so an
+/// item runs exactly as the `fit` command line would.
+#[derive(Debug, Clone, Args)]
+pub struct FitCommandArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    pub data: std::path::PathBuf,
+    #[command(flatten)]
+    pub load: LoadOptions,
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Output directory (e.g. fits/NAME).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+}

@@ -8,7 +8,7 @@
 pub mod decimate;
 pub mod figures;
 pub mod fit_file;
-mod html;
+pub(crate) mod html;
 pub mod slices;
 
 use std::path::Path;
