@@ -11,6 +11,7 @@ pub mod auto;
 pub mod bounds;
 pub mod demo;
 pub mod design;
+pub mod gof;
 pub mod loss;
 pub mod output;
 pub mod problem;
