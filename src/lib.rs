@@ -25,6 +25,7 @@ pub mod fit;
 pub mod lm;
 pub mod model;
 pub mod nist;
+pub mod outdir;
 pub mod params;
 pub mod report;
 pub mod synth;
