@@ -12,6 +12,8 @@
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
 //! - [`rng`]: the seeded, platform-independent random-number generator.
+//! - [`batch`]: `hairfit batch`, many fits from a manifest, sharded for a cluster's scheduler.
+//! - [`outdir`]: output directories locked, staged and published as one set.
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //! - [`error`]: the error type shared by the library.
 
@@ -25,6 +27,7 @@ pub mod eval;
 pub mod fit;
 pub mod lm;
 pub mod model;
+pub mod outdir;
 pub mod params;
 pub mod report;
 pub mod rng;

@@ -172,7 +172,7 @@ pub fn lack_of_fit(residuals: &[f64], group: &[usize], n_params: usize) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fit::design::SplitMix64;
+    use crate::rng::SplitMix64;
 
     /// Standard normal draws (Box–Muller) from the project's seeded generator.
     fn normals(seed: u64, n: usize) -> Vec<f64> {

@@ -1,0 +1,372 @@
+//! Output directories published as one set. A run locks its `--out` directory (a second run
+//! fails fast and names the holder), writes everything into a staging directory beside it, and
+//! publishes by swapping the staging directory in: a reader sees the old set or the new set,
+//! never a mix, and nothing of an earlier run lingers beside a new one. A directory that holds
+//! something other than a hairfit result is refused unless `--force`, and never one that holds
+//! the run's own input.
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use crate::error::{Error, Result};
+
+/// The file that marks a directory as a hairfit output set (its content names the command).
+pub const MARKER: &str = ".hairfit";
+
+/// Staging directories being written right now: a process ending by a signal runs no
+/// destructors, so the signal handler removes them through [`remove_in_flight`].
+static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Remove every staging directory still being written (for a signal handler that then exits).
+pub fn remove_in_flight() {
+    let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+    for p in list.iter() {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
+
+fn forget_in_flight(path: &Path) {
+    let mut list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+    list.retain(|p| p != path);
+}
+
+/// An output set being written: files go to [`OutputSet::staging`], then [`OutputSet::publish`].
+/// Dropped unpublished (an error), the staging directory is removed and the old set stays.
+#[derive(Debug)]
+pub struct OutputSet {
+    dir: PathBuf,
+    staging: PathBuf,
+    published: bool,
+    /// Held for the life of the run: the OS releases it when the process ends, however it ends.
+    _lock: File,
+}
+
+/// Whether `dir` may be replaced: absent, empty, or already a hairfit output set.
+fn holds_foreign_files(dir: &Path) -> Result<Option<String>> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(Error::io(dir, e)),
+    };
+    let names: Vec<String> = entries
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if names.is_empty() || names.iter().any(|n| n == MARKER) || is_legacy_result(dir) {
+        return Ok(None);
+    }
+    let mut shown: Vec<&str> = names.iter().map(String::as_str).take(3).collect();
+    shown.sort();
+    Ok(Some(format!(
+        "{}{}",
+        shown.join(", "),
+        if names.len() > 3 { ", …" } else { "" }
+    )))
+}
+
+/// A result written before the marker existed: `fit.json` or `cost.json` by hairfit.
+fn is_legacy_result(dir: &Path) -> bool {
+    ["fit.json", "cost.json"].iter().any(|f| {
+        std::fs::read_to_string(dir.join(f)).is_ok_and(|t| t.contains("\"hairfit_version\""))
+    })
+}
+
+/// `path` made absolute and free of `.`/`..` (the part that exists is resolved through links).
+fn absolute(path: &Path) -> Result<PathBuf> {
+    let abs = std::path::absolute(path).map_err(|e| Error::io(path, e))?;
+    // Resolve the longest existing ancestor, keep the rest as written.
+    let mut existing = abs.clone();
+    let mut rest = Vec::new();
+    while !existing.exists() {
+        match (existing.file_name(), existing.parent()) {
+            (Some(name), Some(parent)) => {
+                rest.push(name.to_os_string());
+                existing = parent.to_path_buf();
+            }
+            _ => break,
+        }
+    }
+    let mut out = existing.canonicalize().unwrap_or(existing);
+    for part in rest.into_iter().rev() {
+        out.push(part);
+    }
+    Ok(out)
+}
+
+impl OutputSet {
+    /// Lock `dir` and open a staging directory beside it for `command` (e.g. `hairfit fit`).
+    /// `inputs` are the files the run reads: none may lie inside `dir`, which is replaced whole.
+    pub fn begin(dir: &Path, command: &str, force: bool, inputs: &[&Path]) -> Result<OutputSet> {
+        let abs = absolute(dir)?;
+        let cwd = std::env::current_dir()
+            .ok()
+            .and_then(|c| c.canonicalize().ok());
+        let (Some(parent), Some(name)) = (abs.parent(), abs.file_name()) else {
+            return Err(Error::Other(format!(
+                "--out {}: the output directory is replaced as a whole; name a directory of its own, e.g. fits/NAME",
+                dir.display()
+            )));
+        };
+        if cwd.as_ref().is_some_and(|c| c.starts_with(&abs)) {
+            return Err(Error::Other(format!(
+                "--out {}: that is the current directory (or holds it), and the output directory is replaced as a whole; name a directory of its own, e.g. fits/NAME",
+                dir.display()
+            )));
+        }
+        for input in inputs {
+            let input_abs = absolute(input)?;
+            if input_abs.starts_with(&abs) {
+                return Err(Error::Other(format!(
+                    "--out {}: the input {} is inside it, and the output directory is replaced as a whole; write the result elsewhere",
+                    dir.display(),
+                    input.display()
+                )));
+            }
+        }
+        std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        let lock = lock(parent, &name.to_string_lossy(), dir)?;
+        if let Some(found) = holds_foreign_files(&abs)? {
+            if !force {
+                return Err(Error::Other(format!(
+                    "--out {}: the directory holds files that are not a hairfit result ({found}); a run replaces the whole directory. Choose an empty or new directory, or pass --force to replace it",
+                    dir.display()
+                )));
+            }
+        }
+        let staging = tempfile::Builder::new()
+            .prefix(&format!(".{}.hairfit-stage-", name.to_string_lossy()))
+            .tempdir_in(parent)
+            .map_err(|e| Error::io(parent, e))?
+            .keep();
+        IN_FLIGHT
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(staging.clone());
+        let marker = staging.join(MARKER);
+        std::fs::write(&marker, format!("written by {command}\n"))
+            .map_err(|e| Error::io(&marker, e))?;
+        Ok(OutputSet {
+            dir: dir.to_path_buf(),
+            staging,
+            published: false,
+            _lock: lock,
+        })
+    }
+
+    /// Where the run writes its files.
+    pub fn staging(&self) -> &Path {
+        &self.staging
+    }
+
+    /// The directory the set is published to.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Carry `names` of the current set into the new one unchanged (hard links where possible,
+    /// so a large `curves.csv` is not copied), e.g. when a report is redrawn.
+    pub fn keep(&self, names: &[&str]) -> Result<()> {
+        for name in names {
+            let (from, to) = (self.dir.join(name), self.staging.join(name));
+            if std::fs::hard_link(&from, &to).is_err() {
+                std::fs::copy(&from, &to).map_err(|e| Error::io(&from, e))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Swap the staged set in place of the old one, then remove the old one.
+    pub fn publish(mut self) -> Result<()> {
+        let old = swap_in(&self.staging, &self.dir)?;
+        self.published = true;
+        forget_in_flight(&self.staging);
+        if let Some(old) = old {
+            let _ = std::fs::remove_dir_all(old);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputSet {
+    fn drop(&mut self) {
+        if !self.published {
+            let _ = std::fs::remove_dir_all(&self.staging);
+            forget_in_flight(&self.staging);
+        }
+    }
+}
+
+/// Take `parent/.NAME.hairfit-lock` without waiting; when another run holds it, say which.
+fn lock(parent: &Path, name: &str, dir: &Path) -> Result<File> {
+    let path = parent.join(format!(".{name}.hairfit-lock"));
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .read(true)
+        .write(true)
+        .open(&path)
+        .map_err(|e| Error::io(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let holder = std::fs::read_to_string(&path).unwrap_or_default();
+            return Err(Error::Other(format!(
+                "--out {}: another hairfit run is writing there ({}); wait for it, or choose another --out",
+                dir.display(),
+                holder.trim()
+            )));
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(&path, e)),
+    }
+    // Who holds it, for the message a second run prints.
+    let _ = file.set_len(0);
+    let _ = writeln!(
+        file,
+        "pid {}, {}",
+        std::process::id(),
+        std::env::args().collect::<Vec<_>>().join(" ")
+    );
+    Ok(file)
+}
+
+/// Put `staging` at `dir`; returns where the old set now is (to be removed), if there was one.
+fn swap_in(staging: &Path, dir: &Path) -> Result<Option<PathBuf>> {
+    if std::fs::symlink_metadata(dir).is_err() {
+        std::fs::rename(staging, dir).map_err(|e| Error::io(dir, e))?;
+        return Ok(None);
+    }
+    #[cfg(target_os = "linux")]
+    {
+        use rustix::fs::{renameat_with, RenameFlags, CWD};
+        if renameat_with(CWD, staging, CWD, dir, RenameFlags::EXCHANGE).is_ok() {
+            return Ok(Some(staging.to_path_buf()));
+        }
+    }
+    // No atomic exchange here: two renames, the old set moved aside first.
+    let aside = staging.with_extension("old");
+    std::fs::rename(dir, &aside).map_err(|e| Error::io(dir, e))?;
+    if let Err(e) = std::fs::rename(staging, dir) {
+        let _ = std::fs::rename(&aside, dir);
+        return Err(Error::io(dir, e));
+    }
+    Ok(Some(aside))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(set: &OutputSet, name: &str, text: &str) {
+        std::fs::write(set.staging().join(name), text).unwrap();
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_new_set_replaces_the_old_one_whole() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("fit");
+        let set = OutputSet::begin(&out, "test", false, &[]).unwrap();
+        write(&set, "fit.json", "1");
+        write(&set, "polar.png", "old figure");
+        set.publish().unwrap();
+        let set = OutputSet::begin(&out, "test", false, &[]).unwrap();
+        // Until publish, readers see the old set.
+        write(&set, "fit.json", "2");
+        assert_eq!(std::fs::read_to_string(out.join("fit.json")).unwrap(), "1");
+        set.publish().unwrap();
+        assert_eq!(std::fs::read_to_string(out.join("fit.json")).unwrap(), "2");
+        assert_eq!(
+            names(&out),
+            [MARKER, "fit.json"],
+            "the stale figure is gone"
+        );
+        // Nothing but the result and its hidden lock file beside it.
+        assert_eq!(names(tmp.path()), [".fit.hairfit-lock", "fit"]);
+    }
+
+    #[test]
+    fn an_unpublished_set_leaves_the_old_one_and_no_staging() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("fit");
+        let set = OutputSet::begin(&out, "test", false, &[]).unwrap();
+        write(&set, "fit.json", "1");
+        set.publish().unwrap();
+        {
+            let set = OutputSet::begin(&out, "test", false, &[]).unwrap();
+            write(&set, "fit.json", "half");
+        }
+        assert_eq!(std::fs::read_to_string(out.join("fit.json")).unwrap(), "1");
+        assert_eq!(names(tmp.path()), [".fit.hairfit-lock", "fit"]);
+    }
+
+    #[test]
+    fn a_second_run_fails_fast_while_the_first_holds_the_lock() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("fit");
+        let first = OutputSet::begin(&out, "test", false, &[]).unwrap();
+        let e = OutputSet::begin(&out, "test", false, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("another hairfit run") && e.contains("pid"),
+            "{e}"
+        );
+        drop(first);
+        OutputSet::begin(&out, "test", false, &[]).unwrap();
+    }
+
+    #[test]
+    fn foreign_directories_and_inputs_inside_are_refused() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("mine");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("params.json"), "hand-written").unwrap();
+        let e = OutputSet::begin(&out, "test", false, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--force") && e.contains("params.json"), "{e}");
+        // --force replaces it, but never a directory holding the run's input.
+        let data = out.join("curves.csv");
+        std::fs::write(&data, "x").unwrap();
+        let e = OutputSet::begin(&out, "test", true, &[&data])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is inside it"), "{e}");
+        let set = OutputSet::begin(&out, "test", true, &[]).unwrap();
+        set.publish().unwrap();
+        assert_eq!(names(&out), [MARKER]);
+    }
+
+    #[test]
+    fn a_legacy_result_without_marker_may_be_replaced() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("old");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("fit.json"), r#"{"hairfit_version": "0.1.0"}"#).unwrap();
+        OutputSet::begin(&out, "test", false, &[]).unwrap();
+    }
+
+    #[test]
+    fn keep_carries_files_into_the_new_set() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path().join("fit");
+        let set = OutputSet::begin(&out, "test", false, &[]).unwrap();
+        write(&set, "curves.csv", "data");
+        write(&set, "old.png", "figure");
+        set.publish().unwrap();
+        let set = OutputSet::begin(&out, "test", false, &[]).unwrap();
+        set.keep(&["curves.csv"]).unwrap();
+        set.publish().unwrap();
+        assert_eq!(names(&out), [MARKER, "curves.csv"]);
+    }
+}
