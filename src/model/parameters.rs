@@ -4,6 +4,9 @@
 //!
 //! Values in the table are in FILE units (degrees for angles); the accessors that return model
 //! values convert to the model's units (radians) with `f64::to_radians`.
+//!
+//! Over 500 lines because rustfmt lays each table line out as a ~25-line struct literal; splitting
+//! the file would split the table.
 
 use std::f64::consts::FRAC_1_SQRT_2;
 
@@ -205,7 +208,7 @@ pub const TABLE: [ParamSpec; 9] = [
         meaning: "index of refraction of the cortex",
         unit: Unit::Dimensionless,
         domain: Interval { lo: 1.0, lo_open: true, hi: 10.0, hi_open: false },
-        domain_why: "refraction needs eta > 1; above 10 (no fiber is that dense) eta^2 heads for overflow",
+        domain_why: "refraction needs eta > 1, and no fiber comes near 10 (diamond is 2.42; far larger values overflow the model)",
         fit_lo: 1.0 + OPEN_MARGIN,
         fit_hi: Some(2.5),
         typical: (1.5, 1.6),
