@@ -11,6 +11,7 @@
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`.
 //! - [`nist`]: the NIST StRD nonlinear-regression suite the solver is validated on.
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
+//! - [`plot`]: the plotting kit (chart set-up, scales, SVG + PNG rendering) of report and cost.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //! - [`error`]: the error type shared by the library.
@@ -26,6 +27,7 @@ pub mod lm;
 pub mod model;
 pub mod nist;
 pub mod params;
+pub mod plot;
 pub mod report;
 pub mod synth;
 

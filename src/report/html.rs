@@ -4,25 +4,9 @@
 
 use std::fmt::Write as _;
 
-use super::figures::fmt_num;
 use super::fit_file::{FitResult, FitStatus, ParamStatus};
 use super::{ReportOptions, ReportSummary};
-
-/// Escape text for HTML/XML content and attribute values.
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for ch in s.chars() {
-        match ch {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
+use crate::plot::{escape, fmt_num};
 
 const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:24px auto;max-width:1720px;color:#222;background:#fff;padding:0 16px}\
 h1{font-size:1.6em;margin-bottom:4px}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:4px;margin-top:32px}\
