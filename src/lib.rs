@@ -10,6 +10,7 @@
 //! - [`fit`]: `hairfit fit` / `hairfit demo`: least squares with exact Jacobians and uncertainties.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`, and the covariance of its solution.
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
+//! - [`plot`]: the plotting kit (chart set-up, scales, SVG + PNG rendering) of report and cost.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
 //! - [`rng`]: the seeded, platform-independent random-number generator.
 //! - [`batch`]: `hairfit batch`, many fits from a manifest, sharded for a cluster's scheduler.
@@ -29,6 +30,7 @@ pub mod lm;
 pub mod model;
 pub mod outdir;
 pub mod params;
+pub mod plot;
 pub mod report;
 pub mod rng;
 pub mod synth;

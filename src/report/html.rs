@@ -4,25 +4,9 @@
 
 use std::fmt::Write as _;
 
-use super::figures::fmt_num;
 use super::fit_file::{FitResult, FitStatus, ParamStatus};
 use super::{ReportOptions, ReportSummary};
-
-/// Escape text for HTML/XML content and attribute values.
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for ch in s.chars() {
-        match ch {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
+use crate::plot::{escape, fmt_num};
 
 const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:24px auto;max-width:1720px;color:#222;background:#fff;padding:0 16px}\
 h1{font-size:1.6em;margin-bottom:4px}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:4px;margin-top:32px}\
@@ -147,11 +131,39 @@ fn summary_section(h: &mut String, fit: &FitResult) {
     h.push_str("</table>\n");
 }
 
+/// A table cell, already HTML: text, or a number aligned right.
+enum Cell {
+    Text(String),
+    Num(String),
+}
+
+/// A `<section>` with heading `title` and a table of `head` columns and `rows` of cells.
+fn table_section(
+    h: &mut String,
+    title: &str,
+    head: &[&str],
+    rows: impl Iterator<Item = Vec<Cell>>,
+) {
+    let _ = write!(h, "<section><h2>{title}</h2>\n<table>\n<tr>");
+    for column in head {
+        let _ = write!(h, "<th>{column}</th>");
+    }
+    h.push_str("</tr>\n");
+    for row in rows {
+        h.push_str("<tr>");
+        for cell in row {
+            let _ = match cell {
+                Cell::Text(s) => write!(h, "<td>{s}</td>"),
+                Cell::Num(s) => write!(h, "<td class=\"num\">{s}</td>"),
+            };
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table></section>\n");
+}
+
 fn parameter_table(h: &mut String, fit: &FitResult) {
-    h.push_str(
-        "<section><h2>Parameters</h2>\n<table>\n<tr><th>parameter</th><th>value</th><th>std. error</th><th>unit</th><th>status</th></tr>\n",
-    );
-    for p in &fit.parameters {
+    let rows = fit.parameters.iter().map(|p| {
         let unit = if p.name.ends_with("_deg") { "deg" } else { "" };
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
@@ -164,14 +176,16 @@ fn parameter_table(h: &mut String, fit: &FitResult) {
             }
             s => s.as_str().to_string(),
         };
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{err}</td><td>{unit}</td><td>{status}</td></tr>",
-            escape(&with_channel(&p.name, &fit.data.channels)),
-            opt(p.value)
-        );
-    }
-    h.push_str("</table></section>\n");
+        vec![
+            Cell::Text(escape(&with_channel(&p.name, &fit.data.channels))),
+            Cell::Num(opt(p.value)),
+            Cell::Num(err),
+            Cell::Text(unit.into()),
+            Cell::Text(status),
+        ]
+    });
+    let head = ["parameter", "value", "std. error", "unit", "status"];
+    table_section(h, "Parameters", &head, rows);
 }
 
 /// `sigma_a[1]` → `sigma_a[1] (g)`: name the channel of a per-channel parameter.
@@ -191,37 +205,29 @@ fn scale_table(h: &mut String, fit: &FitResult) {
     if fit.scale.is_empty() {
         return;
     }
-    h.push_str(
-        "<section><h2>Scale per channel</h2>\n<table>\n<tr><th>channel</th><th>scale</th><th>std. error</th></tr>\n",
-    );
-    for s in &fit.scale {
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
-            escape(&s.channel),
-            opt(s.value),
-            opt(s.std_error)
-        );
-    }
-    h.push_str("</table></section>\n");
+    let rows = fit.scale.iter().map(|s| {
+        vec![
+            Cell::Text(escape(&s.channel)),
+            Cell::Num(opt(s.value)),
+            Cell::Num(opt(s.std_error)),
+        ]
+    });
+    let head = ["channel", "scale", "std. error"];
+    table_section(h, "Scale per channel", &head, rows);
 }
 
 fn stage_table(h: &mut String, fit: &FitResult) {
     if fit.trace.is_empty() {
         return;
     }
-    h.push_str(
-        "<section><h2>Solver stages</h2>\n<table>\n<tr><th>stage</th><th>iterations</th><th>final cost</th><th>wall time (s)</th></tr>\n",
-    );
-    for t in &fit.trace {
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
-            escape(&t.stage),
-            t.iterations,
-            opt(t.cost),
-            fmt_num(t.wall_s)
-        );
-    }
-    h.push_str("</table></section>\n");
+    let rows = fit.trace.iter().map(|t| {
+        vec![
+            Cell::Text(escape(&t.stage)),
+            Cell::Num(t.iterations.to_string()),
+            Cell::Num(opt(t.cost)),
+            Cell::Num(fmt_num(t.wall_s)),
+        ]
+    });
+    let head = ["stage", "iterations", "final cost", "wall time (s)"];
+    table_section(h, "Solver stages", &head, rows);
 }

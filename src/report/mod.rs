@@ -25,10 +25,11 @@ pub use fit_file::{
     ResidualSummary, ScaleEntry, TraceStage, CURVES_HEADER,
 };
 
+use crate::plot::{fmt_num, render, YScale};
 use decimate::{envelope_indices, stride_indices};
 use figures::{
-    channel_color, de, ChannelSeries, ConvergenceFigure, CorrelationFigure, CurvesFigure,
-    DataVsFitFigure, Figure, Point, PolarFigure, ResidualsFigure, SlicePanel, YScale,
+    channel_color, ChannelSeries, ConvergenceFigure, CorrelationFigure, CurvesFigure,
+    DataVsFitFigure, Point, PolarFigure, ResidualsFigure, SlicePanel,
 };
 use slices::{collect_samples, find_slices, theta_h_deg, wrap_deg, Sample, Slice, SliceKind};
 
@@ -56,14 +57,7 @@ pub struct ReportOptions {
 /// The model as the report evaluates it: `out[c] = [R, TT, TRT]` at `angles` (radians).
 pub type LobeModel<'a> = dyn Fn(&Angles, &mut [[f64; 3]]) + Sync + 'a;
 
-/// A figure written as `stem.svg` and `stem.png`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FigureInfo {
-    pub stem: String,
-    pub title: String,
-    pub width: u32,
-    pub height: u32,
-}
+pub use crate::plot::FigureInfo;
 
 /// What a report wrote and how much it drew.
 #[derive(Debug, Clone, Default)]
@@ -557,7 +551,7 @@ impl Ctx<'_> {
         if beyond > 0 {
             summary.notes.push(format!(
                 "{beyond} residuals beyond ±{} are drawn at the edge of the residual axes",
-                figures::fmt_num(limit)
+                fmt_num(limit)
             ));
         }
         const BINS: usize = 41;
@@ -611,80 +605,4 @@ impl Ctx<'_> {
             limit,
         }
     }
-}
-
-/// Register the shipped DejaVu Sans as the report's font (no system fonts needed).
-fn register_fonts() -> Result<()> {
-    static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-    static REGISTERED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font(figures::FONT, FontStyle::Normal, FONT_BYTES).is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(Error::Other(
-            "the report's font (assets/DejaVuSans.ttf) could not be loaded".into(),
-        ))
-    }
-}
-
-/// Draw `fig` to `stem.svg` (with a `<title>`) and `stem.png`, both written atomically.
-pub fn render<F: Figure>(dir: &Path, fig: &F) -> Result<FigureInfo> {
-    register_fonts()?;
-    let (w, h) = fig.size();
-    let title = fig.title();
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(de)?;
-        fig.draw(&root)?;
-        root.present().map_err(de)?;
-    }
-    let svg = with_svg_title(&svg, &title);
-    let svg_path = dir.join(format!("{}.svg", fig.stem()));
-    write_atomically(&svg_path, |out| {
-        out.write_all(svg.as_bytes())
-            .map_err(|e| Error::io(&svg_path, e))
-    })?;
-    let mut pixels = vec![0u8; w as usize * h as usize * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut pixels, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(de)?;
-        fig.draw(&root)?;
-        root.present().map_err(de)?;
-    }
-    let png_path = dir.join(format!("{}.png", fig.stem()));
-    write_atomically(&png_path, |out| {
-        let bad = |e: png::EncodingError| Error::Other(format!("{}: {e}", png_path.display()));
-        let mut encoder = png::Encoder::new(out, w, h);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        let mut writer = encoder.write_header().map_err(bad)?;
-        writer.write_image_data(&pixels).map_err(bad)?;
-        writer.finish().map_err(bad)
-    })?;
-    Ok(FigureInfo {
-        stem: fig.stem().into(),
-        title,
-        width: w,
-        height: h,
-    })
-}
-
-/// The SVG text with a `<title>` element right after the root's opening tag.
-fn with_svg_title(svg: &str, title: &str) -> String {
-    let Some(start) = svg.find("<svg") else {
-        return svg.to_string();
-    };
-    let Some(end) = svg[start..].find('>') else {
-        return svg.to_string();
-    };
-    let at = start + end + 1;
-    format!(
-        "{}\n<title>{}</title>{}",
-        &svg[..at],
-        html::escape(title),
-        &svg[at..]
-    )
 }
