@@ -13,7 +13,6 @@ mod fits;
 mod jacobian;
 mod ledger;
 mod model;
-mod rng;
 
 use std::path::Path;
 use std::time::Instant;

@@ -1,7 +1,7 @@
 //! The ledger's model section: every root mode × effect set on a seeded set of directions,
 //! time per evaluation against the relative error of S to exact roots with every effect.
 
-use super::rng::SplitMix64;
+use crate::rng::SplitMix64;
 use super::{time_per_call, CostRow, COST_SEED};
 use crate::fit::demo::demo_truth;
 use crate::model::{scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
@@ -9,14 +9,14 @@ use crate::model::{scattering, Angles, Effects, Lobes, ModelConfig, Params, Root
 /// A fixed, seeded set of directions: θ uniform in (−80°, 80°) (away from the degenerate ±90°),
 /// φ uniform over the circle — every lobe, the glints and grazing θ_d occur.
 pub fn representative_angles(n: usize, seed: u64) -> Vec<Angles> {
-    let mut rng = SplitMix64(seed);
+    let mut rng = SplitMix64::new(seed);
     (0..n)
         .map(|_| {
             Angles::from_degrees(
-                rng.uniform(-80.0, 80.0),
-                rng.uniform(-180.0, 180.0),
-                rng.uniform(-80.0, 80.0),
-                rng.uniform(-180.0, 180.0),
+                rng.uniform_in(-80.0, 80.0),
+                rng.uniform_in(-180.0, 180.0),
+                rng.uniform_in(-80.0, 80.0),
+                rng.uniform_in(-180.0, 180.0),
             )
         })
         .collect()
