@@ -164,7 +164,9 @@ fn table_section(
 
 fn parameter_table(h: &mut String, fit: &FitResult) {
     let rows = fit.parameters.iter().map(|p| {
-        let unit = if p.name.ends_with("_deg") { "deg" } else { "" };
+        // The parameter table knows each unit (σ_a: per fiber radius).
+        let unit = crate::model::ParamName::from_json_name(&p.name)
+            .map_or("", |n| n.spec().unit.label());
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
             ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),
