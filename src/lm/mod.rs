@@ -1,6 +1,6 @@
 //! Levenberg–Marquardt as an argmin `Solver`: the solver type, its options and why it stopped.
 //! The iteration is in `iterate`, the trust-region step in `step`, and what the data determine
-//! about the solution (covariance, correlation, null space) in [`covariance`].
+//! about the solution (covariance, correlation, null space) in [`covariance`](mod@covariance).
 //!
 //! The algorithm is Moré's (1978) trust-region LM as in MINPACK `lmder`: the step solves
 //! `min ‖J p + r‖² + λ‖D p‖²` with `D` the running maximum of the Jacobian's column norms, and `λ`
