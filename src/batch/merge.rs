@@ -187,7 +187,7 @@ pub fn merge(manifest: &Manifest, out: &Path) -> Result<MergeSummary> {
 }
 
 fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
-    use crate::report::html::escape;
+    use crate::plot::escape;
     let shown: Vec<usize> = (0..table.header.len())
         .filter(|&c| c != 1 && !table.header[c].ends_with("_status"))
         .collect();

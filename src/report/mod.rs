@@ -8,7 +8,7 @@
 pub mod decimate;
 pub mod figures;
 pub mod fit_file;
-pub(crate) mod html;
+mod html;
 pub mod slices;
 
 use std::path::Path;
