@@ -42,9 +42,14 @@ fn known_values_both_sets_both_directions() {
     let mut failures = Vec::new();
     for (a, expected) in TABLE {
         let swapped = [a[2], a[3], a[0], a[1]];
-        for (k, (p, dir)) in [(set_a(), a), (set_a(), swapped), (set_b(), a), (set_b(), swapped)]
-            .into_iter()
-            .enumerate()
+        for (k, (p, dir)) in [
+            (set_a(), a),
+            (set_a(), swapped),
+            (set_b(), a),
+            (set_b(), swapped),
+        ]
+        .into_iter()
+        .enumerate()
         {
             let got = s(&p, &m, dir);
             if !agrees(got, expected[k]) {

@@ -81,7 +81,11 @@ pub fn scattering_batch<T: DualNum<f64>>(
     out: &mut [T],
 ) {
     let n = params.sigma_a.len();
-    assert_eq!(out.len(), angles.len() * n, "one output per sample and channel");
+    assert_eq!(
+        out.len(),
+        angles.len() * n,
+        "one output per sample and channel"
+    );
     let mut index: HashMap<(u64, u64), usize> = HashMap::new();
     let mut tables: Vec<AzimuthalTable<T>> = Vec::new();
     for (a, row) in angles.iter().zip(out.chunks_mut(n.max(1))) {

@@ -167,14 +167,28 @@ pub struct ParamFact {
 
 impl ParamFact {
     fn contains(&self, x: f64) -> bool {
-        let lo = if self.lower_inclusive { x >= self.lower } else { x > self.lower };
-        let hi = if self.upper_inclusive { x <= self.upper } else { x < self.upper };
+        let lo = if self.lower_inclusive {
+            x >= self.lower
+        } else {
+            x > self.lower
+        };
+        let hi = if self.upper_inclusive {
+            x <= self.upper
+        } else {
+            x < self.upper
+        };
         x.is_finite() && lo && hi
     }
 
     /// The domain as text, e.g. `(0, 1]`.
     pub fn domain(&self) -> String {
-        let fmt = |v: f64| if v.is_infinite() { "inf".to_string() } else { format!("{v}") };
+        let fmt = |v: f64| {
+            if v.is_infinite() {
+                "inf".to_string()
+            } else {
+                format!("{v}")
+            }
+        };
         format!(
             "{}{}, {}{}",
             if self.lower_inclusive { '[' } else { '(' },

@@ -158,7 +158,11 @@ mod tests {
                 .zip(&gl.weights)
                 .map(|(x, w)| w * x.powi(2 * j as i32))
                 .sum();
-            assert!((m - 2.0 / (2 * j + 1) as f64).abs() < 1e-13, "n = {n}, degree {}", 2 * j);
+            assert!(
+                (m - 2.0 / (2 * j + 1) as f64).abs() < 1e-13,
+                "n = {n}, degree {}",
+                2 * j
+            );
             assert!(gl.nodes.windows(2).all(|p| p[0] < p[1]), "ascending");
         }
     }

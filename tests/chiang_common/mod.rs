@@ -15,7 +15,13 @@ pub fn set_b() -> ChiangParams<f64> {
 }
 
 /// One-channel parameters, α in degrees.
-pub fn params(eta: f64, sigma_a: f64, beta_m: f64, beta_n: f64, alpha_deg: f64) -> ChiangParams<f64> {
+pub fn params(
+    eta: f64,
+    sigma_a: f64,
+    beta_m: f64,
+    beta_n: f64,
+    alpha_deg: f64,
+) -> ChiangParams<f64> {
     ChiangParams {
         eta,
         sigma_a: vec![sigma_a],
