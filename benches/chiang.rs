@@ -68,28 +68,43 @@ fn model(nodes: usize) -> ChiangModel {
     ChiangModel::new(ChiangEffects::default(), nodes).unwrap()
 }
 
-fn chiang_values(nodes: usize, angles: &[Angles]) -> Vec<f64> {
+/// Narrow lobes (β_m = β_n = 0.05): the hardest case for the width rule.
+fn narrow_params() -> ChiangParams<f64> {
+    ChiangParams {
+        beta_m: 0.05,
+        beta_n: 0.05,
+        ..chiang_params()
+    }
+}
+
+fn chiang_values(p: &ChiangParams<f64>, nodes: usize, angles: &[Angles]) -> Vec<f64> {
     let mut out = vec![0.0; angles.len()];
-    scattering_batch(&chiang_params(), &model(nodes), angles, &mut out);
+    scattering_batch(p, &model(nodes), angles, &mut out);
     out
 }
 
-/// Worst and median relative error per node count vs 4096 nodes, on both sample sets.
+/// Worst and median relative error per node count vs 4096 nodes, on both sample sets, for the
+/// benchmarked parameters (set A, β = 0.3) and for narrow lobes (β = 0.05).
 fn print_accuracy(random: &[Angles], rig: &[Angles]) {
-    for (name, angles) in [("random", random), ("rig", rig)] {
-        let reference = chiang_values(4096, angles);
-        for n in NODE_COUNTS {
-            let mut errs: Vec<f64> = chiang_values(n, angles)
-                .iter()
-                .zip(&reference)
-                .map(|(v, r)| (v - r).abs() / r.abs())
-                .collect();
-            errs.sort_by(f64::total_cmp);
-            eprintln!(
-                "accuracy {name:6} {n:4} nodes: worst rel. error {:.2e}, median {:.2e}",
-                errs[errs.len() - 1],
-                errs[errs.len() / 2]
-            );
+    for (set, p) in [
+        ("beta=0.3", chiang_params()),
+        ("beta=0.05", narrow_params()),
+    ] {
+        for (name, angles) in [("random", random), ("rig", rig)] {
+            let reference = chiang_values(&p, 4096, angles);
+            for n in NODE_COUNTS {
+                let mut errs: Vec<f64> = chiang_values(&p, n, angles)
+                    .iter()
+                    .zip(&reference)
+                    .map(|(v, r)| (v - r).abs() / r.abs())
+                    .collect();
+                errs.sort_by(f64::total_cmp);
+                eprintln!(
+                    "accuracy {set:9} {name:6} {n:4} nodes: worst rel. error {:.2e}, median {:.2e}",
+                    errs[errs.len() - 1],
+                    errs[errs.len() / 2]
+                );
+            }
         }
     }
 }
