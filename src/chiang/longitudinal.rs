@@ -73,8 +73,8 @@ mod tests {
     fn unit_area_over_incidence() {
         let gl = super::super::quadrature::GaussLegendre::new(2000);
         for v in [1e-3, 0.01, 0.3, 5.0, 100.0] {
-            for theta_r in [-1.2, -0.3, 0.0, 0.7, 1.4] {
-                let (s, c) = (theta_r as f64).sin_cos();
+            for theta_r in [-1.2f64, -0.3, 0.0, 0.7, 1.4] {
+                let (s, c) = theta_r.sin_cos();
                 let total: f64 = gl
                     .nodes
                     .iter()
