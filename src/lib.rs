@@ -4,6 +4,8 @@
 //! The crate is a library with a thin CLI (`src/main.rs`). Module map:
 //! - [`model`]: the forward model of `MODEL.md` (one pure function per equation), generic over
 //!   the number type so that forward-mode AD gives exact Jacobians.
+//! - [`chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a whole-fibre S),
+//!   generic over the number type like [`model`].
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
@@ -20,6 +22,7 @@
 
 pub mod atomic;
 pub mod batch;
+pub mod chiang;
 pub mod cli;
 pub mod cost;
 pub mod data;

@@ -1,0 +1,189 @@
+//! Azimuthal scattering: Fresnel, absorption, the attenuations `A_p`, the exit angle `Φ_p`, the
+//! trimmed logistic `N_p`, and the width integral `Ñ_p = ⟨A_p N_p⟩_h`, `Ā₃ = ⟨A₃⟩_h`.
+//!
+//! Everything here depends on θ_r and φ only, never on θ_i: one [`AzimuthalTable`] serves every
+//! incidence that shares an exit direction (see [`super::evaluator`]).
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use num_dual::DualNum;
+
+use super::quadrature::WidthRule;
+use super::{ChiangEffects, ChiangParams};
+use crate::model::angles::wrap_t;
+
+/// `s = √(π/8)(0.265β_n + 1.194β_n² + 5.372β_n²²)`.
+#[inline]
+pub fn logistic_scale<T: DualNum<f64>>(beta_n: &T) -> T {
+    const SQRT_PI_OVER_8: f64 = 0.626_657_068_657_750_1;
+    let b = beta_n.clone();
+    (b.clone() * 0.265 + b.powi(2) * 1.194 + b.powi(22) * 5.372) * SQRT_PI_OVER_8
+}
+
+/// `1/(s·tanh(π/(2s)))`: the logistic's normalisation trimmed to [−π, π].
+#[inline]
+pub fn trimmed_logistic_norm<T: DualNum<f64>>(s: &T) -> T {
+    (s.clone() * (s.recip() * FRAC_PI_2).tanh()).recip()
+}
+
+/// `ℓ(x) = e^{−|x|/s} / (s(1 + e^{−|x|/s})² tanh(π/2s))`, x already wrapped to [−π, π];
+/// `norm` from [`trimmed_logistic_norm`].
+#[inline]
+pub fn trimmed_logistic<T: DualNum<f64>>(x: &T, inv_s: &T, norm: &T) -> T {
+    let a = if x.re() < 0.0 { -x.clone() } else { x.clone() };
+    let e = (-(a * inv_s.clone())).exp();
+    let d = e.clone() + 1.0;
+    e * norm.clone() / (d.clone() * d)
+}
+
+/// `Φ_p = 2pγ_t − 2γ_o + pπ`.
+#[inline]
+pub fn exit_azimuth<T: DualNum<f64>>(p: usize, gamma_o: f64, gamma_t: &T) -> T {
+    let pf = p as f64;
+    gamma_t.clone() * (2.0 * pf) + (pf * PI - 2.0 * gamma_o)
+}
+
+/// `N_p = ℓ(wrap(−φ − Φ_p))` (pbrt's azimuth difference is `φ_i − φ_o = −φ`).
+#[inline]
+pub fn azimuthal_lobe<T: DualNum<f64>>(phi: f64, exit: &T, inv_s: &T, norm: &T) -> T {
+    trimmed_logistic(&wrap_t(-exit.clone() - phi), inv_s, norm)
+}
+
+/// Unpolarised dielectric Fresnel reflectance from 1 into `eta` at incidence cosine `cos_i`.
+#[inline]
+pub fn fresnel<T: DualNum<f64>>(eta: &T, cos_i: f64) -> T {
+    let sin2_t = eta.powi(2).recip() * (1.0 - cos_i * cos_i);
+    let cos_t = (-sin2_t + 1.0).sqrt();
+    let e_cos_i = eta.clone() * cos_i;
+    let e_cos_t = eta.clone() * cos_t.clone();
+    let r_parallel = (e_cos_i.clone() - cos_t.clone()) / (e_cos_i + cos_t.clone());
+    let r_perpendicular = (-e_cos_t.clone() + cos_i) / (e_cos_t + cos_i);
+    (r_parallel.powi(2) + r_perpendicular.powi(2)) * 0.5
+}
+
+/// Quantities fixed by θ_r and η: `η' = √(η² − sin²θ_r)/cosθ_r` and `cos θ_t = √(1 − sin²θ_r/η²)`.
+#[derive(Debug, Clone)]
+pub struct ExitRefraction<T> {
+    pub eta_prime: T,
+    pub cos_theta_t: T,
+    pub cos_theta_r: f64,
+}
+
+impl<T: DualNum<f64>> ExitRefraction<T> {
+    pub fn new(eta: &T, theta_r: f64) -> Self {
+        let (s, c) = theta_r.sin_cos();
+        let eta2 = eta.powi(2);
+        ExitRefraction {
+            eta_prime: (eta2.clone() - s * s).sqrt() / c,
+            cos_theta_t: (-(eta2.recip() * (s * s)) + 1.0).sqrt(),
+            cos_theta_r: c,
+        }
+    }
+}
+
+/// Internal transmittance of one segment, `T = exp(−σ_a·2cosγ_t/cosθ_t)`; `chord = 2cosγ_t/cosθ_t`.
+#[inline]
+pub fn transmittance<T: DualNum<f64>>(sigma_a: &T, chord: &T) -> T {
+    (-(sigma_a.clone() * chord.clone())).exp()
+}
+
+/// `A₀ = F, A₁ = (1−F)²T, A₂ = A₁TF, A₃ = A₂TF/(1 − TF)` (A₃ = 0 if TF = 1).
+#[inline]
+pub fn attenuations<T: DualNum<f64>>(f: &T, t: &T) -> [T; 4] {
+    let a0 = f.clone();
+    let a1 = (-f.clone() + 1.0).powi(2) * t.clone();
+    let tf = t.clone() * f.clone();
+    let a2 = a1.clone() * tf.clone();
+    let one_minus = -tf.clone() + 1.0;
+    let a3 = if one_minus.re() == 0.0 {
+        T::from(0.0)
+    } else {
+        a2.clone() * tf / one_minus
+    };
+    [a0, a1, a2, a3]
+}
+
+/// The width-averaged azimuthal factors of one exit direction, per channel:
+/// `lobes[c][p] = Ñ_p = ⟨A_p N_p⟩_h` (p < 3) and `residual[c] = Ā₃ = ⟨A₃⟩_h`. Disabled terms are 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AzimuthalTable<T> {
+    pub lobes: Vec<[T; 3]>,
+    pub residual: Vec<T>,
+}
+
+impl<T: DualNum<f64>> AzimuthalTable<T> {
+    /// Zeros for `n` channels (the buffers are reused by [`AzimuthalTable::fill`]).
+    pub fn zeros(n: usize) -> Self {
+        AzimuthalTable {
+            lobes: vec![[T::from(0.0), T::from(0.0), T::from(0.0)]; n],
+            residual: vec![T::from(0.0); n],
+        }
+    }
+
+    /// The width integral for exit inclination `theta_r` and azimuth `phi` (radians) with the
+    /// rule `rule`. Per node: one `asin`, one Fresnel, the enabled logistics (channel
+    /// independent), then per channel one `exp` for T and a few products.
+    pub fn fill(
+        &mut self,
+        params: &ChiangParams<T>,
+        effects: &ChiangEffects,
+        rule: &WidthRule,
+        theta_r: f64,
+        phi: f64,
+    ) {
+        let n = params.sigma_a.len();
+        assert_eq!(self.lobes.len(), n, "one table row per channel");
+        for c in 0..n {
+            self.lobes[c] = [T::from(0.0), T::from(0.0), T::from(0.0)];
+            self.residual[c] = T::from(0.0);
+        }
+        let on = [effects.r, effects.tt, effects.trt];
+        let transmitted = effects.tt || effects.trt || effects.residual;
+        let any_lobe = effects.r || effects.tt || effects.trt;
+        let refraction = ExitRefraction::new(&params.eta, theta_r);
+        let (inv_s, norm) = if any_lobe {
+            let s = logistic_scale(&params.beta_n);
+            (s.recip(), trimmed_logistic_norm(&s))
+        } else {
+            (T::from(0.0), T::from(0.0))
+        };
+        let inv_eta_prime = refraction.eta_prime.recip();
+        let two_over_cos_tt = refraction.cos_theta_t.recip() * 2.0;
+        let mut lobe_n: [T; 3] = [T::from(0.0), T::from(0.0), T::from(0.0)];
+        for node in &rule.nodes {
+            let f = fresnel(&params.eta, refraction.cos_theta_r * node.cos_gamma);
+            let sin_gt = inv_eta_prime.clone() * node.h;
+            let gamma_t = sin_gt.asin();
+            for p in 0..3 {
+                if on[p] {
+                    let exit = exit_azimuth(p, node.gamma, &gamma_t);
+                    lobe_n[p] = azimuthal_lobe(phi, &exit, &inv_s, &norm) * node.weight;
+                }
+            }
+            if effects.r {
+                // A₀ = F is the same in every channel.
+                let r = f.clone() * lobe_n[0].clone();
+                for row in self.lobes.iter_mut() {
+                    row[0] += r.clone();
+                }
+            }
+            if !transmitted {
+                continue;
+            }
+            let cos_gt = (-sin_gt.powi(2) + 1.0).sqrt();
+            let chord = cos_gt * two_over_cos_tt.clone();
+            for c in 0..n {
+                let t = transmittance(&params.sigma_a[c], &chord);
+                let a = attenuations(&f, &t);
+                for p in 1..3 {
+                    if on[p] {
+                        self.lobes[c][p] += a[p].clone() * lobe_n[p].clone();
+                    }
+                }
+                if effects.residual {
+                    self.residual[c] += a[3].clone() * node.weight;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,120 @@
+//! Evaluating `S`: per sample, or per batch with the width integral cached per exit direction.
+//!
+//! `Ñ_p` and `Ā₃` depend on (θ_r, φ) only and `S` is even in φ, so a batch keys its
+//! [`AzimuthalTable`]s on (θ_r, |φ|): a rig with many incidences (and mirrored azimuths) per exit
+//! direction pays the width integral once per distinct key; each sample then costs only its four
+//! `M_p`.
+
+use std::collections::HashMap;
+
+use num_dual::DualNum;
+
+use super::azimuthal::AzimuthalTable;
+use super::longitudinal::{base_variance, longitudinal};
+use super::{combine, ChiangEffects, ChiangModel, ChiangParams};
+use crate::model::angles::wrap;
+use crate::model::Angles;
+
+/// `M_p(θ_i, θ_r)` for p = 0..3, 0 where the term is off (and then not computed).
+#[inline]
+pub fn longitudinal_terms<T: DualNum<f64>>(
+    params: &ChiangParams<T>,
+    effects: &ChiangEffects,
+    theta_i: f64,
+    theta_r: f64,
+) -> [T; 4] {
+    let v0 = base_variance(&params.beta_m);
+    let on = [effects.r, effects.tt, effects.trt, effects.residual];
+    std::array::from_fn(|p| {
+        if on[p] {
+            longitudinal(p, theta_i, theta_r, &params.alpha, &v0)
+        } else {
+            T::from(0.0)
+        }
+    })
+}
+
+/// `S` per channel for incidence `theta_i` from the table of its exit direction `theta_r`.
+pub fn scattering_from_table<T: DualNum<f64>>(
+    params: &ChiangParams<T>,
+    effects: &ChiangEffects,
+    table: &AzimuthalTable<T>,
+    theta_i: f64,
+    theta_r: f64,
+    out: &mut [T],
+) {
+    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
+    let m = longitudinal_terms(params, effects, theta_i, theta_r);
+    let cos_i = theta_i.cos();
+    for (c, o) in out.iter_mut().enumerate() {
+        *o = combine(&m, &table.lobes[c], &table.residual[c], cos_i);
+    }
+}
+
+/// `S` per channel for one sample, width integral included (no cache). Parameters and angles are
+/// assumed valid ([`ChiangParams::validate`], [`Angles::validate`]).
+pub fn scattering<T: DualNum<f64>>(
+    params: &ChiangParams<T>,
+    model: &ChiangModel,
+    angles: &Angles,
+    out: &mut [T],
+) {
+    let mut table = AzimuthalTable::zeros(params.sigma_a.len());
+    let phi = wrap(angles.phi_r - angles.phi_i);
+    table.fill(params, &model.effects, &model.rule, angles.theta_r, phi);
+    scattering_from_table(
+        params,
+        &model.effects,
+        &table,
+        angles.theta_i,
+        angles.theta_r,
+        out,
+    );
+}
+
+/// `S` for a batch: `out[k·n + c]` is sample k, channel c (`n` channels). One width integral per
+/// distinct (θ_r, |φ|) in the batch, bit-exact keys (so results equal [`scattering`]'s).
+pub fn scattering_batch<T: DualNum<f64>>(
+    params: &ChiangParams<T>,
+    model: &ChiangModel,
+    angles: &[Angles],
+    out: &mut [T],
+) {
+    let n = params.sigma_a.len();
+    assert_eq!(
+        out.len(),
+        angles.len() * n,
+        "one output per sample and channel"
+    );
+    let mut index: HashMap<(u64, u64), usize> = HashMap::new();
+    let mut tables: Vec<AzimuthalTable<T>> = Vec::new();
+    for (a, row) in angles.iter().zip(out.chunks_mut(n.max(1))) {
+        let phi = wrap(a.phi_r - a.phi_i).abs();
+        let key = (a.theta_r.to_bits(), phi.to_bits());
+        let slot = *index.entry(key).or_insert_with(|| {
+            let mut table = AzimuthalTable::zeros(n);
+            table.fill(params, &model.effects, &model.rule, a.theta_r, phi);
+            tables.push(table);
+            tables.len() - 1
+        });
+        scattering_from_table(
+            params,
+            &model.effects,
+            &tables[slot],
+            a.theta_i,
+            a.theta_r,
+            row,
+        );
+    }
+}
+
+/// Number of distinct exit directions (θ_r, |φ|) in `angles`: the width integrals a batch pays.
+pub fn distinct_exit_directions(angles: &[Angles]) -> usize {
+    let mut keys: Vec<(u64, u64)> = angles
+        .iter()
+        .map(|a| (a.theta_r.to_bits(), wrap(a.phi_r - a.phi_i).abs().to_bits()))
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.len()
+}

@@ -1,0 +1,385 @@
+//! The Chiang et al. 2016 hair model as pbrt-v4 evaluates it, turned into a whole-fibre `S` in the
+//! project's conventions (CHIANG.md): parameters, effect switches, the width-quadrature knob, and
+//! `S = [Σ_{p<3} M_p Ñ_p + M₃ Ā₃/(2π)] / cosθ_i`, generic over the number type for exact
+//! AD Jacobians. One pure function per equation lives in the submodules:
+//! - [`bessel`]: exact exponentially scaled `I₀`;
+//! - [`longitudinal`]: `v_p`, the tilt on θ_r, `M_p`;
+//! - [`azimuthal`]: `s`, Fresnel, `T`, `A_p`, `Φ_p`, trimmed logistic `N_p`, the width integral;
+//! - [`quadrature`]: cached Gauss–Legendre rules in γ = asin h;
+//! - [`evaluator`]: batches grouped by exit direction so the width integral is paid once each;
+//! - [`file`]: the Chiang parameter file (JSON names of CHIANG.md);
+//! - [`jacobian`]: seeding dual numbers, Jacobians of a batch.
+//!
+//! Angles reuse [`crate::model::Angles`]: the frame and sign conventions are MODEL.md's.
+
+use std::fmt;
+use std::sync::Arc;
+
+use num_dual::DualNum;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::model::Angles;
+
+pub mod azimuthal;
+pub mod bessel;
+pub mod evaluator;
+pub mod file;
+pub mod jacobian;
+pub mod longitudinal;
+pub mod quadrature;
+
+pub use azimuthal::AzimuthalTable;
+pub use evaluator::{scattering, scattering_batch, scattering_from_table};
+pub use file::ChiangParamFile;
+pub use jacobian::{batch_jacobian, batch_jacobian_static, seeded};
+pub use quadrature::{WidthRule, DEFAULT_WIDTH_NODES};
+
+/// Which terms of `S` are on; what is off is not computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ChiangEffects {
+    /// p = 0, reflection.
+    pub r: bool,
+    /// p = 1, transmission.
+    pub tt: bool,
+    /// p = 2, one internal reflection.
+    pub trt: bool,
+    /// p ≥ 3 summed: `M₃ Ā₃/(2π)`, azimuthally uniform.
+    pub residual: bool,
+}
+
+impl Default for ChiangEffects {
+    fn default() -> Self {
+        ChiangEffects {
+            r: true,
+            tt: true,
+            trt: true,
+            residual: true,
+        }
+    }
+}
+
+impl ChiangEffects {
+    /// Parse a list such as `"R,TT,TRT,residual"` (case-insensitive; `p3` also names the residual).
+    pub fn parse(list: &str) -> Result<ChiangEffects> {
+        let mut e = ChiangEffects {
+            r: false,
+            tt: false,
+            trt: false,
+            residual: false,
+        };
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            match item.to_ascii_uppercase().as_str() {
+                "R" => e.r = true,
+                "TT" => e.tt = true,
+                "TRT" => e.trt = true,
+                "RESIDUAL" | "P3" => e.residual = true,
+                other => {
+                    return Err(Error::Other(format!(
+                        "unknown Chiang term `{other}` in `{list}`: use a comma-separated list of \
+                         R, TT, TRT, residual"
+                    )))
+                }
+            }
+        }
+        if !(e.r || e.tt || e.trt || e.residual) {
+            return Err(Error::Other(format!(
+                "term list `{list}` is empty: name at least one of R, TT, TRT, residual"
+            )));
+        }
+        Ok(e)
+    }
+
+    /// The parameters `S` depends on under these effects, for `n_channels` absorption values.
+    pub fn parameters(&self, n_channels: usize) -> Vec<ChiangParamName> {
+        let lobes = self.r || self.tt || self.trt;
+        let mut out = vec![ChiangParamName::Eta]; // Fresnel enters every term
+        if self.tt || self.trt || self.residual {
+            out.extend((0..n_channels).map(ChiangParamName::SigmaA));
+        }
+        out.push(ChiangParamName::BetaM); // every term has an M_p
+        if lobes {
+            // the residual is azimuthally uniform and untilted
+            out.push(ChiangParamName::BetaN);
+            out.push(ChiangParamName::Alpha);
+        }
+        out
+    }
+}
+
+/// A Chiang parameter, by its JSON name of CHIANG.md.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ChiangParamName {
+    Eta,
+    SigmaA(usize),
+    BetaM,
+    BetaN,
+    /// Stored in radians in [`ChiangParams`], degrees in files.
+    Alpha,
+}
+
+impl ChiangParamName {
+    /// `"eta"`, `"sigma_a[1]"`, `"beta_m"`, `"beta_n"`, `"alpha_deg"`.
+    pub fn json_name(&self) -> String {
+        match self {
+            ChiangParamName::SigmaA(c) => format!("sigma_a[{c}]"),
+            other => PARAMETERS[other.fact_index()].name.into(),
+        }
+    }
+
+    fn fact_index(&self) -> usize {
+        match self {
+            ChiangParamName::Eta => 0,
+            ChiangParamName::SigmaA(_) => 1,
+            ChiangParamName::BetaM => 2,
+            ChiangParamName::BetaN => 3,
+            ChiangParamName::Alpha => 4,
+        }
+    }
+
+    /// The row of [`PARAMETERS`] for this parameter.
+    pub fn fact(&self) -> &'static ParamFact {
+        &PARAMETERS[self.fact_index()]
+    }
+}
+
+impl fmt::Display for ChiangParamName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.json_name())
+    }
+}
+
+/// What the project knows about one Chiang parameter, in file units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamFact {
+    pub name: &'static str,
+    pub meaning: &'static str,
+    pub unit: &'static str,
+    /// Open/closed bounds in file units: `lower < x` (or `≤` if `lower_inclusive`), `x ≤ upper`
+    /// (or `<` if not `upper_inclusive`).
+    pub lower: f64,
+    pub lower_inclusive: bool,
+    pub upper: f64,
+    pub upper_inclusive: bool,
+    pub default: Option<f64>,
+}
+
+impl ParamFact {
+    fn contains(&self, x: f64) -> bool {
+        let lo = if self.lower_inclusive {
+            x >= self.lower
+        } else {
+            x > self.lower
+        };
+        let hi = if self.upper_inclusive {
+            x <= self.upper
+        } else {
+            x < self.upper
+        };
+        x.is_finite() && lo && hi
+    }
+
+    /// The domain as text, e.g. `(0, 1]`.
+    pub fn domain(&self) -> String {
+        let fmt = |v: f64| {
+            if v.is_infinite() {
+                "inf".to_string()
+            } else {
+                format!("{v}")
+            }
+        };
+        format!(
+            "{}{}, {}{}",
+            if self.lower_inclusive { '[' } else { '(' },
+            fmt(self.lower),
+            fmt(self.upper),
+            if self.upper_inclusive { ']' } else { ')' }
+        )
+    }
+}
+
+/// The one table of Chiang parameter facts (CHIANG.md "Parameters"); pbrt-v4 defaults where the
+/// project uses one.
+pub const PARAMETERS: [ParamFact; 5] = [
+    ParamFact {
+        name: "eta",
+        meaning: "cortex index of refraction",
+        unit: "1",
+        lower: 1.0,
+        lower_inclusive: false,
+        upper: f64::INFINITY,
+        upper_inclusive: false,
+        default: Some(1.55),
+    },
+    ParamFact {
+        name: "sigma_a",
+        meaning: "absorption per unit fibre radius, one value per colour channel",
+        unit: "1/radius",
+        lower: 0.0,
+        lower_inclusive: true,
+        upper: f64::INFINITY,
+        upper_inclusive: false,
+        default: None,
+    },
+    ParamFact {
+        name: "beta_m",
+        meaning: "longitudinal roughness",
+        unit: "1",
+        lower: 0.0,
+        lower_inclusive: false,
+        upper: 1.0,
+        upper_inclusive: true,
+        default: None,
+    },
+    ParamFact {
+        name: "beta_n",
+        meaning: "azimuthal roughness",
+        unit: "1",
+        lower: 0.0,
+        lower_inclusive: false,
+        upper: 1.0,
+        upper_inclusive: true,
+        default: None,
+    },
+    ParamFact {
+        name: "alpha_deg",
+        meaning: "cuticle-scale tilt; the R peak sits at theta_h = +alpha_deg",
+        unit: "degree",
+        lower: -90.0,
+        lower_inclusive: false,
+        upper: 90.0,
+        upper_inclusive: false,
+        default: None,
+    },
+];
+
+/// Chiang parameters, α in RADIANS, generic over the number type.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChiangParams<T> {
+    pub eta: T,
+    pub sigma_a: Vec<T>,
+    pub beta_m: T,
+    pub beta_n: T,
+    pub alpha: T,
+}
+
+impl<T: Clone> ChiangParams<T> {
+    /// The value of `name` (radians for α). Panics on a channel that does not exist.
+    pub fn get(&self, name: ChiangParamName) -> T {
+        match name {
+            ChiangParamName::Eta => self.eta.clone(),
+            ChiangParamName::SigmaA(c) => self.sigma_a[c].clone(),
+            ChiangParamName::BetaM => self.beta_m.clone(),
+            ChiangParamName::BetaN => self.beta_n.clone(),
+            ChiangParamName::Alpha => self.alpha.clone(),
+        }
+    }
+
+    /// Set `name` to `value` (radians for α).
+    pub fn set(&mut self, name: ChiangParamName, value: T) {
+        match name {
+            ChiangParamName::Eta => self.eta = value,
+            ChiangParamName::SigmaA(c) => self.sigma_a[c] = value,
+            ChiangParamName::BetaM => self.beta_m = value,
+            ChiangParamName::BetaN => self.beta_n = value,
+            ChiangParamName::Alpha => self.alpha = value,
+        }
+    }
+
+    /// Map `f` over every parameter (e.g. lift f64 to duals).
+    pub fn map<U>(&self, f: impl Fn(&T) -> U) -> ChiangParams<U> {
+        ChiangParams {
+            eta: f(&self.eta),
+            sigma_a: self.sigma_a.iter().map(&f).collect(),
+            beta_m: f(&self.beta_m),
+            beta_n: f(&self.beta_n),
+            alpha: f(&self.alpha),
+        }
+    }
+}
+
+impl ChiangParams<f64> {
+    /// Check CHIANG.md's domains; the error names the parameter (file name and units) and range.
+    pub fn validate(&self) -> Result<()> {
+        if self.sigma_a.is_empty() {
+            return Err(Error::Parameter {
+                name: "sigma_a".into(),
+                value: f64::NAN,
+                message: "give at least one colour channel".into(),
+            });
+        }
+        let mut checks = vec![
+            (ChiangParamName::Eta, self.eta),
+            (ChiangParamName::BetaM, self.beta_m),
+            (ChiangParamName::BetaN, self.beta_n),
+            (ChiangParamName::Alpha, self.alpha.to_degrees()),
+        ];
+        checks.extend(
+            self.sigma_a
+                .iter()
+                .enumerate()
+                .map(|(c, &s)| (ChiangParamName::SigmaA(c), s)),
+        );
+        for (name, value) in checks {
+            let fact = name.fact();
+            if !fact.contains(value) {
+                return Err(Error::Parameter {
+                    name: name.json_name(),
+                    value,
+                    message: format!(
+                        "{} must be finite and in {} ({})",
+                        fact.meaning,
+                        fact.domain(),
+                        fact.unit
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What one evaluation computes: the effect switches and the width-quadrature rule.
+#[derive(Debug, Clone)]
+pub struct ChiangModel {
+    pub effects: ChiangEffects,
+    pub rule: Arc<WidthRule>,
+}
+
+impl ChiangModel {
+    /// `width_nodes` Gauss–Legendre nodes in γ for the width integral (error if out of range).
+    pub fn new(effects: ChiangEffects, width_nodes: usize) -> Result<ChiangModel> {
+        Ok(ChiangModel {
+            effects,
+            rule: WidthRule::cached(width_nodes)?,
+        })
+    }
+
+    /// Number of width nodes.
+    pub fn width_nodes(&self) -> usize {
+        self.rule.len()
+    }
+}
+
+impl Default for ChiangModel {
+    fn default() -> Self {
+        ChiangModel::new(ChiangEffects::default(), DEFAULT_WIDTH_NODES)
+            .expect("the default node count is in range")
+    }
+}
+
+/// Validate angles for this model (same domain as MODEL.md: |θ| < 90°, finite).
+pub fn validate_angles(angles: &Angles) -> Result<()> {
+    angles.validate()
+}
+
+/// Evaluate `S` from its parts: `[Σ_{p<3} M_p Ñ_p + M₃ Ā₃/(2π)] / cosθ_i` for one channel.
+#[inline]
+pub fn combine<T: DualNum<f64>>(m: &[T; 4], lobes: &[T; 3], residual: &T, cos_theta_i: f64) -> T {
+    let sum = m[0].clone() * lobes[0].clone()
+        + m[1].clone() * lobes[1].clone()
+        + m[2].clone() * lobes[2].clone()
+        + m[3].clone() * residual.clone() * std::f64::consts::FRAC_1_PI * 0.5;
+    sum / cos_theta_i
+}
