@@ -13,6 +13,8 @@
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
+//! - [`files`]: every on-disk format (fit.json, curves.csv, truth.json, timing.json, the load
+//!   report), one Serialize + Deserialize type each.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
@@ -21,6 +23,7 @@ pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;
+pub mod files;
 pub mod fit;
 pub mod lm;
 pub mod model;

@@ -5,8 +5,8 @@
 use std::fmt::Write as _;
 
 use super::figures::fmt_num;
-use super::fit_file::{FitResult, FitStatus, ParamStatus};
 use super::{ReportOptions, ReportSummary};
+use crate::files::{FitJson, FitStatus, ParamStatus};
 
 /// Escape text for HTML/XML content and attribute values.
 pub fn escape(s: &str) -> String {
@@ -36,7 +36,7 @@ figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;overflo
 .grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}";
 
 /// The page for `fit` and the figures in `summary`.
-pub fn index_html(fit: &FitResult, summary: &ReportSummary, options: &ReportOptions) -> String {
+pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOptions) -> String {
     let mut h = String::new();
     let file = escape(&fit.data.file);
     let _ = write!(
@@ -90,7 +90,7 @@ fn opt(v: Option<f64>) -> String {
     v.map_or("—".into(), fmt_num)
 }
 
-fn summary_section(h: &mut String, fit: &FitResult) {
+fn summary_section(h: &mut String, fit: &FitJson) {
     let status_class = if fit.status == FitStatus::Converged {
         "ok"
     } else {
@@ -133,21 +133,17 @@ fn summary_section(h: &mut String, fit: &FitResult) {
     );
     row("RMS normalised residual", opt(r.rms));
     row("reduced χ²", opt(r.reduced_chi2));
-    row(
-        "degrees of freedom",
-        r.dof.map_or("—".into(), |d| d.to_string()),
-    );
+    row("degrees of freedom", r.dof.to_string());
     for c in &r.per_channel {
         row(
             &format!("channel {}", c.channel),
             format!("RMS {}, reduced χ² {}", opt(c.rms), opt(c.reduced_chi2)),
         );
     }
-    row("wall time", format!("{} s", fmt_num(fit.wall_time_s)));
     h.push_str("</table>\n");
 }
 
-fn parameter_table(h: &mut String, fit: &FitResult) {
+fn parameter_table(h: &mut String, fit: &FitJson) {
     h.push_str(
         "<section><h2>Parameters</h2>\n<table>\n<tr><th>parameter</th><th>value</th><th>std. error</th><th>unit</th><th>status</th></tr>\n",
     );
@@ -187,7 +183,7 @@ fn with_channel(name: &str, channels: &[String]) -> String {
     }
 }
 
-fn scale_table(h: &mut String, fit: &FitResult) {
+fn scale_table(h: &mut String, fit: &FitJson) {
     if fit.scale.is_empty() {
         return;
     }
@@ -206,21 +202,20 @@ fn scale_table(h: &mut String, fit: &FitResult) {
     h.push_str("</table></section>\n");
 }
 
-fn stage_table(h: &mut String, fit: &FitResult) {
+fn stage_table(h: &mut String, fit: &FitJson) {
     if fit.trace.is_empty() {
         return;
     }
     h.push_str(
-        "<section><h2>Solver stages</h2>\n<table>\n<tr><th>stage</th><th>iterations</th><th>final cost</th><th>wall time (s)</th></tr>\n",
+        "<section><h2>Solver stages</h2>\n<table>\n<tr><th>stage</th><th>iterations</th><th>final cost</th></tr>\n",
     );
     for t in &fit.trace {
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
+            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
             escape(&t.stage),
             t.iterations,
-            opt(t.cost),
-            fmt_num(t.wall_s)
+            opt(t.cost)
         );
     }
     h.push_str("</table></section>\n");

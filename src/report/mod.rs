@@ -3,11 +3,12 @@
 //! densely, data against fit, residuals, a polar view, the correlation heatmap, convergence) and
 //! one offline `index.html` that shows them with the summary numbers and the parameter table.
 //!
-//! Also owns the typed form of the fit's output files ([`FitResult`], [`CurveRow`]).
+//! The fit's result arrives typed ([`FitJson`], [`CurveRow`] from [`crate::files`]): straight
+//! from the fit ([`write_report_of`]) or read back from its files ([`write_report_with`]). The
+//! model configuration, measurement, scale and weights are the fit's; none is re-derived here.
 
 pub mod decimate;
 pub mod figures;
-pub mod fit_file;
 mod html;
 pub mod slices;
 
@@ -17,13 +18,8 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::model::{scattering_by_lobe, Angles, Measurement, ModelConfig};
-
-pub use fit_file::{
-    read_curves_csv, read_fit_json, write_curves_csv, write_fit_json, ChannelResiduals,
-    Correlation, CurveRow, DataInfo, FitResult, FitStatus, ParamStatus, ParameterEntry,
-    ResidualSummary, ScaleEntry, TraceStage, CURVES_HEADER,
-};
+use crate::files::{read_curves_csv, CurveRow, FitJson};
+use crate::model::{scattering_by_lobe, Angles};
 
 use decimate::{envelope_indices, stride_indices};
 use figures::{
@@ -40,11 +36,12 @@ pub const MAX_PANELS: usize = 12;
 pub const MAX_SLICE_POINTS: usize = 600;
 /// Most points drawn in a scatter figure (data against fit, each residual panel).
 pub const MAX_SCATTER_POINTS: usize = 6000;
-/// Samples per slice used to calibrate the dense curve against the fit column.
-const CALIBRATION_SAMPLES: usize = 64;
+/// Samples per slice at which the dense curve is checked against the fit column.
+const CHECK_SAMPLES: usize = 64;
 /// Relative disagreement between the dense curve and the fit column that gets reported: the
-/// two come from the same model and parameters, so anything beyond rounding means a mismatch.
-const CALIBRATION_TOLERANCE: f64 = 1e-6;
+/// two come from the same model, parameters and scale, so anything beyond rounding means the
+/// files do not belong together.
+const CHECK_TOLERANCE: f64 = 1e-6;
 
 /// Options of `hairfit report`.
 #[derive(Debug, Clone, Copy, Default)]
@@ -82,25 +79,35 @@ pub struct ReportSummary {
     pub notes: Vec<String>,
 }
 
-/// Write the report of the fit in `dir` with default options (called at the end of a fit).
+/// Write the report of the fit in `dir` with default options (reads its files).
 pub fn write_report(dir: &Path) -> Result<ReportSummary> {
     write_report_with(dir, &ReportOptions::default())
 }
 
-/// Write the report of the fit in `dir`: reads fit.json and curves.csv, evaluates the model with
-/// the fitted parameters for the dense curves, as the data measure it (`options.measurement`).
+/// `hairfit report DIR`: read the fit's fit.json and curves.csv from `dir` and report them.
 pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSummary> {
-    let fit = read_fit_json(&dir.join("fit.json"))?;
+    let fit = FitJson::load(&dir.join("fit.json"))?;
     let rows = read_curves_csv(&dir.join("curves.csv"))?;
+    write_report_of(dir, &fit, &rows, options)
+}
+
+/// Report the fit `fit` with curves `rows` into `dir`: the dense curves evaluate the fit's
+/// model configuration and measurement with its fitted parameters.
+pub fn write_report_of(
+    dir: &Path,
+    fit: &FitJson,
+    rows: &[CurveRow],
+    options: &ReportOptions,
+) -> Result<ReportSummary> {
     let params = fit.params.to_params();
-    let config: ModelConfig = fit.model;
-    let mut pre_notes = Vec::new();
-    let measurement = measurement_of(&fit, &mut pre_notes);
+    let config = fit.model;
+    let measurement = fit.options.measurement;
     let model = move |a: &Angles, out: &mut [[f64; 3]]| {
         scattering_by_lobe(&params, &config, a, out);
         let f = measurement.factor(a);
         out.iter_mut().flatten().for_each(|v| *v *= f);
     };
+    let mut pre_notes = Vec::new();
     let usable = match fit.params.validate() {
         Ok(()) => true,
         Err(e) => {
@@ -112,22 +119,17 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
     };
     let n_model = fit.params.n_channels();
     let model_ref: Option<&LobeModel> = if usable { Some(&model) } else { None };
-    let mut summary = render_report(dir, &fit, &rows, model_ref, n_model, options)?;
+    let mut summary = render_report(dir, fit, rows, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
 }
 
-/// What the fit's values were (fit.json `options.measurement`); fits written before the option
-/// existed fitted S itself.
-fn measurement_of(fit: &FitResult, notes: &mut Vec<String>) -> Measurement {
-    match fit.options.get("measurement") {
-        None => Measurement::S,
-        Some(v) => serde_json::from_value(v.clone()).unwrap_or_else(|_| {
-            notes.push(format!(
-                "fit.json options.measurement is {v}, not \"s\" or \"radiance\"; curves assume s"
-            ));
-            Measurement::S
-        }),
+/// Draw the report of a fit just written to `dir`; the fit's files stand whatever happens
+/// here, so a drawing failure is a line of the summary, not an error.
+pub fn report_line(dir: &Path, fit: &FitJson, rows: &[CurveRow]) -> String {
+    match write_report_of(dir, fit, rows, &ReportOptions::default()) {
+        Ok(_) => format!("report: {}\n", dir.join("index.html").display()),
+        Err(e) => format!("warning: the plotted report could not be drawn: {e}\n"),
     }
 }
 
@@ -135,7 +137,7 @@ fn measurement_of(fit: &FitResult, notes: &mut Vec<String>) -> Measurement {
 /// channels) for the dense curves; `None` draws the fit column at the samples instead.
 pub fn render_report(
     dir: &Path,
-    fit: &FitResult,
+    fit: &FitJson,
     rows: &[CurveRow],
     model: Option<&LobeModel>,
     n_model: usize,
@@ -296,7 +298,7 @@ pub fn render_report(
 }
 
 /// Channels in fit.json's order, then any other channel named in curves.csv.
-fn channel_list(fit: &FitResult, rows: &[CurveRow]) -> Vec<String> {
+fn channel_list(fit: &FitJson, rows: &[CurveRow]) -> Vec<String> {
     let mut channels = fit.data.channels.clone();
     for r in rows {
         if !channels.contains(&r.channel) {
@@ -315,7 +317,7 @@ fn panel_points(p: &SlicePanel) -> usize {
 
 /// Everything the figure builders share.
 struct Ctx<'a> {
-    fit: &'a FitResult,
+    fit: &'a FitJson,
     rows: &'a [CurveRow],
     samples: &'a [Sample],
     channel_of_row: &'a [usize],
@@ -382,7 +384,7 @@ impl Ctx<'_> {
                         x,
                         y: row.data,
                         sigma: row.sigma,
-                        outlier: row.weight < 1.0,
+                        outlier: row.down_weighted(),
                     }
                 })
                 .collect();
@@ -394,7 +396,7 @@ impl Ctx<'_> {
                 lobes: [Vec::new(), Vec::new(), Vec::new()],
                 fit_at_points: Vec::new(),
             };
-            match self.calibration(&members, c, slice, summary) {
+            match self.scale_checked(&members, c, slice, summary) {
                 Some(k) => {
                     let mut lobes = [Vec::new(), Vec::new(), Vec::new()];
                     let mut total = Vec::with_capacity(grid.len());
@@ -432,11 +434,10 @@ impl Ctx<'_> {
         }
     }
 
-    /// The factor from the model to the fit column in a slice: the median ratio over a sample
-    /// of its rows. A spread beyond rounding, or a factor that is not fit.json's scale of the
-    /// channel (a constant the model did not reproduce, e.g. cos θ_i of a radiance fit), is
-    /// reported as a note.
-    fn calibration(
+    /// The fitted scale of `channel` (fit.json), which takes the model to the fit column;
+    /// checked at a sample of the slice's rows, a disagreement beyond rounding (files that do
+    /// not belong together) is reported as a note. `None` without a model or a finite scale.
+    fn scale_checked(
         &self,
         members: &[(f64, usize)],
         channel: usize,
@@ -444,47 +445,21 @@ impl Ctx<'_> {
         summary: &mut ReportSummary,
     ) -> Option<f64> {
         self.model?;
-        let mut ratios: Vec<f64> = stride_indices(members.len(), CALIBRATION_SAMPLES)
+        let name = &self.colours[channel].0;
+        let k = self.fit.scale_of(name)?;
+        let worst = stride_indices(members.len(), CHECK_SAMPLES)
             .into_iter()
-            .filter_map(|k| {
-                let row = &self.rows[members[k].1];
-                let deg = [row.theta_i, row.phi_i, row.theta_r, row.phi_r];
-                let l = self.lobes_at(&deg, channel)?;
-                let s = l[0] + l[1] + l[2];
-                let q = row.fit / s;
-                (s > 0.0 && q.is_finite() && q > 0.0).then_some(q)
+            .filter_map(|i| {
+                let row = &self.rows[members[i].1];
+                let l = self.lobes_at(&row.angles_deg(), channel)?;
+                let d = (k * (l[0] + l[1] + l[2]) / row.fit - 1.0).abs();
+                d.is_finite().then_some(d)
             })
-            .collect();
-        if ratios.is_empty() {
-            return None;
-        }
-        ratios.sort_by(f64::total_cmp);
-        let k = ratios[ratios.len() / 2];
-        let spread = ratios
-            .iter()
-            .map(|q| (q / k - 1.0).abs())
             .fold(0.0, f64::max);
-        if spread > CALIBRATION_TOLERANCE {
+        if worst > CHECK_TOLERANCE {
             summary.notes.push(format!(
-                "slice {} channel {}: the re-evaluated model differs from curves.csv's fit column by up to {:.2e} (relative); the fit may have used other settings than fit.json records",
+                "slice {} channel {name}: the model re-evaluated with fit.json's parameters and scale {k:.6e} differs from curves.csv's fit column by up to {worst:.2e} (relative); the files may not come from the same fit",
                 slice.title(),
-                self.colours[channel].0,
-                spread
-            ));
-        }
-        let fitted = self
-            .fit
-            .scale
-            .iter()
-            .find(|s| s.channel == self.colours[channel].0)
-            .and_then(|s| s.value)
-            .filter(|s| s.is_finite() && *s > 0.0);
-        if let Some(s) = fitted.filter(|s| (k / s - 1.0).abs() > CALIBRATION_TOLERANCE) {
-            summary.notes.push(format!(
-                "slice {} channel {}: the re-evaluated model differs from curves.csv's fit column by a factor {k:.6e} where fit.json's scale is {s:.6e} ({:.2e} relative); the fit may have used other settings than fit.json records",
-                slice.title(),
-                self.colours[channel].0,
-                k / s - 1.0
             ));
         }
         Some(k)
@@ -493,7 +468,7 @@ impl Ctx<'_> {
     /// Measured against fitted value for every row (decimated evenly, outliers separately).
     fn data_vs_fit(&self, scale: YScale, only_view: bool, scattered: usize) -> DataVsFitFigure {
         let (out, keep): (Vec<usize>, Vec<usize>) =
-            (0..self.rows.len()).partition(|&r| self.rows[r].weight < 1.0);
+            (0..self.rows.len()).partition(|&r| self.rows[r].down_weighted());
         let mut chosen: Vec<usize> = stride_indices(out.len(), MAX_SCATTER_POINTS / 4)
             .into_iter()
             .map(|k| out[k])
@@ -508,7 +483,12 @@ impl Ctx<'_> {
             .into_iter()
             .map(|r| {
                 let row = &self.rows[r];
-                (row.fit, row.data, self.channel_of_row[r], row.weight < 1.0)
+                (
+                    row.fit,
+                    row.data,
+                    self.channel_of_row[r],
+                    row.down_weighted(),
+                )
             })
             .collect::<Vec<_>>();
         let what = if only_view {
@@ -578,19 +558,19 @@ impl Ctx<'_> {
                 (lo, lo + width, c)
             })
             .collect();
-        let n_outliers = self.rows.iter().filter(|r| r.weight < 1.0).count();
+        let n_outliers = self.rows.iter().filter(|r| r.down_weighted()).count();
         let idx = envelope_indices(&res, MAX_SCATTER_POINTS);
         let points = idx
             .into_iter()
             .map(|r| {
                 let row = &self.rows[r];
-                let deg = [row.theta_i, row.phi_i, row.theta_r, row.phi_r];
+                let deg = row.angles_deg();
                 (
                     wrap_deg(row.phi_r - row.phi_i),
                     theta_h_deg(&deg),
                     row.residual,
                     self.channel_of_row[r],
-                    row.weight < 1.0,
+                    row.down_weighted(),
                 )
             })
             .collect::<Vec<_>>();
