@@ -33,8 +33,8 @@ fn assert_clean(out: &FitOutcome) {
     assert!(!curves.contains("NaN") && !curves.contains("inf"));
 }
 
-fn status_of<'a>(out: &'a FitOutcome, name: &str) -> &'a str {
-    &out.json
+fn status_of(out: &FitOutcome, name: &str) -> &'static str {
+    out.json
         .parameters
         .iter()
         .find(|p| p.name == name)
