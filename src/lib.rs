@@ -18,6 +18,8 @@
 //! - [`batch`]: `hairfit batch`, many fits from a manifest, sharded for a cluster's scheduler.
 //! - [`outdir`]: output directories locked, staged and published as one set.
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
+//! - [`files`]: every on-disk format (fit.json, curves.csv, truth.json, timing.json, the load
+//!   report), one Serialize + Deserialize type each.
 //! - [`error`]: the error type shared by the library.
 
 pub mod atomic;
@@ -28,6 +30,7 @@ pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;
+pub mod files;
 pub mod fit;
 pub mod lm;
 pub mod model;

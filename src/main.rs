@@ -195,18 +195,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Fit(a) => {
             let cancel = Some(ctrl_c_flag());
-            print!(
-                "{}",
-                hairfit::fit::args::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?
-            );
+            let outcome =
+                hairfit::fit::args::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
+            print!("{}", fit_summary_and_report(&outcome, &a.out));
         }
         Command::Batch(a) => return batch(a),
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());
-            print!(
-                "{}",
-                hairfit::fit::demo::demo_command(&a.fit, &a.out, cancel)?
-            );
+            let outcome = hairfit::fit::demo::demo_command(&a.fit, &a.out, cancel)?;
+            print!("{}", fit_summary_and_report(&outcome, &a.out));
+            print!("{}", hairfit::fit::demo::truth_line(&a.out));
         }
     }
     Ok(())
@@ -260,6 +258,12 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
         anyhow::bail!("{failed} items failed (listed above); the others are written");
     }
     Ok(())
+}
+
+/// The fit's summary, then its plotted report, drawn from the fit's result in memory.
+fn fit_summary_and_report(outcome: &hairfit::fit::FitOutcome, dir: &std::path::Path) -> String {
+    hairfit::fit::summary(outcome, Some(dir))
+        + &hairfit::report::report_line(dir, &outcome.json, &outcome.curves)
 }
 
 /// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far; a

@@ -5,8 +5,9 @@
 use std::path::Path;
 use std::process::Command;
 
+use hairfit::files::{read_curves_csv, FitJson};
 use hairfit::model::Measurement;
-use hairfit::report::{read_curves_csv, read_fit_json, write_report_with, ReportOptions};
+use hairfit::report::{write_report_with, ReportOptions};
 use hairfit::synth::Truth;
 
 fn hairfit(args: &[&str]) -> String {
@@ -48,7 +49,7 @@ fn synth_radiance(dir: &Path) -> std::path::PathBuf {
     csv
 }
 
-fn fit(csv: &Path, out: &Path, measurement: &str) -> hairfit::report::FitResult {
+fn fit(csv: &Path, out: &Path, measurement: &str) -> FitJson {
     let summary = hairfit(&[
         "fit",
         path(csv),
@@ -64,11 +65,11 @@ fn fit(csv: &Path, out: &Path, measurement: &str) -> hairfit::report::FitResult 
         measurement == "radiance",
         "{summary}"
     );
-    read_fit_json(&out.join("fit.json")).unwrap()
+    FitJson::load(&out.join("fit.json")).unwrap()
 }
 
 /// Largest relative error of the free parameters and scales against the truth.
-fn worst_error(fit: &hairfit::report::FitResult, truth: &Truth) -> f64 {
+fn worst_error(fit: &FitJson, truth: &Truth) -> f64 {
     let want = serde_json::to_value(&truth.params).unwrap();
     let mut worst: f64 = 0.0;
     for p in fit
@@ -86,7 +87,8 @@ fn worst_error(fit: &hairfit::report::FitResult, truth: &Truth) -> f64 {
         worst = worst.max((p.value.unwrap() - w).abs() / w.abs());
     }
     for (got, w) in fit.scale.iter().zip(&truth.scale) {
-        worst = worst.max((got.value.unwrap() - w.value).abs() / w.value);
+        let w = w.value.unwrap();
+        worst = worst.max((got.value.unwrap() - w).abs() / w);
     }
     worst
 }
@@ -99,7 +101,7 @@ fn radiance_data_are_recovered_only_when_fitted_as_radiance() {
     assert_eq!(truth.measurement, Measurement::Radiance);
 
     let right = fit(&csv, &dir.path().join("radiance"), "radiance");
-    assert_eq!(right.options["measurement"], "radiance");
+    assert_eq!(right.options.measurement, Measurement::Radiance);
     assert!(right
         .parameters
         .iter()
@@ -117,7 +119,7 @@ fn radiance_data_are_recovered_only_when_fitted_as_radiance() {
     }
 
     let wrong = fit(&csv, &dir.path().join("s"), "s");
-    assert_eq!(wrong.options["measurement"], "s");
+    assert_eq!(wrong.options.measurement, Measurement::S);
     let (chi2_right, chi2_wrong) = (
         right.residuals.reduced_chi2.unwrap(),
         wrong.residuals.reduced_chi2.unwrap(),
@@ -191,8 +193,8 @@ fn demo_synthesizes_and_fits_radiance_when_asked() {
     let truth: Truth =
         serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap()).unwrap();
     assert_eq!(truth.measurement, Measurement::Radiance);
-    let fit = read_fit_json(&out.join("fit.json")).unwrap();
-    assert_eq!(fit.options["measurement"], "radiance");
+    let fit = FitJson::load(&out.join("fit.json")).unwrap();
+    assert_eq!(fit.options.measurement, Measurement::Radiance);
     // 2 % relative noise with σ in the file: a model that matches the data gives reduced χ²
     // near 1 (±0.1 is ~6 standard deviations of χ²/ν at ~7000 residuals).
     let chi2 = fit.residuals.reduced_chi2.unwrap();

@@ -17,8 +17,13 @@ fn base() -> FitOptions {
 
 /// Final polish cost of a fit.
 fn final_cost(data: &hairfit::fit::FitData, opts: &FitOptions) -> f64 {
-    let out = fit(data, "stages", serde_json::Value::Null, opts).unwrap();
-    out.json.trace.last().unwrap().cost
+    let out = fit(data, "stages", Default::default(), opts).unwrap();
+    out.json
+        .trace
+        .last()
+        .unwrap()
+        .cost
+        .expect("a finite final cost")
 }
 
 #[test]

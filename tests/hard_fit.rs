@@ -1,6 +1,6 @@
 //! Fits on hard data end with a result or a clear error: never a panic, a hang, or a NaN/inf in
 //! any output file, and every fitted parameter inside its bound. Through the library (`fit::fit`,
-//! `output::write_outputs`, `solve::run_local`) and through the `hairfit fit` binary.
+//! `fit::write_outputs`, `solve::run_local`) and through the `hairfit fit` binary.
 //!
 //! Cases: starts on the bounds; data at grazing θ_d; data exactly on the glint; all-zero and
 //! constant radiance; values from 1e-300 to 1e+300; a single sample.
@@ -15,7 +15,7 @@ use hairfit::fit::bounds::{reference_params, Bound};
 use hairfit::fit::demo::synthesize;
 use hairfit::fit::problem::{Evaluator, FitData, ModelForward, Space};
 use hairfit::fit::solve::run_local;
-use hairfit::fit::{fit, free_parameters, output, EffectsChoice, FitOptions, Loss};
+use hairfit::fit::{fit, free_parameters, EffectsChoice, FitOptions, Loss};
 use hairfit::model::azimuthal::caustic_position;
 use hairfit::model::{Angles, Effects, ModelConfig, Params, RootMode};
 use hard_common::*;
@@ -139,9 +139,10 @@ fn fit_and_write(
     dir: &Path,
     what: &str,
 ) -> Result<serde_json::Value, String> {
-    match fit(data, what, serde_json::json!({}), opts) {
+    match fit(data, what, Default::default(), opts) {
         Ok(outcome) => {
-            output::write_outputs(dir, &outcome).unwrap_or_else(|e| panic!("{what}: write: {e}"));
+            hairfit::fit::write_outputs(dir, &outcome)
+                .unwrap_or_else(|e| panic!("{what}: write: {e}"));
             Ok(check_fit_dir(dir, what))
         }
         Err(e) => Err(e.to_string()),
@@ -292,13 +293,8 @@ fn a_single_sample_ends_cleanly() {
 #[test]
 fn empty_data_is_a_clear_error() {
     let data = with_values(Vec::new(), |_| 1.0);
-    let err = fit(
-        &data,
-        "empty.csv",
-        serde_json::json!({}),
-        &quick(Space::Log),
-    )
-    .expect_err("nothing to fit");
+    let err = fit(&data, "empty.csv", Default::default(), &quick(Space::Log))
+        .expect_err("nothing to fit");
     assert!(err.to_string().contains("no samples"), "{err}");
 }
 
@@ -482,7 +478,7 @@ proptest! {
         data.channels = vec!["radiance".into()];
         let space = if linear { Space::Linear } else { Space::Log };
         let opts = FitOptions { mode, seed, effects: EffectsChoice::All, ..quick(space) };
-        let outcome = fit(&data, "prop", serde_json::json!({}), &opts).unwrap();
+        let outcome = fit(&data, "prop", Default::default(), &opts).unwrap();
         let j = serde_json::to_value(&outcome.json).unwrap();
         assert_params_in_bounds(&j, "proptest fit");
         for name in hairfit::fit::all_parameters(1) {

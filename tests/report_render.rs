@@ -4,13 +4,16 @@
 
 use std::path::Path;
 
+use hairfit::files::{
+    read_curves_csv, write_curves_csv, Correlation, CurveRow, DataInfo, FitJson, FitStatus,
+    LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
+    TraceStage,
+};
 use hairfit::model::{Angles, ModelConfig};
 use hairfit::params::{ParamFile, SigmaA};
 use hairfit::report::{
-    read_curves_csv, render_report, write_curves_csv, write_fit_json, write_report_with,
-    Correlation, CurveRow, DataInfo, FitResult, FitStatus, ParamStatus, ParameterEntry,
-    ReportOptions, ReportSummary, ResidualSummary, ScaleEntry, TraceStage, MAX_PANELS,
-    MAX_SCATTER_POINTS, MAX_SLICE_POINTS,
+    render_report, write_report_with, ReportOptions, ReportSummary, MAX_PANELS, MAX_SCATTER_POINTS,
+    MAX_SLICE_POINTS,
 };
 
 /// A smooth positive stand-in for the model with the right shape (three lobes, channel-dependent
@@ -110,7 +113,7 @@ fn fixture_rows(
     rows
 }
 
-fn fixture_fit(n_samples: usize, n_ch: usize) -> FitResult {
+fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
     let names = [
         "eta",
         "sigma_a[0]",
@@ -151,20 +154,26 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitResult {
                 .collect()
         })
         .collect();
-    FitResult {
+    FitJson {
         hairfit_version: "0.1.0".into(),
         status: FitStatus::Converged,
         data: DataInfo {
             file: "data/fixture.csv".into(),
             channels: CHANNELS[..n_ch].iter().map(|s| s.to_string()).collect(),
             n_samples,
-            load_report: serde_json::json!({"rows_read": n_samples, "accepted": n_samples}),
+            load_report: LoadReport {
+                rows_read: n_samples as u64,
+                accepted: n_samples as u64,
+                ..LoadReport::default()
+            },
         },
         model: ModelConfig::default(),
-        options: serde_json::json!({"space": "log", "loss": "huber", "seed": 7})
-            .as_object()
-            .unwrap()
-            .clone(),
+        options: OptionsRecord {
+            space: "log".into(),
+            loss: "huber".into(),
+            seed: 7,
+            ..OptionsRecord::default()
+        },
         params: ParamFile {
             eta: 1.55,
             sigma_a: SigmaA::PerChannel(vec![0.3, 0.7, 1.1][..n_ch].to_vec()),
@@ -197,7 +206,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitResult {
             loss: "huber".into(),
             rms: Some(1.02),
             reduced_chi2: Some(1.04),
-            dof: Some(500),
+            dof: 500,
             per_channel: vec![],
         },
         trace: vec![
@@ -205,18 +214,15 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitResult {
                 stage: "multistart".into(),
                 iterations: 5,
                 cost: Some(0.2),
-                wall_s: 0.1,
                 history: vec![10.0, 3.0, 1.0, 0.5, 0.2],
             },
             TraceStage {
                 stage: "lm".into(),
                 iterations: 4,
                 cost: Some(0.01),
-                wall_s: 0.2,
                 history: vec![0.2, 0.05, 0.011, 0.01],
             },
         ],
-        wall_time_s: 0.31,
     }
 }
 
@@ -560,7 +566,7 @@ fn write_report_reads_the_fit_directory() {
     let rows = fixture_rows(&angles, &toy_model, 3);
     let mut fit = fixture_fit(angles.len(), 3);
     fit.params.eccentricity = 0.5;
-    write_fit_json(&dir.path().join("fit.json"), &fit).unwrap();
+    fit.save(&dir.path().join("fit.json")).unwrap();
     write_curves_csv(&dir.path().join("curves.csv"), &rows).unwrap();
     let summary = write_report_with(dir.path(), &ReportOptions::default()).unwrap();
     assert!(
@@ -584,7 +590,7 @@ fn report_of_a_real_model_fixture_matches_the_fit_column() {
         hairfit::model::scattering_by_lobe(&params, &config, a, out)
     };
     let rows = fixture_rows(&measurement_angles(), &model, 3);
-    write_fit_json(&dir.path().join("fit.json"), &fit).unwrap();
+    fit.save(&dir.path().join("fit.json")).unwrap();
     write_curves_csv(&dir.path().join("curves.csv"), &rows).unwrap();
     let summary = write_report_with(dir.path(), &ReportOptions::default()).unwrap();
     assert!(

@@ -214,7 +214,10 @@ fn truth_records_every_input() {
         .iter()
         .any(|n| n.contains("replicated to all 3 channels")));
     assert_eq!(t.channels, ["r", "g", "b"]);
-    assert!(t.scale.iter().all(|s| s.value == 3.0));
+    assert!(t
+        .scale
+        .iter()
+        .all(|s| s.value == Some(3.0) && s.std_error.is_none()));
     assert_eq!(t.rig, "longitudinal:incidences=10:phi=0:steps=5:max=85");
     assert_eq!(t.noise, "relative:0.1+outliers:0.5");
     assert!(t.sigma_written);

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::report::fit_file::{read_fit_json, FitResult};
+use crate::files::FitJson;
 
 use super::Manifest;
 
@@ -56,7 +56,7 @@ impl SummaryTable {
 
 /// The fit status in `dir/fit.json`, if it holds a readable fit.
 pub fn fit_status(dir: &Path) -> Option<String> {
-    let fit = read_fit_json(&dir.join("fit.json")).ok()?;
+    let fit = FitJson::load(&dir.join("fit.json")).ok()?;
     Some(fit.status.as_str().to_string())
 }
 
@@ -90,7 +90,7 @@ const FIXED_COLUMNS: [&str; 8] = [
 
 /// Build the summary table of every manifest item under `out`.
 pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSummary) {
-    let mut fits: Vec<(usize, Result<FitResult>)> = Vec::new();
+    let mut fits: Vec<(usize, Result<FitJson>)> = Vec::new();
     let mut missing = Vec::new();
     let mut unreadable = Vec::new();
     for (i, item) in manifest.items.iter().enumerate() {
@@ -99,7 +99,7 @@ pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSum
             missing.push(item.name.clone());
             continue;
         }
-        let fit = read_fit_json(&path);
+        let fit = FitJson::load(&path);
         if let Err(e) = &fit {
             unreadable.push((item.name.clone(), e.to_string()));
         }
@@ -143,7 +143,7 @@ pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSum
                 row[3] = f.data.n_samples.to_string();
                 row[4] = number(f.residuals.reduced_chi2);
                 row[5] = number(f.residuals.rms);
-                row[6] = f.residuals.dof.map(|d| d.to_string()).unwrap_or_default();
+                row[6] = f.residuals.dof.to_string();
                 row[7] = f.warnings.len().to_string();
                 let base = FIXED_COLUMNS.len();
                 for p in &f.parameters {

@@ -141,7 +141,9 @@ fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOut
     });
     match result {
         Err(e) => ItemOutcome::Failed(e.to_string()),
-        Ok(_summary) => {
+        Ok(outcome) => {
+            // The report, as `hairfit fit` draws it after the fit.
+            let _ = crate::report::report_line(&dir, &outcome.json, &outcome.curves);
             let status = merge::fit_status(&dir).unwrap_or_else(|| "unknown".into());
             if status == "interrupted" {
                 return ItemOutcome::Interrupted;

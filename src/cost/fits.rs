@@ -83,7 +83,7 @@ pub(super) fn fit_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>> {
     for (knob, setting, opts, stride) in settings {
         let d = every_nth(data, stride);
         let t0 = Instant::now();
-        let out = fit(&d, "synthetic", serde_json::Value::Null, &opts)?;
+        let out = fit(&d, "synthetic", Default::default(), &opts)?;
         let wall = t0.elapsed().as_secs_f64();
         let free = free_parameters(&Effects::default(), d.n_channels(), false);
         let mut errs: Vec<(f64, String)> = free

@@ -1,5 +1,5 @@
-//! The clap options of `hairfit fit` / `hairfit demo`, and the commands themselves (load, fit,
-//! write, summarise), so `main.rs` only parses and calls.
+//! The clap options of `hairfit fit` / `hairfit demo`, and the fit command itself (load, fit,
+//! write), so `main.rs` only parses, calls, and hands the result to the report.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -7,7 +7,9 @@ use std::sync::Arc;
 
 use clap::Args;
 
-use super::{fit, fit_data, output, EffectsChoice, FitOptions, Global, Loss, Space};
+use super::{
+    fit, fit_data, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
+};
 use crate::cli::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
@@ -129,29 +131,22 @@ impl FitArgs {
     }
 }
 
-/// `hairfit fit DATA --out DIR`: load, fit, write, and return the summary.
+/// `hairfit fit DATA --out DIR`: load, fit, write the fit's files into `out`; the outcome.
 pub fn fit_command(
     data_path: &Path,
     load_options: &LoadOptions,
     args: &FitArgs,
     out: &Path,
     cancel: Option<Arc<AtomicBool>>,
-) -> Result<String> {
+) -> Result<FitOutcome> {
     let opts = args.options(cancel)?;
     let (ds, report) = load(data_path, load_options)?;
-    let report_json = serde_json::to_value(&report)
-        .map_err(|e| Error::Other(format!("cannot serialise the load report: {e}")))?;
     let data = fit_data(&ds);
-    let mut outcome = fit(&data, &data_path.display().to_string(), report_json, &opts)?;
+    let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
     // The loader's settings are options of this fit too.
-    if let Some(o) = outcome.json.options.as_object_mut() {
-        o.insert(
-            "load".into(),
-            serde_json::json!(format!("{load_options:?}")),
-        );
-    }
-    output::write_outputs(out, &outcome)?;
-    Ok(output::summary(&outcome, Some(out)) + &output::write_report_line(out))
+    outcome.json.options.load = Some(format!("{load_options:?}"));
+    write_outputs(out, &outcome)?;
+    Ok(outcome)
 }
 
 /// Everything `hairfit fit` takes: the data file, the loader's options, the fit's options and

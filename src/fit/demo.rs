@@ -8,8 +8,9 @@ use std::sync::Arc;
 
 use super::args::FitArgs;
 use super::problem::FitData;
-use super::{fit, output};
+use super::{fit, write_outputs, FitOutcome};
 use crate::error::Result;
+use crate::files::LoadReport;
 use crate::model::{Angles, ModelConfig, Params};
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
@@ -94,8 +95,12 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
 }
 
 /// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
-/// `data.csv` and `truth.json`, fit from the default start design, write, summarise.
-pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>) -> Result<String> {
+/// `data.csv` and `truth.json`, fit from the default start design, write the fit's files.
+pub fn demo_command(
+    args: &FitArgs,
+    out: &Path,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<FitOutcome> {
     let opts = args.options(cancel)?;
     let truth = demo_truth();
     let config = ModelConfig {
@@ -116,28 +121,31 @@ pub fn demo_command(args: &FitArgs, out: &Path, cancel: Option<Arc<AtomicBool>>)
     std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;
     let data_path = out.join("data.csv");
     crate::data::write_csv(&dataset, &data_path)?;
-    let truth_path = out.join("truth.json");
-    crate::atomic::write_atomically(&truth_path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &truth_record)
-            .map_err(|e| crate::Error::Other(format!("{}: {e}", truth_path.display())))
-    })?;
-    let report = serde_json::json!({
-        "file": data_path.display().to_string(),
-        "format": "synthetic",
-        "rows_read": dataset.len(),
-        "accepted": dataset.len(),
-        "notes": [format!("hairfit demo: crate::synth, noise {noise}, seed {}", opts.seed)],
-    });
+    truth_record.save(&out.join("truth.json"))?;
+    let report = LoadReport {
+        file: data_path.display().to_string(),
+        format: "synthetic".into(),
+        rows_read: dataset.len() as u64,
+        accepted: dataset.len() as u64,
+        notes: vec![format!(
+            "hairfit demo: crate::synth, noise {noise}, seed {}",
+            opts.seed
+        )],
+        ..LoadReport::default()
+    };
     let data = super::fit_data(&dataset);
     let outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
-    output::write_outputs(out, &outcome)?;
-    let mut s = output::summary(&outcome, Some(out));
-    s += &output::write_report_line(out);
-    s += &format!(
+    write_outputs(out, &outcome)?;
+    Ok(outcome)
+}
+
+/// The demo's truth, for the end of its summary.
+pub fn truth_line(out: &Path) -> String {
+    let truth = demo_truth();
+    format!(
         "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
         truth.sigma_a,
         DEMO_SCALE,
-        truth_path.display()
-    );
-    Ok(s)
+        out.join("truth.json").display()
+    )
 }

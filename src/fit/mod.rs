@@ -2,39 +2,44 @@
 //! exact AD Jacobians, bounds by smooth transforms, per-channel scale by variable projection,
 //! robust losses, a seeded parallel multi-start, LM polish, and uncertainties in natural units.
 //!
-//! Pipeline ([`fit`]): choose effects → free parameters → Latin-hypercube starts → short LM runs
-//! on a subsample (parallel over starts) → optional global stage → LM polish of the best few on
-//! all data → covariance, warnings, residual statistics, curves ([`output`] writes them).
+//! Pipeline ([`fit`], its stages in [`stages`]): choose effects → free parameters →
+//! Latin-hypercube starts → short LM runs on a subsample (parallel over starts) → optional
+//! global stage → LM polish of the best few on all data → covariance, warnings, residual
+//! statistics, curves ([`assemble`]). The result is typed ([`FitOutcome`], formats from
+//! [`crate::files`]); the caller writes it and hands it to the report.
 
 pub mod args;
+pub mod assemble;
 pub mod auto;
 pub mod bounds;
 pub mod demo;
 pub mod design;
+pub mod diagnostics;
 pub mod gof;
 pub mod loss;
-pub mod output;
 pub mod problem;
 pub mod solve;
+pub mod stages;
+pub mod summary;
 
+use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::Serialize;
 
 pub use auto::{choose_effects, AutoChoice};
+pub use diagnostics::POORLY_DETERMINED;
 pub use loss::Loss;
-pub use output::{CurveRow, FitJson};
 pub use problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode, Space};
-pub use solve::RunStatus;
+pub use summary::summary;
 
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
+use crate::files::{CurveRow, FitJson, LoadReport, Timing};
+use crate::model::{Effects, Measurement, ParamName, Params, RootMode};
 use bounds::{report_factor, typical_range, Bound};
-use solve::{is_cancelled, run_local, LocalRun};
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -61,6 +66,16 @@ pub enum Global {
     NelderMead,
     /// argmin's particle swarm on the subsample cost over the start box (seeded).
     Pso,
+}
+
+impl std::fmt::Display for Global {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Global::None => "none",
+            Global::NelderMead => "nelder-mead",
+            Global::Pso => "pso",
+        })
+    }
 }
 
 impl std::str::FromStr for Global {
@@ -229,23 +244,19 @@ fn bound_text(p: ParamName) -> String {
     }
 }
 
-/// Per-stage solver record (fit.json `trace`).
-#[derive(Debug, Clone, Serialize)]
-pub struct StageTrace {
-    pub stage: String,
-    pub iterations: u64,
-    pub cost: f64,
-    pub wall_s: f64,
-    /// Cost per iteration of the run that won this stage.
-    pub history: Vec<f64>,
-}
-
-/// The result of [`fit`], ready to write.
+/// The result of [`fit`]: fit.json's content, the parameters, curves.csv's rows and the run's
+/// wall-clock times (timing.json).
 #[derive(Debug, Clone)]
 pub struct FitOutcome {
     pub json: FitJson,
     pub params: Params<f64>,
     pub curves: Vec<CurveRow>,
+    pub timing: Timing,
+}
+
+/// Write the outcome's files into `dir` (fit.json, params.json, curves.csv, timing.json).
+pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
+    crate::files::write_fit_dir(dir, &out.json, &out.curves, &out.timing)
 }
 
 /// The model's parameters that a fit under `effects` varies (before `--fix`).
@@ -265,10 +276,10 @@ pub fn free_parameters(effects: &Effects, nc: usize, free_eta: bool) -> Vec<Para
 pub fn fit(
     data: &FitData,
     file: &str,
-    load_report: serde_json::Value,
+    load_report: LoadReport,
     opts: &FitOptions,
 ) -> Result<FitOutcome> {
-    let t0 = Instant::now();
+    let started = Instant::now();
     let nc = data.n_channels();
     if data.is_empty() || nc == 0 {
         return Err(Error::Other(format!(
@@ -276,296 +287,65 @@ pub fn fit(
         )));
     }
     let mut warnings = Vec::new();
-
-    // Effects.
-    let (effects, effects_choice, reasons) = match opts.effects {
-        EffectsChoice::Auto => {
-            let c = choose_effects(data, opts.mode);
-            (c.effects, "auto", c.reasons)
-        }
-        EffectsChoice::All => (Effects::default(), "all", vec!["--effects all".into()]),
-        EffectsChoice::Explicit(e) => (
-            e,
-            "explicit",
-            vec!["--lobes/--no-glints/--no-eccentricity".into()],
-        ),
-    };
-    let config = ModelConfig {
-        mode: opts.mode,
-        effects,
-    };
+    let choice = stages::choose_model(data, opts);
     let forward = ModelForward {
-        config,
+        config: choice.config,
         measurement: opts.measurement,
     };
-
-    // Free parameters and the base (fixed) values.
-    let fixes = parse_fixes(&opts.fix, nc)?;
-    let mut base = bounds::reference_params(nc);
-    for &(p, x) in &fixes {
-        base.set(p, x);
-    }
-    let free: Vec<ParamName> = free_parameters(&effects, nc, opts.free_eta)
-        .into_iter()
-        .filter(|p| !fixes.iter().any(|(f, _)| f == p))
-        .collect();
-    for p in free_parameters(&Effects::default(), nc, opts.free_eta) {
-        if !effects.parameters(nc).contains(&p) && !fixes.iter().any(|(f, _)| *f == p) {
-            warnings.push(format!(
-                "{}: not fitted (the effects in play do not depend on it; see options.effects_reasons)",
-                p.json_name()
-            ));
-        }
-    }
-
-    // Evaluators on all data and on the multi-start subsample.
-    let (ev_full, floored) = Evaluator::new(
-        &forward,
-        data,
-        opts.space,
-        opts.loss,
-        opts.loss_scale,
-        base.clone(),
-        free.clone(),
-    )?;
-    for (c, &k) in floored.count.iter().enumerate() {
-        if k > 0 {
-            warnings.push(format!(
-                "channel {}: {k} value(s) not significantly positive (<= 0, or below {} sigma) cannot be logged; they are fitted as linear residuals (y - s*S)/sigma{} inside the log-space fit. Consider --space linear",
-                data.channels[c],
-                problem::LOG_MIN_SNR,
-                if data.sigma.is_some() {
-                    String::new()
-                } else {
-                    format!(" with sigma = {:.4e} (half the smallest positive value)", floored.floor[c])
-                }
-            ));
-        }
-    }
+    let set = stages::free_set(&choice.config.effects, nc, opts, &mut warnings)?;
+    let evaluator = |d: &FitData| {
+        Evaluator::new(
+            &forward,
+            d,
+            opts.space,
+            opts.loss,
+            opts.loss_scale,
+            set.base.clone(),
+            set.free.clone(),
+        )
+    };
+    let (ev_full, floored) = evaluator(data)?;
+    stages::warn_floored(data, &floored, &mut warnings);
     let sub_idx = design::subsample(
         data.len(),
         opts.subsample.max(1),
         opts.seed ^ 0x5b5b_0000_0001,
     );
     let sub_data = data.subset(&sub_idx);
-    let (ev_sub, _) = Evaluator::new(
-        &forward,
-        &sub_data,
-        opts.space,
-        opts.loss,
-        opts.loss_scale,
-        base.clone(),
-        free.clone(),
-    )?;
+    let (ev_sub, _) = evaluator(&sub_data)?;
 
-    // Start design in natural units, then internal (+ explicit log-scales from the projection).
-    let ranges: Vec<(f64, f64)> = free.iter().map(|&p| typical_range(p)).collect();
+    let ranges: Vec<(f64, f64)> = set.free.iter().map(|&p| typical_range(p)).collect();
     let starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
-    let to_u = |ev: &Evaluator<'_, ModelForward>, x: &[f64]| -> Vec<f64> {
-        let mut u = ev.internal(x);
-        if ev.explicit_scale {
-            let ones = vec![1.0; x.len()];
-            let e = ev.evaluate(x, &ones, ScaleMode::Projected, false);
-            u.extend(e.scale.iter().map(|s| s.max(1e-300).ln()));
-        }
-        u
-    };
-    let bar = progress_bar(opts, opts.starts.max(1) + opts.polish.max(1));
+    let bar = stages::progress_bar(opts, opts.starts.max(1) + opts.polish.max(1));
+    let mut log = stages::StageLog::default();
+    let (runs, order) = stages::multistart(&ev_sub, &starts, opts, &bar, &mut log);
+    let mut candidates = stages::distinct_candidates(&ev_sub, &runs, &order, &ranges, opts.polish);
+    stages::global_stage(&ev_sub, &mut candidates, &ranges, opts, &mut log);
+    let best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
+    let status = stages::final_status(&best, data, opts, &mut warnings);
 
-    let mut trace = Vec::new();
-    let ts = Instant::now();
-    let runs: Vec<LocalRun> = starts
-        .par_iter()
-        .map(|x0| {
-            // After Ctrl-C, starts not yet begun are skipped rather than initialised on the data
-            // (each costs a Jacobian evaluation before it would see the flag).
-            if is_cancelled(&opts.cancel) {
-                let mut u = ev_sub.internal(x0);
-                u.resize(ev_sub.n_params(), 0.0);
-                return LocalRun {
-                    u,
-                    cost: f64::INFINITY,
-                    iterations: 0,
-                    history: Vec::new(),
-                    status: RunStatus::Interrupted,
-                    wall_s: 0.0,
-                };
-            }
-            let r = run_local(&ev_sub, &to_u(&ev_sub, x0), opts.start_iters, &opts.cancel);
-            bar.inc(1);
-            r
-        })
-        .collect();
-    let mut order: Vec<usize> = (0..runs.len()).collect();
-    order.sort_by(|&a, &b| runs[a].cost.total_cmp(&runs[b].cost).then(a.cmp(&b)));
-    trace.push(StageTrace {
-        stage: "multistart".into(),
-        iterations: runs.iter().map(|r| r.iterations).sum(),
-        cost: runs[order[0]].cost,
-        wall_s: ts.elapsed().as_secs_f64(),
-        history: runs[order[0]].history.clone(),
-    });
-    // The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
-    // typical range) are polished once, so the full-data stage is not spent twice on one basin.
-    let mut candidates: Vec<Vec<f64>> = Vec::new();
-    let mut chosen_x: Vec<Vec<f64>> = Vec::new();
-    for &k in &order {
-        if candidates.len() >= opts.polish.max(1) {
-            break;
-        }
-        let x = ev_sub.natural(&runs[k].u[..free.len()]);
-        let same = chosen_x.iter().any(|y| {
-            x.iter()
-                .zip(y)
-                .zip(&ranges)
-                .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
-        });
-        // A runner-up whose subsample cost is worse by more than POLISH_CHI2 χ² units would
-        // need that much improvement from data it has not seen: skip its full-data polish.
-        let best_cost = runs[order[0]].cost;
-        let dof_sub = ev_sub
-            .n_residuals()
-            .saturating_sub(ev_sub.n_params())
-            .max(1) as f64;
-        let far = best_cost > 0.0 && (runs[k].cost - best_cost) * dof_sub / best_cost > POLISH_CHI2;
-        if !same && (!far || candidates.is_empty()) {
-            chosen_x.push(x);
-            candidates.push(runs[k].u.clone());
-        }
-    }
-
-    if opts.global == Global::NelderMead && !is_cancelled(&opts.cancel) {
-        let tg = Instant::now();
-        let (u, cost, iters, history) =
-            solve::nelder_mead(&ev_sub, &candidates[0], 200 * free.len() as u64);
-        trace.push(StageTrace {
-            stage: "global-nelder-mead".into(),
-            iterations: iters,
-            cost,
-            wall_s: tg.elapsed().as_secs_f64(),
-            history,
-        });
-        candidates.insert(0, u);
-    }
-    if opts.global == Global::Pso && !is_cancelled(&opts.cancel) {
-        let tg = Instant::now();
-        // The swarm's box is the start design's box in internal coordinates (plus ±3 in ln s
-        // around the projected scale when the scale is explicit).
-        let lo_x: Vec<f64> = ranges.iter().map(|r| r.0).collect();
-        let hi_x: Vec<f64> = ranges.iter().map(|r| r.1).collect();
-        let (mut lo, mut hi) = (ev_sub.internal(&lo_x), ev_sub.internal(&hi_x));
-        for (a, b) in lo.iter_mut().zip(hi.iter_mut()) {
-            if a > b {
-                std::mem::swap(a, b);
-            }
-        }
-        if ev_sub.explicit_scale {
-            let mid: Vec<f64> = lo_x.iter().zip(&hi_x).map(|(a, b)| 0.5 * (a + b)).collect();
-            for ls in to_u(&ev_sub, &mid)[free.len()..].iter() {
-                lo.push(ls - 3.0);
-                hi.push(ls + 3.0);
-            }
-        }
-        let (u, cost, iters, history) = solve::particle_swarm(&ev_sub, &lo, &hi, 24, 60, opts.seed);
-        trace.push(StageTrace {
-            stage: "global-pso".into(),
-            iterations: iters,
-            cost,
-            wall_s: tg.elapsed().as_secs_f64(),
-            history,
-        });
-        candidates.insert(0, u);
-    }
-
-    // Polish on all data; keep the best.
-    let tp = Instant::now();
-    let mut best: Option<LocalRun> = None;
-    let mut polish_iters = 0;
-    for u0 in &candidates {
-        if is_cancelled(&opts.cancel) && best.is_some() {
-            break;
-        }
-        let r = run_local(&ev_full, u0, opts.polish_iters, &opts.cancel);
-        polish_iters += r.iterations;
-        bar.inc(1);
-        if best.as_ref().is_none_or(|b| r.cost < b.cost) {
-            best = Some(r);
-        }
-    }
-    bar.finish_and_clear();
-    let best = best.expect("at least one candidate is polished");
-    trace.push(StageTrace {
-        stage: "polish".into(),
-        iterations: polish_iters,
-        cost: best.cost,
-        wall_s: tp.elapsed().as_secs_f64(),
-        history: best.history.clone(),
-    });
-    // An infinite cost (e.g. linear-space residuals of values near 1e300 overflow when squared)
-    // means no step was ever accepted: say so instead of reporting the start as converged.
-    let overflowed = !best.cost.is_finite();
-    if overflowed {
-        let big = data.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        warnings.push(format!(
-            "the cost is not finite at any point tried ({} space, largest |value| {big:.3e}): the residuals overflow, so the parameters are the start values, not a fit; use --space log or rescale the data",
-            opts.space
-        ));
-    }
-    let status = if is_cancelled(&opts.cancel) {
-        RunStatus::Interrupted
-    } else if overflowed {
-        RunStatus::Failed
-    } else {
-        best.status
-    };
-
-    let options = serde_json::json!({
-        "space": opts.space,
-        "loss": opts.loss,
-        "loss_scale": opts.loss_scale,
-        "starts": opts.starts,
-        "seed": opts.seed,
-        "global": opts.global,
-        "subsample": sub_idx.len(),
-        "polish": opts.polish,
-        "start_iters": opts.start_iters,
-        "polish_iters": opts.polish_iters,
-        "mode": opts.mode,
-        "measurement": opts.measurement,
-        "fixed": fixes.iter().map(|(p, x)| (p.json_name(), serde_json::json!(x * report_factor(*p)))).collect::<serde_json::Map<_, _>>(),
-        "freed": if opts.free_eta { vec!["eta"] } else { vec![] },
-        "free_parameters": free.iter().map(|p| p.json_name()).collect::<Vec<_>>(),
-        "effects_choice": effects_choice,
-        "effects_reasons": reasons,
-        "scale": if ev_full.explicit_scale { "explicit (robust loss)" } else { "variable projection" },
-        "log_floored": floored,
-    });
-    output::assemble(output::Assembly {
+    let options = stages::options_record(
+        opts,
+        &choice,
+        &set,
+        sub_idx.len(),
+        ev_full.explicit_scale,
+        floored,
+    );
+    assemble::assemble(assemble::Assembly {
         data,
         file,
         load_report,
-        config,
+        config: choice.config,
         ev: &ev_full,
         u: &best.u,
         status,
         options,
         warnings,
-        trace,
-        started: t0,
+        trace: log.trace,
+        stage_times: log.times,
+        started,
     })
-}
-
-/// A progress bar on stderr when asked for (indicatif hides it when stderr is not a terminal).
-fn progress_bar(opts: &FitOptions, len: usize) -> indicatif::ProgressBar {
-    if !opts.progress {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("fit {bar:30} {pos}/{len} runs {elapsed}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar
 }
 
 /// `get` re-exported for callers that index parameters by name.

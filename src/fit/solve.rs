@@ -16,34 +16,14 @@ use argmin::core::{
     TerminationStatus, KV,
 };
 use nalgebra::{DMatrix, DVector};
-use serde::Serialize;
 
 use super::problem::{Evaluator, Forward, LsqProblem};
 
 /// argmin state of the least-squares solvers.
 pub type LsqState = IterState<DVector<f64>, (), DMatrix<f64>, (), DVector<f64>, f64>;
 
-/// How a solver run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum RunStatus {
-    Converged,
-    Interrupted,
-    MaxIterations,
-    Failed,
-}
-
-impl RunStatus {
-    /// The fit.json status string.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            RunStatus::Converged => "converged",
-            RunStatus::Interrupted => "interrupted",
-            RunStatus::MaxIterations => "max_iterations",
-            RunStatus::Failed => "failed",
-        }
-    }
-}
+/// How a solver run ended (the same type as fit.json's `status`).
+pub use crate::files::FitStatus as RunStatus;
 
 /// Trial steps over which a fit must still make statistically visible progress.
 pub const STALL_WINDOW: usize = 20;

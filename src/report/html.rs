@@ -4,8 +4,8 @@
 
 use std::fmt::Write as _;
 
-use super::fit_file::{FitResult, FitStatus, ParamStatus};
 use super::{ReportOptions, ReportSummary};
+use crate::files::{FitJson, FitStatus, ParamStatus};
 use crate::plot::{escape, fmt_num};
 
 const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:24px auto;max-width:1720px;color:#222;background:#fff;padding:0 16px}\
@@ -20,7 +20,7 @@ figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;overflo
 .grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}";
 
 /// The page for `fit` and the figures in `summary`.
-pub fn index_html(fit: &FitResult, summary: &ReportSummary, options: &ReportOptions) -> String {
+pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOptions) -> String {
     let mut h = String::new();
     let file = escape(&fit.data.file);
     let _ = write!(
@@ -74,7 +74,7 @@ fn opt(v: Option<f64>) -> String {
     v.map_or("—".into(), fmt_num)
 }
 
-fn summary_section(h: &mut String, fit: &FitResult) {
+fn summary_section(h: &mut String, fit: &FitJson) {
     let status_class = if fit.status == FitStatus::Converged {
         "ok"
     } else {
@@ -117,17 +117,13 @@ fn summary_section(h: &mut String, fit: &FitResult) {
     );
     row("RMS normalised residual", opt(r.rms));
     row("reduced χ²", opt(r.reduced_chi2));
-    row(
-        "degrees of freedom",
-        r.dof.map_or("—".into(), |d| d.to_string()),
-    );
+    row("degrees of freedom", r.dof.to_string());
     for c in &r.per_channel {
         row(
             &format!("channel {}", c.channel),
             format!("RMS {}, reduced χ² {}", opt(c.rms), opt(c.reduced_chi2)),
         );
     }
-    row("wall time", format!("{} s", fmt_num(fit.wall_time_s)));
     h.push_str("</table>\n");
 }
 
@@ -162,7 +158,7 @@ fn table_section(
     h.push_str("</table></section>\n");
 }
 
-fn parameter_table(h: &mut String, fit: &FitResult) {
+fn parameter_table(h: &mut String, fit: &FitJson) {
     let rows = fit.parameters.iter().map(|p| {
         // The parameter table knows each unit (σ_a: per fiber radius).
         let unit = crate::model::ParamName::from_json_name(&p.name)
@@ -203,7 +199,7 @@ fn with_channel(name: &str, channels: &[String]) -> String {
     }
 }
 
-fn scale_table(h: &mut String, fit: &FitResult) {
+fn scale_table(h: &mut String, fit: &FitJson) {
     if fit.scale.is_empty() {
         return;
     }
@@ -218,7 +214,7 @@ fn scale_table(h: &mut String, fit: &FitResult) {
     table_section(h, "Scale per channel", &head, rows);
 }
 
-fn stage_table(h: &mut String, fit: &FitResult) {
+fn stage_table(h: &mut String, fit: &FitJson) {
     if fit.trace.is_empty() {
         return;
     }
@@ -227,9 +223,8 @@ fn stage_table(h: &mut String, fit: &FitResult) {
             Cell::Text(escape(&t.stage)),
             Cell::Num(t.iterations.to_string()),
             Cell::Num(opt(t.cost)),
-            Cell::Num(fmt_num(t.wall_s)),
         ]
     });
-    let head = ["stage", "iterations", "final cost", "wall time (s)"];
+    let head = ["stage", "iterations", "final cost"];
     table_section(h, "Solver stages", &head, rows);
 }

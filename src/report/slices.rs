@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use super::fit_file::CurveRow;
+use crate::files::CurveRow;
 
 /// Fewest distinct swept values that make a slice worth drawing as a curve.
 pub const MIN_SLICE_POINTS: usize = 3;
@@ -117,7 +117,7 @@ pub fn collect_samples(rows: &[CurveRow]) -> Vec<Sample> {
         let k = *index.entry(row.sample).or_insert_with(|| {
             samples.push(Sample {
                 id: row.sample,
-                angles: [row.theta_i, row.phi_i, row.theta_r, row.phi_r],
+                angles: row.angles_deg(),
                 rows: Vec::new(),
             });
             samples.len() - 1

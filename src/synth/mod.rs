@@ -13,12 +13,11 @@ mod rig;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
-use crate::atomic::write_atomically;
 use crate::cli::{MeasurementArgs, ModelArgs};
 use crate::data::{round_trip_degrees, write_csv, Dataset};
 use crate::error::{Error, Result};
+pub use crate::files::{ScaleEntry, Truth};
 use crate::model::{scattering, Angles, Measurement, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
 
@@ -32,59 +31,6 @@ pub const RNG_DESCRIPTION: &str = "ChaCha8 (rand_chacha 0.9), key = seed as u64 
 /// Line of the first sample in the CSV that [`write_csv`] writes (two comment lines, then the
 /// header): a synthesized dataset's `source_line` is what loading its file gives back.
 pub const CSV_FIRST_DATA_LINE: u64 = 4;
-
-/// One channel's scale factor (the same shape as `fit.json`'s `scale` entries).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ChannelScale {
-    pub channel: String,
-    pub value: f64,
-}
-
-/// The sidecar `FILE.truth.json`: the exact inputs of a synthetic dataset.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Truth {
-    pub hairfit_version: String,
-    /// The exact parameters (a parameter file: degrees, MODEL.md names).
-    pub params: ParamFile,
-    pub channels: Vec<String>,
-    /// Measured value = scale × S (× cos θ_i for `radiance`, see `measurement`), per channel.
-    pub scale: Vec<ChannelScale>,
-    /// `s` (values are scale × S) or `radiance` (scale × S × cos θ_i); files written before
-    /// the option existed hold S, hence the default.
-    #[serde(default)]
-    pub measurement: Measurement,
-    /// Canonical rig spec with every option spelled out.
-    pub rig: String,
-    /// Canonical noise spec.
-    pub noise: String,
-    /// True when the CSV has `sigma` columns (photon, relative or floor noise).
-    pub sigma_written: bool,
-    pub seed: u64,
-    pub rng: String,
-    pub model: ModelConfig,
-    pub n_samples: usize,
-    /// 0-based sample indices multiplied by an outlier factor (empty without outlier noise).
-    pub outliers: Vec<usize>,
-    /// Choices made on the user's behalf (e.g. a scalar sigma_a replicated over channels).
-    pub notes: Vec<String>,
-    /// The command that made the files (absent when made through the library).
-    pub command_line: Option<String>,
-}
-
-impl Truth {
-    /// Read a truth file.
-    pub fn load(path: &Path) -> Result<Truth> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        serde_json::from_str(&text).map_err(|e| {
-            Error::input(
-                path,
-                e.line() as u64,
-                e.column() as u64,
-                format!("not a hairfit truth file: {e}"),
-            )
-        })
-    }
-}
 
 /// Channel names for `n` channels: `radiance` (one column `radiance`), `r,g,b`, or `c0…`.
 pub fn channel_names(n: usize) -> Vec<String> {
@@ -192,9 +138,10 @@ pub fn synthesize_directions(
         scale: channels
             .iter()
             .zip(scale)
-            .map(|(c, &v)| ChannelScale {
+            .map(|(c, &v)| ScaleEntry {
                 channel: c.clone(),
-                value: v,
+                value: Some(v),
+                std_error: None,
             })
             .collect(),
         measurement,
@@ -362,10 +309,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
 
     let truth_file = truth_path(&args.output);
     write_csv(&dataset, &args.output)?;
-    write_atomically(&truth_file, |w| {
-        serde_json::to_writer_pretty(&mut *w, &truth).map_err(|e| Error::Other(e.to_string()))?;
-        w.write_all(b"\n").map_err(|e| Error::io(&truth_file, e))
-    })?;
+    truth.save(&truth_file)?;
     Ok(SynthSummary {
         csv: args.output.clone(),
         truth: truth_file,

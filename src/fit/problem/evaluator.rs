@@ -73,15 +73,8 @@ pub struct Evaluator<'f, F: Forward> {
 /// Gaussian (the log-normal approximation σ_log = σ/y needs y ≫ σ), so it is fitted linearly.
 pub const LOG_MIN_SNR: f64 = 5.0;
 
-/// Values a log-space fit cannot take the logarithm of, met when preparing the targets.
-#[derive(Debug, Clone, Default, Serialize)]
-pub struct Floored {
-    /// Per channel: how many values (`y ≤ 0`, or `y < 2σ`) are fitted as linear residuals.
-    pub count: Vec<usize>,
-    /// Per channel: the noise unit of those residuals when σ is unknown (half the smallest
-    /// positive value: a reading at or below zero is below the detector's noise).
-    pub floor: Vec<f64>,
-}
+/// Values a log-space fit cannot take the logarithm of (fit.json `options.log_floored`).
+pub use crate::files::Floored;
 
 impl<'f, F: Forward> Evaluator<'f, F> {
     /// Prepare `data` for `space`; in log space values that are not significantly positive

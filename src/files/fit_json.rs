@@ -1,0 +1,276 @@
+//! `fit.json`: what a fit found and how ([`FitJson`]). Field names and order are the file's
+//! contract; the fit writes and the report reads this one type.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::load_report::LoadReport;
+use super::nan_if_missing_vec;
+use crate::error::Result;
+use crate::model::{Measurement, ModelConfig, RootMode};
+use crate::params::ParamFile;
+
+/// How a fit (or one solver run) ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitStatus {
+    Converged,
+    Interrupted,
+    MaxIterations,
+    Failed,
+}
+
+impl FitStatus {
+    /// The JSON spelling.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            FitStatus::Converged => "converged",
+            FitStatus::Interrupted => "interrupted",
+            FitStatus::MaxIterations => "max_iterations",
+            FitStatus::Failed => "failed",
+        }
+    }
+}
+
+impl std::fmt::Display for FitStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// What the fit did with one parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ParamStatus {
+    Free,
+    Fixed,
+    AtBound,
+    Undetermined,
+}
+
+impl ParamStatus {
+    /// The JSON spelling.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            ParamStatus::Free => "free",
+            ParamStatus::Fixed => "fixed",
+            ParamStatus::AtBound => "at_bound",
+            ParamStatus::Undetermined => "undetermined",
+        }
+    }
+}
+
+impl std::fmt::Display for ParamStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// `fit.json` → `data`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DataInfo {
+    pub file: String,
+    pub channels: Vec<String>,
+    pub n_samples: usize,
+    /// What the loader did with every row of the file.
+    #[serde(default)]
+    pub load_report: LoadReport,
+}
+
+/// `fit.json` → `parameters[]`: one model parameter (its JSON name, e.g. `alpha_r_deg`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParameterEntry {
+    pub name: String,
+    /// `null` when not finite.
+    pub value: Option<f64>,
+    /// `null` when fixed or undetermined.
+    pub std_error: Option<f64>,
+    pub status: ParamStatus,
+}
+
+/// One channel's scale factor: `fit.json` → `scale[]` (fitted, with its standard error) and
+/// `truth.json` → `scale[]` (exact, `std_error` null).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScaleEntry {
+    pub channel: String,
+    /// `null` when not finite.
+    pub value: Option<f64>,
+    /// `null` when unknown (exact, or not determined by the data).
+    #[serde(default)]
+    pub std_error: Option<f64>,
+}
+
+/// `fit.json` → `correlation`: `matrix[i][j]` between `names[i]` and `names[j]` (`null` where
+/// undefined, e.g. an undetermined direction).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Correlation {
+    pub names: Vec<String>,
+    pub matrix: Vec<Vec<Option<f64>>>,
+}
+
+/// `fit.json` → `residuals.per_channel[]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelResiduals {
+    pub channel: String,
+    pub rms: Option<f64>,
+    pub reduced_chi2: Option<f64>,
+}
+
+/// `fit.json` → `residuals`: goodness of fit in the fit's space (`log` or `linear`) and loss.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResidualSummary {
+    pub space: String,
+    pub loss: String,
+    pub rms: Option<f64>,
+    pub reduced_chi2: Option<f64>,
+    pub dof: usize,
+    #[serde(default)]
+    pub per_channel: Vec<ChannelResiduals>,
+}
+
+/// `fit.json` → `trace[]`: one solver stage and its cost per iteration (its wall time is in
+/// `timing.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TraceStage {
+    pub stage: String,
+    pub iterations: u64,
+    /// Final cost of the stage (`null` when not finite).
+    pub cost: Option<f64>,
+    /// Cost per iteration of the run that won this stage (`null` entries read as NaN and are
+    /// not drawn).
+    #[serde(default, deserialize_with = "nan_if_missing_vec")]
+    pub history: Vec<f64>,
+}
+
+/// `fit.json` → `options.log_floored`: values a log-space fit cannot take the logarithm of.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Floored {
+    /// Per channel: how many values (`y ≤ 0`, or `y < 2σ`) are fitted as linear residuals.
+    pub count: Vec<usize>,
+    /// Per channel: the noise unit of those residuals when σ is unknown (half the smallest
+    /// positive value: a reading at or below zero is below the detector's noise).
+    #[serde(deserialize_with = "nan_if_missing_vec")]
+    pub floor: Vec<f64>,
+}
+
+/// `fit.json` → `options`: every setting the fit used. Fields are in alphabetical order, the
+/// order the file has always had (it was a sorted JSON map). `space`, `loss` and `global` hold
+/// the fit's own spellings (`fit::Space`, `fit::Loss`, `fit::Global`).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct OptionsRecord {
+    /// `auto`, `all` or `explicit`: how the effects were chosen.
+    pub effects_choice: String,
+    /// Why each lobe/effect is on or off.
+    pub effects_reasons: Vec<String>,
+    /// `--fix`: JSON name → value in reporting units (degrees for `*_deg`).
+    pub fixed: BTreeMap<String, f64>,
+    pub free_parameters: Vec<String>,
+    /// Parameters freed that are fixed by default (`--free eta`).
+    pub freed: Vec<String>,
+    pub global: String,
+    /// The loader's settings (`hairfit fit` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load: Option<String>,
+    pub log_floored: Floored,
+    pub loss: String,
+    pub loss_scale: f64,
+    /// What the data's values are: `s` (scale·S) or `radiance` (scale·S·cos θ_i).
+    pub measurement: Measurement,
+    pub mode: RootMode,
+    pub polish: usize,
+    pub polish_iters: u64,
+    /// `variable projection` or `explicit (robust loss)`.
+    pub scale: String,
+    pub seed: u64,
+    pub space: String,
+    pub start_iters: u64,
+    pub starts: usize,
+    /// Samples the multi-start used.
+    pub subsample: usize,
+}
+
+/// The whole of `fit.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitJson {
+    pub hairfit_version: String,
+    pub status: FitStatus,
+    pub data: DataInfo,
+    /// The forward model's configuration the fit used (the report evaluates the same).
+    pub model: ModelConfig,
+    pub options: OptionsRecord,
+    /// The fitted parameters, exactly a parameter file.
+    pub params: ParamFile,
+    pub parameters: Vec<ParameterEntry>,
+    pub scale: Vec<ScaleEntry>,
+    #[serde(default)]
+    pub correlation: Correlation,
+    #[serde(default)]
+    pub warnings: Vec<String>,
+    pub residuals: ResidualSummary,
+    #[serde(default)]
+    pub trace: Vec<TraceStage>,
+}
+
+impl FitJson {
+    /// Read `fit.json`; a syntax or schema error names line and column.
+    pub fn load(path: &Path) -> Result<FitJson> {
+        super::read_json(
+            path,
+            "fit.json is written by `hairfit fit` — re-run the fit to regenerate it",
+        )
+    }
+
+    /// Write `fit.json` atomically (pretty-printed).
+    pub fn save(&self, path: &Path) -> Result<()> {
+        super::write_json(path, self)
+    }
+
+    /// The fitted scale of `channel`, when finite and positive.
+    pub fn scale_of(&self, channel: &str) -> Option<f64> {
+        self.scale
+            .iter()
+            .find(|s| s.channel == channel)
+            .and_then(|s| s.value)
+            .filter(|s| s.is_finite() && *s > 0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `options` keeps the sorted key order fit.json has always had.
+    #[test]
+    fn options_fields_are_in_alphabetical_order() {
+        let record = OptionsRecord {
+            load: Some("x".into()),
+            ..OptionsRecord::default()
+        };
+        let text = serde_json::to_string(&record).unwrap();
+        let value: serde_json::Map<String, serde_json::Value> =
+            serde_json::from_str(&text).unwrap();
+        let mut at: Vec<(usize, &String)> = value
+            .keys()
+            .map(|k| (text.find(&format!("\"{k}\":")).unwrap(), k))
+            .collect();
+        at.sort();
+        let written: Vec<&String> = at.into_iter().map(|(_, k)| k).collect();
+        let mut sorted = written.clone();
+        sorted.sort();
+        assert_eq!(written, sorted);
+        assert_eq!(written.len(), 20);
+    }
+
+    /// A fit.json written before the load report was typed (the demo's five fields) still reads.
+    #[test]
+    fn a_partial_load_report_reads_with_empty_defaults() {
+        let r: LoadReport = serde_json::from_str(
+            r#"{"accepted": 3, "file": "d.csv", "format": "synthetic", "notes": [], "rows_read": 3}"#,
+        )
+        .unwrap();
+        assert_eq!((r.rows_read, r.accepted, r.rejected_total()), (3, 3, 0));
+    }
+}

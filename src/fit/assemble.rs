@@ -1,0 +1,366 @@
+//! The fit's typed result at the solver's final point ([`assemble`]): parameter values and
+//! statuses with standard errors in natural units, the scale, correlations, residual
+//! statistics, the curves at every sample, and the warnings that explain them.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::bounds::{report_factor, typical_range, Bound};
+use super::diagnostics::{null_space_weights, why_undetermined, NULL_WEIGHT, POORLY_DETERMINED};
+use super::problem::{Evaluation, Evaluator, FitData, Forward, ModelForward, ScaleMode};
+use super::{all_parameters, FitOutcome};
+use crate::error::Result;
+use crate::files::{
+    finite, ChannelResiduals, Correlation, CurveRow, DataInfo, FitJson, FitStatus, LoadReport,
+    OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, StageTiming, Timing,
+    TraceStage,
+};
+use crate::model::{ModelConfig, ParamName, Params};
+use crate::params::ParamFile;
+
+/// What [`assemble`] needs from the fit driver.
+pub struct Assembly<'a, 'e, 'f> {
+    pub data: &'a FitData,
+    pub file: &'a str,
+    pub load_report: LoadReport,
+    pub config: ModelConfig,
+    pub ev: &'e Evaluator<'f, ModelForward>,
+    pub u: &'a [f64],
+    pub status: FitStatus,
+    pub options: OptionsRecord,
+    pub warnings: Vec<String>,
+    pub trace: Vec<TraceStage>,
+    pub stage_times: Vec<StageTiming>,
+    pub started: Instant,
+}
+
+/// The covariance of the free parameters and scales, in reporting units, with what makes a
+/// column's standard error meaningless.
+struct Uncertainty {
+    cov: Option<crate::lm::Covariance>,
+    corr: Option<nalgebra::DMatrix<f64>>,
+    null_w: Vec<f64>,
+    col_zero: Vec<bool>,
+    dof: usize,
+    m: usize,
+}
+
+impl Uncertainty {
+    /// Column `j`'s standard error, unless it is undetermined.
+    fn std_of(&self, j: usize) -> Option<f64> {
+        let c = self.cov.as_ref()?;
+        if c.undetermined[j] || self.col_zero[j] || self.null_w[j] >= NULL_WEIGHT {
+            return None;
+        }
+        finite(c.matrix[(j, j)].max(0.0).sqrt())
+    }
+}
+
+/// Jacobian in natural reporting units (degrees for angles) with the natural scales fixed.
+fn uncertainty(
+    ev: &Evaluator<'_, ModelForward>,
+    x: &[f64],
+    scale: &[f64],
+    warnings: &mut Vec<String>,
+) -> Uncertainty {
+    let col: Vec<f64> = ev.free.iter().map(|&p| 1.0 / report_factor(p)).collect();
+    let ej = ev.evaluate(x, &col, ScaleMode::FixedNatural(scale), true);
+    let m = ej.residual.len();
+    let ncol = ej.n_cols;
+    let jm = nalgebra::DMatrix::from_row_slice(m, ncol, ej.jacobian.as_deref().unwrap_or(&[]));
+    let ss: f64 = ej.residual.iter().map(|r| r * r).sum();
+    let dof = m.saturating_sub(ncol);
+    let cov = crate::lm::covariance(&jm, ss, dof);
+    if cov.is_none() {
+        warnings.push(format!(
+            "no standard errors: {m} residuals for {ncol} parameters (dof = {dof}) or a non-finite Jacobian"
+        ));
+    }
+    let corr = cov.as_ref().map(|c| crate::lm::correlation(&c.matrix));
+    Uncertainty {
+        null_w: null_space_weights(&jm),
+        col_zero: (0..ncol)
+            .map(|j| jm.column(j).iter().all(|v| *v == 0.0))
+            .collect(),
+        cov,
+        corr,
+        dof,
+        m,
+    }
+}
+
+/// Every parameter's entry in output order, with the warnings that explain its status.
+fn parameter_entries(
+    ev: &Evaluator<'_, ModelForward>,
+    data: &FitData,
+    config: &ModelConfig,
+    params: &Params<f64>,
+    unc: &Uncertainty,
+    warnings: &mut Vec<String>,
+) -> Vec<ParameterEntry> {
+    let nf = ev.free.len();
+    // Statistically undetermined: the standard error exceeds the whole typical range (the data
+    // say less than the prior box does), even when JᵀJ is numerically invertible.
+    let range_width = |p: ParamName| {
+        let (a, b) = typical_range(p);
+        (b - a) * report_factor(p)
+    };
+    let why = |p: ParamName, partners: &[String]| {
+        why_undetermined(p, data, config.mode, params, partners)
+    };
+    let mut parameters = Vec::new();
+    for p in all_parameters(data.n_channels()) {
+        let value = params.get(p) * report_factor(p);
+        let entry = match ev.free.iter().position(|q| *q == p) {
+            Some(j) => {
+                let se = unc.std_of(j);
+                let too_wide = se.is_some_and(|e| e > range_width(p));
+                let undetermined = unc.col_zero[j]
+                    || too_wide
+                    || unc.null_w[j] >= NULL_WEIGHT
+                    || unc.cov.as_ref().is_some_and(|c| c.undetermined[j]);
+                let partners: Vec<String> = match &unc.corr {
+                    Some(r) => (0..nf)
+                        .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
+                        .map(|k| ev.free[k].json_name())
+                        .collect(),
+                    None => Vec::new(),
+                };
+                let status = if undetermined {
+                    warnings.push(format!(
+                        "{}: not determined by the data ({}); value is the best fit but has no standard error",
+                        p.json_name(),
+                        if unc.col_zero[j] {
+                            "S does not depend on it at any sample".to_string()
+                        } else if too_wide {
+                            format!(
+                                "standard error {:.3e} exceeds its whole typical range; {}",
+                                se.unwrap_or(f64::NAN),
+                                why(p, &partners)
+                            )
+                        } else {
+                            why(p, &partners)
+                        }
+                    ));
+                    ParamStatus::Undetermined
+                } else if Bound::of(p).at_bound(params.get(p)) {
+                    warnings.push(format!(
+                        "{}: at its bound {:.6} (the data push it there; its standard error is one-sided; {})",
+                        p.json_name(),
+                        value,
+                        why(p, &partners)
+                    ));
+                    ParamStatus::AtBound
+                } else {
+                    if let Some(e) = se.filter(|&e| e > POORLY_DETERMINED * range_width(p)) {
+                        warnings.push(format!(
+                            "{}: poorly determined (standard error {e:.3e} is {:.0}% of its typical range; {})",
+                            p.json_name(),
+                            100.0 * e / range_width(p),
+                            why(p, &partners)
+                        ));
+                    }
+                    ParamStatus::Free
+                };
+                ParameterEntry {
+                    name: p.json_name(),
+                    value: finite(value),
+                    std_error: if undetermined { None } else { se },
+                    status,
+                }
+            }
+            None => ParameterEntry {
+                name: p.json_name(),
+                value: finite(value),
+                std_error: None,
+                status: ParamStatus::Fixed,
+            },
+        };
+        if entry.value.is_none() {
+            warnings.push(format!(
+                "{}: value is not finite; written as null",
+                p.json_name()
+            ));
+        }
+        parameters.push(entry);
+    }
+    parameters
+}
+
+/// Residual statistics in the fit space (normalised residuals), overall and per channel.
+fn residual_summary(
+    ev: &Evaluator<'_, ModelForward>,
+    data: &FitData,
+    e: &Evaluation,
+    unc: &Uncertainty,
+) -> ResidualSummary {
+    let nc = data.n_channels();
+    let (m, dof) = (unc.m, unc.dof);
+    let raw_ss: f64 = e.raw.iter().map(|r| r * r).sum();
+    let rt_ss: f64 = e.residual.iter().map(|r| r * r).sum();
+    let per_channel = (0..nc)
+        .map(|c| {
+            let rr: Vec<f64> = e.raw.iter().skip(c).step_by(nc).copied().collect();
+            let rt: f64 = e.residual.iter().skip(c).step_by(nc).map(|r| r * r).sum();
+            let n = rr.len() as f64;
+            // Each channel carries its share of the degrees of freedom.
+            let dof_c = n * dof as f64 / m.max(1) as f64;
+            ChannelResiduals {
+                channel: data.channels[c].clone(),
+                rms: finite((rr.iter().map(|r| r * r).sum::<f64>() / n).sqrt()),
+                reduced_chi2: finite(rt / dof_c),
+            }
+        })
+        .collect();
+    ResidualSummary {
+        space: ev.space.to_string(),
+        loss: ev.loss.to_string(),
+        rms: finite((raw_ss / m.max(1) as f64).sqrt()),
+        reduced_chi2: finite(rt_ss / dof as f64),
+        dof,
+        per_channel,
+    }
+}
+
+/// One row per sample and channel: the data, the fit and its lobes (with the evaluator's
+/// measurement factor and the fitted scale), the residual and the robust weight.
+fn curve_rows(
+    ev: &Evaluator<'_, ModelForward>,
+    data: &FitData,
+    params: &Params<f64>,
+    e: &Evaluation,
+) -> Vec<CurveRow> {
+    let nc = data.n_channels();
+    let fwd = *ev.forward;
+    // Per-lobe values in parallel, one Vec per sample, collected in sample order.
+    let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
+        .angles
+        .par_iter()
+        .map(|ang| {
+            let mut lobes = vec![[0.0; 3]; nc];
+            fwd.by_lobe(params, ang, &mut lobes).then_some(lobes)
+        })
+        .collect();
+    let mut curves = Vec::with_capacity(data.len() * nc);
+    for (i, ang) in data.angles.iter().enumerate() {
+        for c in 0..nc {
+            let k = i * nc + c;
+            let s = e.scale[c];
+            let (fr, ft, ftrt) = match &lobes_all[i] {
+                Some(l) => (s * l[c][0], s * l[c][1], s * l[c][2]),
+                None => (f64::NAN, f64::NAN, f64::NAN),
+            };
+            curves.push(CurveRow {
+                sample: i as u64,
+                line: data.line.get(i).copied().unwrap_or(i as u64 + 1),
+                channel: data.channels[c].clone(),
+                theta_i: ang.theta_i.to_degrees(),
+                phi_i: ang.phi_i.to_degrees(),
+                theta_r: ang.theta_r.to_degrees(),
+                phi_r: ang.phi_r.to_degrees(),
+                data: data.values[k],
+                sigma: data.sigma.as_ref().map(|s| s[k]),
+                fit: s * e.model[k],
+                fit_r: fr,
+                fit_tt: ft,
+                fit_trt: ftrt,
+                residual: e.raw[k],
+                weight: e.robust_weight[k],
+            });
+        }
+    }
+    curves
+}
+
+/// Build the outcome (fit.json content, parameters, curves, timing) at solver parameters `u`.
+pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
+    let Assembly {
+        data,
+        file,
+        load_report,
+        config,
+        ev,
+        u,
+        status,
+        options,
+        mut warnings,
+        trace,
+        stage_times,
+        started,
+    } = a;
+    let nc = data.n_channels();
+    let nf = ev.free.len();
+    let x = ev.natural(&u[..nf]);
+    let mut params = ev.params_at(&x);
+    // Transforms keep x inside; clamp anyway so rounding can never leave the domain.
+    for &p in &ev.free {
+        let v = params.get(p);
+        params.set(p, Bound::of(p).clamp(v));
+    }
+    let e = ev.eval_internal(u, false);
+    let unc = uncertainty(ev, &x, &e.scale, &mut warnings);
+    let parameters = parameter_entries(ev, data, &config, &params, &unc, &mut warnings);
+    let scale: Vec<ScaleEntry> = (0..nc)
+        .map(|c| ScaleEntry {
+            channel: data.channels[c].clone(),
+            value: finite(e.scale[c]),
+            std_error: unc.std_of(nf + c),
+        })
+        .collect();
+    for s in scale.iter().filter(|s| s.std_error.is_none()) {
+        warnings.push(format!(
+            "scale[{}]: no standard error: it trades off with parameters the data do not determine",
+            s.channel
+        ));
+    }
+    let correlation = Correlation {
+        names: ev.free.iter().map(|p| p.json_name()).collect(),
+        matrix: (0..nf)
+            .map(|i| {
+                (0..nf)
+                    .map(|j| unc.corr.as_ref().and_then(|r| finite(r[(i, j)])))
+                    .collect()
+            })
+            .collect(),
+    };
+    let residuals = residual_summary(ev, data, &e, &unc);
+    let curves = curve_rows(ev, data, &params, &e);
+    if curves.iter().any(|r| {
+        ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
+            .iter()
+            .all(|v| v.is_finite())
+    }) {
+        warnings
+            .push("curves.csv: some fitted values are not finite; written as empty cells".into());
+    }
+
+    let json = FitJson {
+        hairfit_version: env!("CARGO_PKG_VERSION").into(),
+        status,
+        data: DataInfo {
+            file: file.into(),
+            channels: data.channels.clone(),
+            n_samples: data.len(),
+            load_report,
+        },
+        model: config,
+        options,
+        params: ParamFile::from_params(&params),
+        parameters,
+        scale,
+        correlation,
+        warnings,
+        residuals,
+        trace,
+    };
+    Ok(FitOutcome {
+        json,
+        params,
+        curves,
+        timing: Timing {
+            wall_time_s: started.elapsed().as_secs_f64(),
+            stages: stage_times,
+        },
+    })
+}

@@ -1,0 +1,141 @@
+//! Why a parameter is undetermined or poorly determined: the Jacobian's numerical null space,
+//! and the data's geometry as the parameter sees it (samples near the glint, the spread of
+//! θ_h and of cos 2φ_h). Words for fit.json's warnings; no numbers are changed here.
+
+use std::f64::consts::PI;
+
+use super::problem::FitData;
+use crate::model::angles::wrap;
+use crate::model::azimuthal::caustic_position;
+use crate::model::bravais::bravais_indices;
+use crate::model::{ParamName, Params, RootMode};
+
+/// A standard error above this fraction of the typical range earns a "poorly determined" warning.
+pub const POORLY_DETERMINED: f64 = 0.2;
+
+/// A parameter whose unit column-scaled direction has at least this weight (squared component)
+/// in the numerical null space of the Jacobian moves along a direction the data do not see:
+/// 1e-6 is a component of 1e-3, far above the rounding of an SVD (~1e-15) yet catching partners
+/// of an undetermined parameter that would otherwise get a meaningless tiny standard error.
+pub const NULL_WEIGHT: f64 = 1e-6;
+
+/// Per column of `j`, the weight of its unit vector in the numerical null space of the
+/// column-scaled `j` (singular values below `lm::DEFAULT_RCOND`·σ_max), via QR then SVD of R.
+pub fn null_space_weights(j: &nalgebra::DMatrix<f64>) -> Vec<f64> {
+    let n = j.ncols();
+    if n == 0 || j.nrows() < n || j.iter().any(|v| !v.is_finite()) {
+        return vec![0.0; n];
+    }
+    let mut scaled = j.clone();
+    for mut col in scaled.column_iter_mut() {
+        let norm = col.norm();
+        if norm > 0.0 {
+            col /= norm;
+        }
+    }
+    let r = scaled.qr().r();
+    let svd = r.svd(false, true);
+    let Some(v_t) = svd.v_t else {
+        return vec![0.0; n];
+    };
+    let smax = svd.singular_values.max();
+    let mut w = vec![0.0; n];
+    for (k, &s) in svd.singular_values.iter().enumerate() {
+        if s <= crate::lm::DEFAULT_RCOND * smax {
+            for (j, wj) in w.iter_mut().enumerate() {
+                *wj += v_t[(k, j)].powi(2);
+            }
+        }
+    }
+    w
+}
+
+/// Samples within 2 w_c of the glint azimuth φ_c(θ_d) the model places (its caustic under the
+/// fit's root mode, index η), and the span of |φ| they cover.
+fn samples_near_glint(data: &FitData, mode: RootMode, eta: f64, w_c: f64) -> (usize, f64) {
+    let near: Vec<f64> = data
+        .angles
+        .iter()
+        .filter(|a| {
+            let td = 0.5 * (a.theta_r - a.theta_i);
+            let (s, c) = td.sin_cos();
+            let eta_p = bravais_indices(&eta, s, c).eta_p;
+            if !eta_p.is_finite() {
+                return false;
+            }
+            let Some((phi_c, _)) = caustic_position(mode, eta_p) else {
+                return false;
+            };
+            let phi = wrap(a.phi_r - a.phi_i).abs();
+            (phi - phi_c).abs() < 2.0 * w_c
+        })
+        .map(|a| wrap(a.phi_r - a.phi_i).abs())
+        .collect();
+    let span = near.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+        - near.iter().copied().fold(f64::INFINITY, f64::min);
+    (near.len(), if near.is_empty() { 0.0 } else { span })
+}
+
+/// Why the data cannot determine `p` (geometry first, else the correlated partners).
+pub fn why_undetermined(
+    p: ParamName,
+    data: &FitData,
+    mode: RootMode,
+    params: &Params<f64>,
+    partners: &[String],
+) -> String {
+    let tail = if partners.is_empty() {
+        String::new()
+    } else {
+        format!("; strongly correlated with {}", partners.join(", "))
+    };
+    match p {
+        ParamName::KG | ParamName::WC => {
+            let (n, span) = samples_near_glint(data, mode, params.eta, params.w_c);
+            if n == 0 {
+                format!("no sample near the glint (|phi - phi_c| < 2 w_c){tail}")
+            } else if span < params.w_c {
+                format!(
+                    "the {n} sample(s) near the glint span only {:.1} deg of |phi|: its width and height trade off{tail}",
+                    span.to_degrees()
+                )
+            } else {
+                format!("{n} sample(s) near the glint (|phi - phi_c| < 2 w_c){tail}")
+            }
+        }
+        ParamName::Eccentricity => {
+            let c2: Vec<f64> = data
+                .angles
+                .iter()
+                .map(|a| (a.phi_i + a.phi_r).cos())
+                .collect();
+            let spread = c2.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - c2.iter().copied().fold(f64::INFINITY, f64::min);
+            format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
+        }
+        ParamName::SigmaA(_) => {
+            let n = data
+                .angles
+                .iter()
+                .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * PI)
+                .count();
+            format!(
+                "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
+            )
+        }
+        ParamName::AlphaR | ParamName::BetaR => {
+            let th: Vec<f64> = data
+                .angles
+                .iter()
+                .map(|a| 0.5 * (a.theta_i + a.theta_r))
+                .collect();
+            let spread = th.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - th.iter().copied().fold(f64::INFINITY, f64::min);
+            format!(
+                "the samples span theta_h by {:.1} deg only: the longitudinal lobe shape needs a scan across it{tail}",
+                spread.to_degrees()
+            )
+        }
+        _ => format!("the data do not constrain it{tail}"),
+    }
+}

@@ -1,0 +1,391 @@
+//! The named stages of [`super::fit`]: choose the model's effects, choose the free parameters,
+//! the seeded multi-start on a subsample, the optional global stage, the polish on all data,
+//! the final status, and the record of the options used.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::bounds::{self, report_factor};
+use super::problem::{self, Evaluator, FitData, ModelForward, ScaleMode};
+use super::solve::{self, is_cancelled, run_local, LocalRun};
+use super::{choose_effects, free_parameters, parse_fixes, EffectsChoice, FitOptions, Global};
+use crate::error::Result;
+use crate::files::{FitStatus, Floored, OptionsRecord, StageTiming, TraceStage};
+use crate::model::{Effects, ModelConfig, ParamName, Params};
+
+/// The model the fit uses and why.
+pub struct ModelChoice {
+    pub config: ModelConfig,
+    /// `auto`, `all` or `explicit`.
+    pub effects_choice: &'static str,
+    pub reasons: Vec<String>,
+}
+
+/// Effects: from the data's geometry (`auto`), all, or as given.
+pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
+    let (effects, effects_choice, reasons) = match opts.effects {
+        EffectsChoice::Auto => {
+            let c = choose_effects(data, opts.mode);
+            (c.effects, "auto", c.reasons)
+        }
+        EffectsChoice::All => (Effects::default(), "all", vec!["--effects all".into()]),
+        EffectsChoice::Explicit(e) => (
+            e,
+            "explicit",
+            vec!["--lobes/--no-glints/--no-eccentricity".into()],
+        ),
+    };
+    ModelChoice {
+        config: ModelConfig {
+            mode: opts.mode,
+            effects,
+        },
+        effects_choice,
+        reasons,
+    }
+}
+
+/// The parameters the fit varies and the values of the others.
+pub struct FreeSet {
+    /// `--fix` values in natural units.
+    pub fixes: Vec<(ParamName, f64)>,
+    /// Reference values with the fixes applied.
+    pub base: Params<f64>,
+    pub free: Vec<ParamName>,
+}
+
+/// Free parameters and the base (fixed) values; warns about parameters the effects ignore.
+pub fn free_set(
+    effects: &Effects,
+    nc: usize,
+    opts: &FitOptions,
+    warnings: &mut Vec<String>,
+) -> Result<FreeSet> {
+    let fixes = parse_fixes(&opts.fix, nc)?;
+    let mut base = bounds::reference_params(nc);
+    for &(p, x) in &fixes {
+        base.set(p, x);
+    }
+    let is_fixed = |p: &ParamName| fixes.iter().any(|(f, _)| f == p);
+    let free: Vec<ParamName> = free_parameters(effects, nc, opts.free_eta)
+        .into_iter()
+        .filter(|p| !is_fixed(p))
+        .collect();
+    for p in free_parameters(&Effects::default(), nc, opts.free_eta) {
+        if !effects.parameters(nc).contains(&p) && !is_fixed(&p) {
+            warnings.push(format!(
+                "{}: not fitted (the effects in play do not depend on it; see options.effects_reasons)",
+                p.json_name()
+            ));
+        }
+    }
+    Ok(FreeSet { fixes, base, free })
+}
+
+/// Warn about values a log-space fit takes as linear residuals.
+pub fn warn_floored(data: &FitData, floored: &Floored, warnings: &mut Vec<String>) {
+    for (c, &k) in floored.count.iter().enumerate() {
+        if k > 0 {
+            warnings.push(format!(
+                "channel {}: {k} value(s) not significantly positive (<= 0, or below {} sigma) cannot be logged; they are fitted as linear residuals (y - s*S)/sigma{} inside the log-space fit. Consider --space linear",
+                data.channels[c],
+                problem::LOG_MIN_SNR,
+                if data.sigma.is_some() {
+                    String::new()
+                } else {
+                    format!(" with sigma = {:.4e} (half the smallest positive value)", floored.floor[c])
+                }
+            ));
+        }
+    }
+}
+
+/// The solver stages run so far: fit.json's `trace` and timing.json's wall times.
+#[derive(Default)]
+pub struct StageLog {
+    pub trace: Vec<TraceStage>,
+    pub times: Vec<StageTiming>,
+}
+
+impl StageLog {
+    fn record(
+        &mut self,
+        stage: &str,
+        iterations: u64,
+        cost: f64,
+        started: Instant,
+        history: Vec<f64>,
+    ) {
+        self.trace.push(TraceStage {
+            stage: stage.into(),
+            iterations,
+            cost: crate::files::finite(cost),
+            history,
+        });
+        self.times.push(StageTiming {
+            stage: stage.into(),
+            wall_s: started.elapsed().as_secs_f64(),
+        });
+    }
+}
+
+/// Internal solver coordinates of natural point `x` (plus the explicit log-scales from the
+/// projection when the scale is explicit).
+fn to_internal(ev: &Evaluator<'_, ModelForward>, x: &[f64]) -> Vec<f64> {
+    let mut u = ev.internal(x);
+    if ev.explicit_scale {
+        let ones = vec![1.0; x.len()];
+        let e = ev.evaluate(x, &ones, ScaleMode::Projected, false);
+        u.extend(e.scale.iter().map(|s| s.max(1e-300).ln()));
+    }
+    u
+}
+
+/// Short LM runs from every start on the subsample (parallel); returns the runs and their
+/// order by cost.
+pub fn multistart(
+    ev_sub: &Evaluator<'_, ModelForward>,
+    starts: &[Vec<f64>],
+    opts: &FitOptions,
+    bar: &indicatif::ProgressBar,
+    log: &mut StageLog,
+) -> (Vec<LocalRun>, Vec<usize>) {
+    let ts = Instant::now();
+    let runs: Vec<LocalRun> = starts
+        .par_iter()
+        .map(|x0| {
+            // After Ctrl-C, starts not yet begun are skipped rather than initialised on the data
+            // (each costs a Jacobian evaluation before it would see the flag).
+            if is_cancelled(&opts.cancel) {
+                let mut u = ev_sub.internal(x0);
+                u.resize(ev_sub.n_params(), 0.0);
+                return LocalRun {
+                    u,
+                    cost: f64::INFINITY,
+                    iterations: 0,
+                    history: Vec::new(),
+                    status: FitStatus::Interrupted,
+                    wall_s: 0.0,
+                };
+            }
+            let r = run_local(
+                ev_sub,
+                &to_internal(ev_sub, x0),
+                opts.start_iters,
+                &opts.cancel,
+            );
+            bar.inc(1);
+            r
+        })
+        .collect();
+    let mut order: Vec<usize> = (0..runs.len()).collect();
+    order.sort_by(|&a, &b| runs[a].cost.total_cmp(&runs[b].cost).then(a.cmp(&b)));
+    log.record(
+        "multistart",
+        runs.iter().map(|r| r.iterations).sum(),
+        runs[order[0]].cost,
+        ts,
+        runs[order[0]].history.clone(),
+    );
+    (runs, order)
+}
+
+/// The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
+/// typical range) are polished once, so the full-data stage is not spent twice on one basin.
+pub fn distinct_candidates(
+    ev_sub: &Evaluator<'_, ModelForward>,
+    runs: &[LocalRun],
+    order: &[usize],
+    ranges: &[(f64, f64)],
+    polish: usize,
+) -> Vec<Vec<f64>> {
+    let nf = ev_sub.free.len();
+    let mut candidates: Vec<Vec<f64>> = Vec::new();
+    let mut chosen_x: Vec<Vec<f64>> = Vec::new();
+    let best_cost = runs[order[0]].cost;
+    let dof_sub = ev_sub
+        .n_residuals()
+        .saturating_sub(ev_sub.n_params())
+        .max(1) as f64;
+    for &k in order {
+        if candidates.len() >= polish.max(1) {
+            break;
+        }
+        let x = ev_sub.natural(&runs[k].u[..nf]);
+        let same = chosen_x.iter().any(|y| {
+            x.iter()
+                .zip(y)
+                .zip(ranges)
+                .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
+        });
+        // A runner-up whose subsample cost is worse by more than POLISH_CHI2 χ² units would
+        // need that much improvement from data it has not seen: skip its full-data polish.
+        let far = best_cost > 0.0
+            && (runs[k].cost - best_cost) * dof_sub / best_cost > super::POLISH_CHI2;
+        if !same && (!far || candidates.is_empty()) {
+            chosen_x.push(x);
+            candidates.push(runs[k].u.clone());
+        }
+    }
+    candidates
+}
+
+/// The optional global stage on the subsample; its result is polished first.
+pub fn global_stage(
+    ev_sub: &Evaluator<'_, ModelForward>,
+    candidates: &mut Vec<Vec<f64>>,
+    ranges: &[(f64, f64)],
+    opts: &FitOptions,
+    log: &mut StageLog,
+) {
+    if opts.global == Global::None || is_cancelled(&opts.cancel) {
+        return;
+    }
+    let tg = Instant::now();
+    let nf = ev_sub.free.len();
+    let (stage, (u, cost, iters, history)) = match opts.global {
+        Global::NelderMead => (
+            "global-nelder-mead",
+            solve::nelder_mead(ev_sub, &candidates[0], 200 * nf as u64),
+        ),
+        _ => {
+            // The swarm's box is the start design's box in internal coordinates (plus ±3 in
+            // ln s around the projected scale when the scale is explicit).
+            let lo_x: Vec<f64> = ranges.iter().map(|r| r.0).collect();
+            let hi_x: Vec<f64> = ranges.iter().map(|r| r.1).collect();
+            let (mut lo, mut hi) = (ev_sub.internal(&lo_x), ev_sub.internal(&hi_x));
+            for (a, b) in lo.iter_mut().zip(hi.iter_mut()) {
+                if a > b {
+                    std::mem::swap(a, b);
+                }
+            }
+            if ev_sub.explicit_scale {
+                let mid: Vec<f64> = lo_x.iter().zip(&hi_x).map(|(a, b)| 0.5 * (a + b)).collect();
+                for ls in to_internal(ev_sub, &mid)[nf..].iter() {
+                    lo.push(ls - 3.0);
+                    hi.push(ls + 3.0);
+                }
+            }
+            (
+                "global-pso",
+                solve::particle_swarm(ev_sub, &lo, &hi, 24, 60, opts.seed),
+            )
+        }
+    };
+    log.record(stage, iters, cost, tg, history);
+    candidates.insert(0, u);
+}
+
+/// LM polish of every candidate on all data; the best run.
+pub fn polish(
+    ev_full: &Evaluator<'_, ModelForward>,
+    candidates: &[Vec<f64>],
+    opts: &FitOptions,
+    bar: &indicatif::ProgressBar,
+    log: &mut StageLog,
+) -> LocalRun {
+    let tp = Instant::now();
+    let mut best: Option<LocalRun> = None;
+    let mut iterations = 0;
+    for u0 in candidates {
+        if is_cancelled(&opts.cancel) && best.is_some() {
+            break;
+        }
+        let r = run_local(ev_full, u0, opts.polish_iters, &opts.cancel);
+        iterations += r.iterations;
+        bar.inc(1);
+        if best.as_ref().is_none_or(|b| r.cost < b.cost) {
+            best = Some(r);
+        }
+    }
+    bar.finish_and_clear();
+    let best = best.expect("at least one candidate is polished");
+    log.record("polish", iterations, best.cost, tp, best.history.clone());
+    best
+}
+
+/// How the fit ended: interrupted, failed (no finite cost anywhere), or as the polish ended.
+pub fn final_status(
+    best: &LocalRun,
+    data: &FitData,
+    opts: &FitOptions,
+    warnings: &mut Vec<String>,
+) -> FitStatus {
+    // An infinite cost (e.g. linear-space residuals of values near 1e300 overflow when squared)
+    // means no step was ever accepted: say so instead of reporting the start as converged.
+    let overflowed = !best.cost.is_finite();
+    if overflowed {
+        let big = data.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        warnings.push(format!(
+            "the cost is not finite at any point tried ({} space, largest |value| {big:.3e}): the residuals overflow, so the parameters are the start values, not a fit; use --space log or rescale the data",
+            opts.space
+        ));
+    }
+    if is_cancelled(&opts.cancel) {
+        FitStatus::Interrupted
+    } else if overflowed {
+        FitStatus::Failed
+    } else {
+        best.status
+    }
+}
+
+/// fit.json's record of every option the fit used.
+pub fn options_record(
+    opts: &FitOptions,
+    choice: &ModelChoice,
+    set: &FreeSet,
+    subsample: usize,
+    explicit_scale: bool,
+    floored: Floored,
+) -> OptionsRecord {
+    OptionsRecord {
+        effects_choice: choice.effects_choice.into(),
+        effects_reasons: choice.reasons.clone(),
+        fixed: set
+            .fixes
+            .iter()
+            .map(|(p, x)| (p.json_name(), x * report_factor(*p)))
+            .collect(),
+        free_parameters: set.free.iter().map(|p| p.json_name()).collect(),
+        freed: if opts.free_eta {
+            vec!["eta".into()]
+        } else {
+            vec![]
+        },
+        global: opts.global.to_string(),
+        load: None,
+        log_floored: floored,
+        loss: opts.loss.to_string(),
+        loss_scale: opts.loss_scale,
+        measurement: opts.measurement,
+        mode: opts.mode,
+        polish: opts.polish,
+        polish_iters: opts.polish_iters,
+        scale: if explicit_scale {
+            "explicit (robust loss)"
+        } else {
+            "variable projection"
+        }
+        .into(),
+        seed: opts.seed,
+        space: opts.space.to_string(),
+        start_iters: opts.start_iters,
+        starts: opts.starts,
+        subsample,
+    }
+}
+
+/// A progress bar on stderr when asked for (indicatif hides it when stderr is not a terminal).
+pub fn progress_bar(opts: &FitOptions, len: usize) -> indicatif::ProgressBar {
+    if !opts.progress {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("fit {bar:30} {pos}/{len} runs {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}

@@ -1,0 +1,96 @@
+//! The one-screen summary printed by `hairfit fit` / `hairfit demo`.
+
+use std::path::Path;
+
+use super::FitOutcome;
+use crate::model::Measurement;
+
+/// `v ± e` with a sensible number of digits.
+fn pm(v: Option<f64>, e: Option<f64>) -> String {
+    match (v, e) {
+        (Some(v), Some(e)) => format!("{v:>12.6} ± {e:.2e}"),
+        (Some(v), None) => format!("{v:>12.6}"),
+        _ => "        null".into(),
+    }
+}
+
+/// The summary of `out`; `dir` is where its files were written, if they were.
+pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
+    let j = &out.json;
+    let mut s = String::new();
+    let l = j.model.effects.lobes;
+    let lobes: Vec<&str> = [(l.r, "R"), (l.tt, "TT"), (l.trt, "TRT")]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect();
+    let on_off = |b: bool| if b { "on" } else { "off" };
+    s += &format!(
+        "hairfit fit: {} — {} samples × {} channel(s) from {}\n",
+        j.status,
+        j.data.n_samples,
+        j.data.channels.len(),
+        j.data.file
+    );
+    s += &format!(
+        "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
+        j.model.mode,
+        lobes.join("+"),
+        on_off(j.model.effects.glints),
+        on_off(j.model.effects.eccentricity),
+        j.options.effects_choice
+    );
+    if j.options.measurement == Measurement::Radiance {
+        s += "measurement: radiance, the model times cos theta_i (--measurement radiance)\n";
+    }
+    for r in &j.options.effects_reasons {
+        s += &format!("  {r}\n");
+    }
+    s += "parameters:\n";
+    for p in &j.parameters {
+        s += &format!(
+            "  {:<16} {}  {}\n",
+            p.name,
+            pm(p.value, p.std_error),
+            p.status
+        );
+    }
+    for c in &j.scale {
+        s += &format!(
+            "  scale[{}]{:<8} {}\n",
+            c.channel,
+            "",
+            pm(c.value, c.std_error)
+        );
+    }
+    let r = &j.residuals;
+    s += &format!(
+        "residuals ({} space, {} loss): rms {} reduced chi2 {} dof {}\n",
+        r.space,
+        r.loss,
+        r.rms.map_or("null".into(), |v| format!("{v:.4e}")),
+        r.reduced_chi2.map_or("null".into(), |v| format!("{v:.4e}")),
+        r.dof
+    );
+    for t in &j.trace {
+        s += &format!(
+            "  stage {:<18} iterations {:>5}  cost {:.6e}  {:.2} s\n",
+            t.stage,
+            t.iterations,
+            t.cost.unwrap_or(f64::NAN),
+            out.timing.stage(&t.stage)
+        );
+    }
+    for w in &j.warnings {
+        s += &format!("warning: {w}\n");
+    }
+    s += &format!("wall time {:.2} s", out.timing.wall_time_s);
+    if let Some(d) = dir {
+        s += &format!(
+            "; wrote {}/{{fit.json,params.json,curves.csv}}",
+            d.display()
+        );
+    }
+    s.push('\n');
+    s
+}
