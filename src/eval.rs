@@ -6,12 +6,12 @@
 
 use std::fmt::Write as _;
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
-use crate::data::lines::LineCounter;
+use crate::data::lines::{csv_error, LineCounter, TextGuard};
 use crate::error::{Error, Result};
 use crate::model::{scattering, Angles, ModelConfig, Params};
 
@@ -52,6 +52,13 @@ pub fn eval_file(
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
     let file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
+    if file.metadata().is_ok_and(|m| m.is_dir()) {
+        return Err(Error::Other(format!(
+            "--input {}: is a directory, not an angles CSV",
+            input.display()
+        )));
+    }
+    let file = TextGuard::new(file);
     match output {
         Some(out) => {
             let mut summary = EvalSummary { rows: 0 };
@@ -91,7 +98,10 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
     };
     let headers = match reader.byte_headers() {
         Ok(h) => h.clone(),
-        Err(e) => return Err(csv_error(source, &e, line_of_last_record(&reader))),
+        Err(e) => {
+                    let line = line_of_last_record(&reader);
+                    return Err(csv_error(source, e, line));
+                }
     };
     let header_line = line_of_last_record(&reader);
     let header_names: Vec<String> = headers
@@ -142,7 +152,10 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
             match reader.read_byte_record(&mut spare) {
                 Ok(true) => {}
                 Ok(false) => break,
-                Err(e) => return Err(csv_error(source, &e, line_of_last_record(&reader))),
+                Err(e) => {
+                    let line = line_of_last_record(&reader);
+                    return Err(csv_error(source, e, line));
+                }
             }
             let line = line_of_last_record(&reader);
             angles.push(parse_angles(
@@ -261,23 +274,6 @@ fn parse_angles(
         deg[k] = value;
     }
     Ok(Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]))
-}
-
-/// A csv error at `line` (where the reader stopped: the offending record's line).
-fn csv_error(source: &Path, err: &csv::Error, line: u64) -> Error {
-    let column = match err.kind() {
-        csv::ErrorKind::UnequalLengths { len, .. } => *len + 1,
-        csv::ErrorKind::Utf8 { err, .. } => err.field() as u64 + 1,
-        _ => 1,
-    };
-    let message = match err.kind() {
-        csv::ErrorKind::UnequalLengths {
-            expected_len, len, ..
-        } => format!("this row has {len} fields but the header has {expected_len}"),
-        csv::ErrorKind::Io(e) => format!("read error: {e}"),
-        _ => err.to_string(),
-    };
-    Error::input(PathBuf::from(source), line, column, message)
 }
 
 fn write_error(err: &csv::Error) -> Error {

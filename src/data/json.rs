@@ -169,7 +169,9 @@ fn channels_of(file: &FileJson, path: &Path, positions: &[(u64, u64)]) -> Result
 
 /// Load a JSON dataset (angles in degrees).
 pub(crate) fn load_json(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut super::open(path)?, &mut bytes)
+        .map_err(|e| super::lines::read_error(path, e))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
     let file: FileJson = serde_json::from_slice(bytes).map_err(|e| json_error(path, &e))?;
     let positions = sample_positions(bytes);

@@ -303,6 +303,15 @@ pub fn detect_format(path: &Path, options: &LoadOptions) -> Format {
 
 /// Load samples from `path`, returning the accepted samples and a report on every row.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
+    // A missing file or a directory says so before any format-specific advice (a mistyped
+    // `data.cvs` would otherwise be read as a scan and asked for --columns).
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::Other(format!(
+            "{}: is a directory, not a data file",
+            path.display()
+        )));
+    }
     let format = detect_format(path, options);
     check_options_fit_format(path, format, options)?;
     if let Some(t) = options.negative_tolerance {
@@ -350,10 +359,19 @@ fn check_options_fit_format(path: &Path, format: Format, options: &LoadOptions) 
     Ok(())
 }
 
-/// Open `path` for buffered reading.
-fn open(path: &Path) -> Result<std::io::BufReader<std::fs::File>> {
+/// Open `path` for buffered reading of text (see [`lines::TextGuard`]).
+fn open(path: &Path) -> Result<std::io::BufReader<lines::TextGuard<std::fs::File>>> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    Ok(std::io::BufReader::with_capacity(1 << 16, file))
+    if file.metadata().is_ok_and(|m| m.is_dir()) {
+        return Err(Error::Other(format!(
+            "{}: is a directory, not a data file",
+            path.display()
+        )));
+    }
+    Ok(std::io::BufReader::with_capacity(
+        1 << 16,
+        lines::TextGuard::new(file),
+    ))
 }
 
 /// `hairfit load`: load `path` and return the report as text (a summary, or JSON when `json`).

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use super::csv::parse_cell;
 use super::expr::Linear;
+use super::lines::read_error;
 use super::rows::{Cell, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::error::{Error, Result};
@@ -34,7 +35,8 @@ fn layout(options: &LoadOptions) -> Result<Layout> {
     if options.columns.is_empty() {
         return Err(option_error(format!(
             "a headerless scan needs --columns (e.g. `--columns phi_r,theta_r,radiance`; \
-             valid names: {VALID})"
+             valid names: {VALID}); files are read by extension: .csv and .tsv as tables with \
+             a header, .json as a JSON dataset, anything else as a scan (or give --format)"
         )));
     }
     let mut targets = Vec::new();
@@ -254,7 +256,10 @@ fn trim_bytes(mut s: &[u8]) -> &[u8] {
 
 /// Load a headerless scan.
 pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
-    let lay = layout(options)?;
+    let lay = layout(options).map_err(|e| match e {
+        Error::Other(m) => Error::Other(format!("{}: {m}", path.display())),
+        other => other,
+    })?;
     let unit = options.angles.unwrap_or(AngleUnit::Deg);
     check_fixed_theta(&lay.fixed, unit)?;
     let mut rows = Rows::new(
@@ -288,7 +293,7 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         buf.clear();
         let n = reader
             .read_until(b'\n', &mut buf)
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| read_error(path, e))?;
         if n == 0 {
             break;
         }
