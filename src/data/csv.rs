@@ -62,7 +62,7 @@ fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<Angle
 }
 
 /// Read the comment/blank lines and the header line at the top of a CSV file.
-fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
+fn read_preamble(reader: &mut impl BufRead, delimiter: u8, path: &Path) -> Result<Preamble> {
     skip_bom(reader, path)?;
     let mut buf = Vec::new();
     let mut lines = 0u64;
@@ -93,7 +93,7 @@ fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
             }
             continue;
         }
-        let header = parse_header_line(&buf, path, lines)?;
+        let header = parse_header_line(&buf, delimiter, path, lines)?;
         return Ok(Preamble {
             header,
             directive,
@@ -103,8 +103,14 @@ fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
 }
 
 /// Split the header line into trimmed UTF-8 names.
-fn parse_header_line(line: &[u8], path: &Path, line_no: u64) -> Result<csv::StringRecord> {
+fn parse_header_line(
+    line: &[u8],
+    delimiter: u8,
+    path: &Path,
+    line_no: u64,
+) -> Result<csv::StringRecord> {
     let mut r = csv::ReaderBuilder::new()
+        .delimiter(delimiter)
         .has_headers(false)
         .trim(csv::Trim::All)
         .from_reader(line);
@@ -134,8 +140,8 @@ const HEADER_HELP: &str = "required: theta_i, phi_i, theta_r, phi_r and either `
 fn separator_hint(header: &csv::StringRecord) -> &'static str {
     match header.iter().next() {
         Some(h) if header.len() == 1 && (h.contains(';') || h.contains('\t')) => {
-            " (the file seems to use `;` or tabs between columns: hairfit CSV uses commas; \
-             for a headerless scan give --columns)"
+            " (the file seems to use `;` or tabs between columns: give --delimiter ';' or \
+             --delimiter tab; for a headerless scan give --columns)"
         }
         _ => "",
     }
@@ -323,7 +329,8 @@ pub(crate) fn parse_cell(
 /// Load a header CSV file.
 pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
     let mut reader = super::open(path)?;
-    let pre = read_preamble(&mut reader, path)?;
+    let delimiter = options.delimiter_for(path)?;
+    let pre = read_preamble(&mut reader, delimiter, path)?;
     let unit = resolve_unit(options.angles, pre.directive, path)?;
     let header_line = pre.lines;
     let cols = columns_from_header(&pre.header, path, header_line)?;
@@ -413,6 +420,7 @@ fn read_rows(
     } = *input;
     let (reader, newlines) = LineCounter::wrap(reader);
     let mut csv = csv::ReaderBuilder::new()
+        .delimiter(options.delimiter_for(path)?)
         .has_headers(false)
         .flexible(true)
         .comment(Some(b'#'))

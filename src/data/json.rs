@@ -149,6 +149,26 @@ fn channels_of(file: &FileJson, path: &Path, positions: &[(u64, u64)]) -> Result
         if ch.is_empty() {
             return Err(Error::input(path, 1, 1, "\"channels\" is empty"));
         }
+        // The same rules as a CSV header's `radiance_<channel>` columns.
+        let mut seen = std::collections::HashSet::new();
+        for name in ch {
+            if name.trim().is_empty() {
+                return Err(Error::input(
+                    path,
+                    1,
+                    1,
+                    "\"channels\" has an empty name: name every channel",
+                ));
+            }
+            if !seen.insert(name.to_ascii_lowercase()) {
+                return Err(Error::input(
+                    path,
+                    1,
+                    1,
+                    format!("\"channels\" names `{name}` twice: channel names must differ"),
+                ));
+            }
+        }
         return Ok(ch.clone());
     }
     let first_array = file

@@ -132,7 +132,9 @@ impl<R> TextGuard<R> {
                 .position(|&b| b == b'\n')
                 .map_or(chunk, |end| &chunk[..end]);
             let lone_cr = (self.pending_cr && chunk.first().is_some_and(|&b| b != b'\n'))
-                || first_line.windows(2).any(|w| w[0] == b'\r' && w[1] != b'\n');
+                || first_line
+                    .windows(2)
+                    .any(|w| w[0] == b'\r' && w[1] != b'\n');
             if lone_cr {
                 return Err(self.refuse(
                     "the line breaks are carriage returns only (an old Mac text file?): \
@@ -151,7 +153,10 @@ impl<R> TextGuard<R> {
         };
         // A line inside one chunk is shorter than the chunk; only the run up to the first
         // newline can continue a long line from earlier chunks.
-        let head = chunk.iter().position(|&b| b == b'\n').unwrap_or(chunk.len()) as u64;
+        let head = chunk
+            .iter()
+            .position(|&b| b == b'\n')
+            .unwrap_or(chunk.len()) as u64;
         if self.in_line + head > MAX_LINE_BYTES || tail > MAX_LINE_BYTES {
             return Err(self.refuse(format!(
                 "line {} is longer than {} MiB with no line break: not a text table \

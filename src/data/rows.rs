@@ -1,7 +1,7 @@
 //! Row validation shared by every format: each parsed row is accepted into the [`Dataset`] or
 //! rejected with a [`RejectReason`]; duplicates and kept negatives are settled in [`Rows::finish`].
 
-use std::f64::consts::FRAC_PI_2;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 use rayon::slice::ParallelSliceMut;
 
@@ -119,6 +119,17 @@ impl Rows {
             .any(|t| t.unwrap_or(0.0).abs() >= theta_limit)
         {
             return Some(RejectReason::ThetaOutOfRange);
+        }
+        // Two turns either way covers every convention (−180..180, 0..360, unwrapped sweeps).
+        let phi_limit = match self.unit {
+            AngleUnit::Deg => 720.0,
+            AngleUnit::Rad => 4.0 * PI,
+        };
+        if [angles[1], angles[3]]
+            .iter()
+            .any(|p| p.unwrap_or(0.0).abs() > phi_limit)
+        {
+            return Some(RejectReason::PhiOutOfRange);
         }
         if let Some(tol) = self.negative_tolerance {
             if radiance.iter().any(|r| r.unwrap_or(0.0) < -tol) {

@@ -217,9 +217,17 @@ fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Role]) -> Resu
         }
         mapped[k] = true;
         maps[k] = Linear::parse(expr)
-            .map_err(|e| option_error(format!("--map `{item}`: expression `{expr}` {e}")))?;
+            .map_err(|e| option_error(format!("--map `{}`: expression {e}", abbreviate(item))))?;
     }
     Ok(maps)
+}
+
+/// At most 40 characters of `text` (a hostile `--map` can be 100k characters long).
+fn abbreviate(text: &str) -> String {
+    match text.char_indices().nth(40) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_string(),
+    }
 }
 
 /// Split a scan line into fields: on commas when it has any, else on runs of whitespace.
