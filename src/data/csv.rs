@@ -8,7 +8,7 @@ use std::io::{BufRead, Read};
 use std::path::Path;
 
 use super::lines::{csv_error, read_error, LineCounter};
-use super::rows::{Cell, Rows};
+use super::rows::{Cell, RowCells, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
@@ -474,15 +474,13 @@ fn read_rows(
                 k as u64 + 1,
                 &header[k],
             )?;
-            match *role {
-                Role::Angle(a) => angles[a] = cell,
-                Role::Radiance(c) => radiance[c] = cell,
-                Role::Sigma(Some(c)) => sigma[c] = cell,
-                Role::Sigma(None) => sigma.fill(cell),
-                Role::Weight(Some(c)) => weight[c] = cell,
-                Role::Weight(None) => weight.fill(cell),
-                Role::Ignored => {}
-            }
+            let mut cells = RowCells {
+                angles: &mut angles,
+                radiance: &mut radiance,
+                sigma: &mut sigma,
+                weight: &mut weight,
+            };
+            cells.place(*role, cell);
         }
         rows.row(line, angles, &radiance, &sigma, &weight);
         if rows.rows_read() == SIZE_SAMPLE_ROWS {

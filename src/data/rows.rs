@@ -19,6 +19,30 @@ pub(crate) struct Rows {
 /// A parsed cell: `None` is a missing value.
 pub(crate) type Cell = Option<f64>;
 
+/// The cells of the row being parsed, filled column by column (CSV and scan readers alike).
+pub(crate) struct RowCells<'a> {
+    pub angles: &'a mut [Cell; 4],
+    pub radiance: &'a mut [Cell],
+    pub sigma: &'a mut [Cell],
+    pub weight: &'a mut [Cell],
+}
+
+impl RowCells<'_> {
+    /// Put `cell` where its column's role says (an unsuffixed sigma/weight goes to every channel).
+    pub fn place(&mut self, role: super::Role, cell: Cell) {
+        use super::Role;
+        match role {
+            Role::Angle(a) => self.angles[a] = cell,
+            Role::Radiance(c) => self.radiance[c] = cell,
+            Role::Sigma(Some(c)) => self.sigma[c] = cell,
+            Role::Sigma(None) => self.sigma.fill(cell),
+            Role::Weight(Some(c)) => self.weight[c] = cell,
+            Role::Weight(None) => self.weight.fill(cell),
+            Role::Ignored => {}
+        }
+    }
+}
+
 impl Rows {
     /// Rows for `channels`, with per-channel sigma/weight when the file has them.
     pub fn new(

@@ -8,7 +8,7 @@ use std::path::Path;
 use super::csv::parse_cell;
 use super::expr::Linear;
 use super::lines::read_error;
-use super::rows::{Cell, Rows};
+use super::rows::{Cell, RowCells, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::error::{Error, Result};
 
@@ -344,15 +344,13 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
                 &lay.names[k],
             )?
             .map(|x| lay.maps[k].apply(x));
-            match target {
-                Role::Angle(a) => angles[a] = cell,
-                Role::Radiance(c) => radiance[c] = cell,
-                Role::Sigma(Some(c)) => sigma[c] = cell,
-                Role::Sigma(None) => sigma.fill(cell),
-                Role::Weight(Some(c)) => weight[c] = cell,
-                Role::Weight(None) => weight.fill(cell),
-                Role::Ignored => {}
-            }
+            let mut cells = RowCells {
+                angles: &mut angles,
+                radiance: &mut radiance,
+                sigma: &mut sigma,
+                weight: &mut weight,
+            };
+            cells.place(target, cell);
         }
         rows.row(line_no, angles, &radiance, &sigma, &weight);
     }
