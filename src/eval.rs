@@ -6,18 +6,22 @@
 
 use std::fmt::Write as _;
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
-use crate::data::lines::LineCounter;
+use crate::data::lines::{csv_error, LineCounter, TextGuard};
 use crate::error::{Error, Result};
 use crate::model::{scattering, Angles, ModelConfig, Params};
 
 /// Rows evaluated per parallel chunk: large enough to amortise the rayon fork, small enough that
 /// memory does not grow with the file.
 const CHUNK_ROWS: usize = 16_384;
+
+/// Values (rows × channels) per chunk: with many channels the chunk has fewer rows, so memory
+/// stays bounded by the channel count too (16k rows × 1M channels asked for 131 GB).
+const CHUNK_VALUES: usize = 1 << 20;
 
 pub use crate::data::ANGLE_COLUMNS;
 
@@ -52,6 +56,13 @@ pub fn eval_file(
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
     let file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
+    if file.metadata().is_ok_and(|m| m.is_dir()) {
+        return Err(Error::Other(format!(
+            "--input {}: is a directory, not an angles CSV",
+            input.display()
+        )));
+    }
+    let file = TextGuard::new(file);
     match output {
         Some(out) => {
             let mut summary = EvalSummary { rows: 0 };
@@ -91,7 +102,10 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
     };
     let headers = match reader.byte_headers() {
         Ok(h) => h.clone(),
-        Err(e) => return Err(csv_error(source, &e, line_of_last_record(&reader))),
+        Err(e) => {
+            let line = line_of_last_record(&reader);
+            return Err(csv_error(source, e, line));
+        }
     };
     let header_line = line_of_last_record(&reader);
     let header_names: Vec<String> = headers
@@ -129,20 +143,24 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         .write_record(&out_header)
         .map_err(|e| write_error(&e))?;
 
-    let n_channels = request.params.sigma_a.len();
-    let mut records: Vec<csv::ByteRecord> = Vec::with_capacity(CHUNK_ROWS);
-    let mut angles: Vec<Angles> = Vec::with_capacity(CHUNK_ROWS);
-    let mut values: Vec<f64> = Vec::with_capacity(CHUNK_ROWS * n_channels);
+    let n_channels = request.params.sigma_a.len().max(1);
+    let chunk_rows = (CHUNK_VALUES / n_channels).clamp(1, CHUNK_ROWS);
+    let mut records: Vec<csv::ByteRecord> = Vec::with_capacity(chunk_rows);
+    let mut angles: Vec<Angles> = Vec::with_capacity(chunk_rows);
+    let mut values: Vec<f64> = Vec::with_capacity(chunk_rows * n_channels);
     let mut rows = 0u64;
     let mut spare = csv::ByteRecord::new();
     loop {
         records.clear();
         angles.clear();
-        while records.len() < CHUNK_ROWS {
+        while records.len() < chunk_rows {
             match reader.read_byte_record(&mut spare) {
                 Ok(true) => {}
                 Ok(false) => break,
-                Err(e) => return Err(csv_error(source, &e, line_of_last_record(&reader))),
+                Err(e) => {
+                    let line = line_of_last_record(&reader);
+                    return Err(csv_error(source, e, line));
+                }
             }
             let line = line_of_last_record(&reader);
             angles.push(parse_angles(
@@ -163,6 +181,15 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
             .par_chunks_mut(n_channels)
             .zip(angles.par_iter())
             .for_each(|(out, a)| scattering(&request.params, &request.config, a, out));
+        if let Some(j) = values.iter().position(|v| !v.is_finite()) {
+            return Err(non_finite_error(
+                source,
+                &records,
+                j / n_channels,
+                values[j],
+                request,
+            ));
+        }
         let mut buffer = String::with_capacity(32);
         for (record, vals) in records.iter().zip(values.chunks(n_channels)) {
             let mut out = record.clone();
@@ -263,21 +290,26 @@ fn parse_angles(
     Ok(Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]))
 }
 
-/// A csv error at `line` (where the reader stopped: the offending record's line).
-fn csv_error(source: &Path, err: &csv::Error, line: u64) -> Error {
-    let column = match err.kind() {
-        csv::ErrorKind::UnequalLengths { len, .. } => *len + 1,
-        csv::ErrorKind::Utf8 { err, .. } => err.field() as u64 + 1,
-        _ => 1,
-    };
-    let message = match err.kind() {
-        csv::ErrorKind::UnequalLengths {
-            expected_len, len, ..
-        } => format!("this row has {len} fields but the header has {expected_len}"),
-        csv::ErrorKind::Io(e) => format!("read error: {e}"),
-        _ => err.to_string(),
-    };
-    Error::input(PathBuf::from(source), line, column, message)
+/// A non-finite S is an error naming the row and the parameters, never a `NaN` in the output.
+fn non_finite_error(
+    source: &Path,
+    records: &[csv::ByteRecord],
+    row: usize,
+    value: f64,
+    request: &EvalRequest,
+) -> Error {
+    let fields: Vec<String> = records[row]
+        .iter()
+        .map(|f| String::from_utf8_lossy(f).into_owned())
+        .collect();
+    Error::Other(format!(
+        "{}: the model gives S = {value} for the row `{}` with the parameters {}: use \
+         parameters the model can evaluate",
+        source.display(),
+        fields.join(","),
+        serde_json::to_string(&crate::params::ParamFile::from_params(&request.params))
+            .unwrap_or_default()
+    ))
 }
 
 fn write_error(err: &csv::Error) -> Error {

@@ -151,7 +151,7 @@ fn semicolon_separated_header_gets_a_hint() {
         1,
         1,
     );
-    assert!(msg.contains("uses commas"), "{msg}");
+    assert!(msg.contains("give --delimiter"), "{msg}");
 }
 
 #[test]

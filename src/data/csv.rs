@@ -3,11 +3,12 @@
 //! Comment lines before the header may carry the unit directive `# angles: deg|rad`;
 //! [`write_csv`] writes degrees and says so.
 
+use std::collections::{HashMap, HashSet};
 use std::io::{BufRead, Read};
 use std::path::Path;
 
-use super::lines::LineCounter;
-use super::rows::{Cell, Rows};
+use super::lines::{csv_error, read_error, LineCounter};
+use super::rows::{Cell, RowCells, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
@@ -32,7 +33,7 @@ struct Preamble {
 
 /// Strip a UTF-8 byte-order mark at the start of the stream.
 fn skip_bom(reader: &mut impl BufRead, path: &Path) -> Result<()> {
-    let buf = reader.fill_buf().map_err(|e| Error::io(path, e))?;
+    let buf = reader.fill_buf().map_err(|e| read_error(path, e))?;
     if buf.starts_with(b"\xEF\xBB\xBF") {
         reader.consume(3);
     }
@@ -61,7 +62,7 @@ fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<Angle
 }
 
 /// Read the comment/blank lines and the header line at the top of a CSV file.
-fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
+fn read_preamble(reader: &mut impl BufRead, delimiter: u8, path: &Path) -> Result<Preamble> {
     skip_bom(reader, path)?;
     let mut buf = Vec::new();
     let mut lines = 0u64;
@@ -70,7 +71,7 @@ fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
         buf.clear();
         let n = reader
             .read_until(b'\n', &mut buf)
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| read_error(path, e))?;
         if n == 0 {
             return Err(Error::input(
                 path,
@@ -92,7 +93,7 @@ fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
             }
             continue;
         }
-        let header = parse_header_line(&buf, path, lines)?;
+        let header = parse_header_line(&buf, delimiter, path, lines)?;
         return Ok(Preamble {
             header,
             directive,
@@ -102,8 +103,14 @@ fn read_preamble(reader: &mut impl BufRead, path: &Path) -> Result<Preamble> {
 }
 
 /// Split the header line into trimmed UTF-8 names.
-fn parse_header_line(line: &[u8], path: &Path, line_no: u64) -> Result<csv::StringRecord> {
+fn parse_header_line(
+    line: &[u8],
+    delimiter: u8,
+    path: &Path,
+    line_no: u64,
+) -> Result<csv::StringRecord> {
     let mut r = csv::ReaderBuilder::new()
+        .delimiter(delimiter)
         .has_headers(false)
         .trim(csv::Trim::All)
         .from_reader(line);
@@ -133,8 +140,8 @@ const HEADER_HELP: &str = "required: theta_i, phi_i, theta_r, phi_r and either `
 fn separator_hint(header: &csv::StringRecord) -> &'static str {
     match header.iter().next() {
         Some(h) if header.len() == 1 && (h.contains(';') || h.contains('\t')) => {
-            " (the file seems to use `;` or tabs between columns: hairfit CSV uses commas; \
-             for a headerless scan give --columns)"
+            " (the file seems to use `;` or tabs between columns: give --delimiter ';' or \
+             --delimiter tab; for a headerless scan give --columns)"
         }
         _ => "",
     }
@@ -157,16 +164,17 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
     let mut sigma_cols: Vec<(usize, Option<String>)> = Vec::new();
     let mut weight_cols: Vec<(usize, Option<String>)> = Vec::new();
     let mut ignored = Vec::new();
-    let mut seen: Vec<String> = Vec::new();
+    // Hash lookups keep a header of many columns linear (a list search was quadratic: 100k
+    // columns took 14 s).
+    let mut seen: HashSet<String> = HashSet::with_capacity(header.len());
     for (k, name) in header.iter().enumerate() {
         let lower = name.to_ascii_lowercase();
-        if seen.contains(&lower) {
+        if !seen.insert(lower.clone()) {
             return Err(err(
                 k,
                 format!("column `{name}` appears twice in the header"),
             ));
         }
-        seen.push(lower.clone());
         let suffix = |prefix: &str| {
             lower
                 .strip_prefix(prefix)
@@ -222,6 +230,11 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
     }
     let has_sigma = !sigma_cols.is_empty();
     let has_weight = !weight_cols.is_empty();
+    let channel_index: HashMap<&str, usize> = channels
+        .iter()
+        .enumerate()
+        .map(|(c, name)| (name.as_str(), c))
+        .collect();
     for (cols, what) in [(&sigma_cols, "sigma"), (&weight_cols, "weight")] {
         let mut covered = vec![false; channels.len()];
         let broadcast = cols.iter().any(|(_, ch)| ch.is_none());
@@ -235,7 +248,7 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
             let role_ch = match ch {
                 None => None,
                 Some(name) => {
-                    let c = channels.iter().position(|c| c == name).ok_or_else(|| {
+                    let c = channel_index.get(name.as_str()).copied().ok_or_else(|| {
                         err(
                             *k,
                             format!(
@@ -316,7 +329,8 @@ pub(crate) fn parse_cell(
 /// Load a header CSV file.
 pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
     let mut reader = super::open(path)?;
-    let pre = read_preamble(&mut reader, path)?;
+    let delimiter = options.delimiter_for(path)?;
+    let pre = read_preamble(&mut reader, delimiter, path)?;
     let unit = resolve_unit(options.angles, pre.directive, path)?;
     let header_line = pre.lines;
     let cols = columns_from_header(&pre.header, path, header_line)?;
@@ -330,7 +344,7 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
     if !cols.ignored.is_empty() {
         rows.note(format!("ignored columns: {}", cols.ignored.join(", ")));
     }
-    let file_len = reader.get_ref().metadata().map_or(0, |m| m.len());
+    let file_len = reader.get_ref().get_ref().metadata().map_or(0, |m| m.len());
     let input = Input {
         path,
         header: &pre.header,
@@ -406,6 +420,7 @@ fn read_rows(
     } = *input;
     let (reader, newlines) = LineCounter::wrap(reader);
     let mut csv = csv::ReaderBuilder::new()
+        .delimiter(options.delimiter_for(path)?)
         .has_headers(false)
         .flexible(true)
         .comment(Some(b'#'))
@@ -421,10 +436,7 @@ fn read_rows(
         let more = csv.read_byte_record(&mut record).map_err(|e| {
             let byte = e.position().map_or(0, |p| p.byte());
             let line = header_line + 1 + newlines.borrow_mut().count_before(byte);
-            match e.into_kind() {
-                csv::ErrorKind::Io(io) => Error::io(path, io),
-                other => Error::input(path, line, 1, format!("unreadable CSV: {other:?}")),
-            }
+            csv_error(path, e, line)
         })?;
         if !more {
             return Ok(());
@@ -462,15 +474,13 @@ fn read_rows(
                 k as u64 + 1,
                 &header[k],
             )?;
-            match *role {
-                Role::Angle(a) => angles[a] = cell,
-                Role::Radiance(c) => radiance[c] = cell,
-                Role::Sigma(Some(c)) => sigma[c] = cell,
-                Role::Sigma(None) => sigma.fill(cell),
-                Role::Weight(Some(c)) => weight[c] = cell,
-                Role::Weight(None) => weight.fill(cell),
-                Role::Ignored => {}
-            }
+            let mut cells = RowCells {
+                angles: &mut angles,
+                radiance: &mut radiance,
+                sigma: &mut sigma,
+                weight: &mut weight,
+            };
+            cells.place(*role, cell);
         }
         rows.row(line, angles, &radiance, &sigma, &weight);
         if rows.rows_read() == SIZE_SAMPLE_ROWS {

@@ -25,6 +25,7 @@ impl Linear {
         let mut p = Parser {
             chars: text.chars().collect(),
             pos: 0,
+            depth: 0,
         };
         let value = p.expr()?;
         p.skip_spaces();
@@ -48,7 +49,13 @@ impl fmt::Display for Linear {
 struct Parser {
     chars: Vec<char>,
     pos: usize,
+    /// Nesting of `factor` calls (parentheses and signs), bounded by [`MAX_DEPTH`].
+    depth: usize,
 }
+
+/// Deepest nesting of parentheses and signs: far beyond any real map, far below what overflows
+/// the stack (60k parentheses or 100k minus signs aborted the process).
+const MAX_DEPTH: usize = 200;
 
 impl Parser {
     fn error(&self, what: &str) -> String {
@@ -125,6 +132,18 @@ impl Parser {
 
     /// factor := ('+' | '-') factor | 'x' | number | '(' expr ')'
     fn factor(&mut self) -> Result<Linear, String> {
+        if self.depth >= MAX_DEPTH {
+            return Err(self.error(&format!(
+                "more than {MAX_DEPTH} nested parentheses or signs"
+            )));
+        }
+        self.depth += 1;
+        let f = self.factor_inner();
+        self.depth -= 1;
+        f
+    }
+
+    fn factor_inner(&mut self) -> Result<Linear, String> {
         match self.peek() {
             Some('-') => {
                 self.pos += 1;

@@ -149,6 +149,26 @@ fn channels_of(file: &FileJson, path: &Path, positions: &[(u64, u64)]) -> Result
         if ch.is_empty() {
             return Err(Error::input(path, 1, 1, "\"channels\" is empty"));
         }
+        // The same rules as a CSV header's `radiance_<channel>` columns.
+        let mut seen = std::collections::HashSet::new();
+        for name in ch {
+            if name.trim().is_empty() {
+                return Err(Error::input(
+                    path,
+                    1,
+                    1,
+                    "\"channels\" has an empty name: name every channel",
+                ));
+            }
+            if !seen.insert(name.to_ascii_lowercase()) {
+                return Err(Error::input(
+                    path,
+                    1,
+                    1,
+                    format!("\"channels\" names `{name}` twice: channel names must differ"),
+                ));
+            }
+        }
         return Ok(ch.clone());
     }
     let first_array = file
@@ -169,7 +189,9 @@ fn channels_of(file: &FileJson, path: &Path, positions: &[(u64, u64)]) -> Result
 
 /// Load a JSON dataset (angles in degrees).
 pub(crate) fn load_json(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut super::open(path)?, &mut bytes)
+        .map_err(|e| super::lines::read_error(path, e))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
     let file: FileJson = serde_json::from_slice(bytes).map_err(|e| json_error(path, &e))?;
     let positions = sample_positions(bytes);

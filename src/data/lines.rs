@@ -1,10 +1,14 @@
-//! Line numbers of CSV records as a person counts them: the csv crate's record positions point
-//! before skipped blank and comment lines (and drift with CRLF), so readers count newlines here.
+//! Reading text input line by line, safely: line numbers of CSV records as a person counts them
+//! (the csv crate's record positions point before skipped blank and comment lines and drift with
+//! CRLF, so readers count newlines here), and a guard that refuses input with no line breaks.
 
 use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::io::Read;
+use std::path::Path;
 use std::rc::Rc;
+
+use crate::error::Error;
 
 /// Offsets of the newlines a reader has passed, so a byte offset can be turned into a line.
 /// csv's own record positions point before skipped blank/comment lines (and drift with CRLF),
@@ -57,5 +61,149 @@ impl<R: Read> LineCounter<R> {
             },
             lines,
         )
+    }
+}
+
+/// Longest line a text input may have. A hairfit table's longest line is its header (about 20
+/// bytes per column, so 64 MiB is over three million columns); input with no line break at all
+/// (`/dev/zero`, a binary file) is refused here instead of being read into memory whole.
+pub(crate) const MAX_LINE_BYTES: u64 = 64 << 20;
+
+/// Why a reader stopped: the input is not line-structured text. Carried inside an
+/// `io::Error` so that every reader (csv, scan, JSON, eval) reports it through [`read_error`].
+#[derive(Debug)]
+pub(crate) struct NotText {
+    line: u64,
+    message: String,
+}
+
+impl std::fmt::Display for NotText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for NotText {}
+
+/// A reader that refuses input no text table can be: a line longer than [`MAX_LINE_BYTES`], or
+/// a first line ended by a lone carriage return (a file whose line breaks are CR only, which
+/// would otherwise read as one long line: "a header but no samples").
+pub(crate) struct TextGuard<R> {
+    inner: R,
+    /// Line feeds seen so far (the current line is `lf + 1`).
+    lf: u64,
+    /// Bytes of the current line seen so far.
+    in_line: u64,
+    /// The previous chunk ended with a carriage return.
+    pending_cr: bool,
+}
+
+impl<R> TextGuard<R> {
+    pub(crate) fn new(inner: R) -> Self {
+        TextGuard {
+            inner,
+            lf: 0,
+            in_line: 0,
+            pending_cr: false,
+        }
+    }
+
+    /// The wrapped reader.
+    pub(crate) fn get_ref(&self) -> &R {
+        &self.inner
+    }
+
+    fn refuse(&self, message: String) -> std::io::Error {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            NotText {
+                line: self.lf + 1,
+                message,
+            },
+        )
+    }
+
+    /// Check the next chunk of input.
+    fn check(&mut self, chunk: &[u8]) -> std::io::Result<()> {
+        if self.lf == 0 {
+            // Only the first line is checked for CR-only breaks: later lone CRs are harmless.
+            let first_line = chunk
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(chunk, |end| &chunk[..end]);
+            let lone_cr = (self.pending_cr && chunk.first().is_some_and(|&b| b != b'\n'))
+                || first_line
+                    .windows(2)
+                    .any(|w| w[0] == b'\r' && w[1] != b'\n');
+            if lone_cr {
+                return Err(self.refuse(
+                    "the line breaks are carriage returns only (an old Mac text file?): \
+                     convert them to line feeds, e.g. `tr '\\r' '\\n' < IN > OUT`"
+                        .into(),
+                ));
+            }
+            self.pending_cr = chunk.last() == Some(&b'\r');
+        }
+        let (newlines, tail) = match chunk.iter().rposition(|&b| b == b'\n') {
+            Some(last) => (
+                chunk.iter().filter(|&&b| b == b'\n').count() as u64,
+                (chunk.len() - last - 1) as u64,
+            ),
+            None => (0, self.in_line + chunk.len() as u64),
+        };
+        // A line inside one chunk is shorter than the chunk; only the run up to the first
+        // newline can continue a long line from earlier chunks.
+        let head = chunk
+            .iter()
+            .position(|&b| b == b'\n')
+            .unwrap_or(chunk.len()) as u64;
+        if self.in_line + head > MAX_LINE_BYTES || tail > MAX_LINE_BYTES {
+            return Err(self.refuse(format!(
+                "line {} is longer than {} MiB with no line break: not a text table \
+                 (a binary file or a device?)",
+                self.lf + 1,
+                MAX_LINE_BYTES >> 20
+            )));
+        }
+        self.lf += newlines;
+        self.in_line = tail;
+        Ok(())
+    }
+}
+
+impl<R: Read> Read for TextGuard<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.check(&buf[..n])?;
+        Ok(n)
+    }
+}
+
+/// A read error on `path` as the library's error: input that is not text is an input error at
+/// its line, anything else an I/O error on the file.
+pub(crate) fn read_error(path: &Path, err: std::io::Error) -> Error {
+    if let Some(not_text) = err.get_ref().and_then(|e| e.downcast_ref::<NotText>()) {
+        return Error::input(path, not_text.line, 1, not_text.message.clone());
+    }
+    Error::io(path, err)
+}
+
+/// A csv read error at `line` (where the reader stopped) as the library's error, with the column
+/// when the csv crate knows it: one conversion for every csv reader (dataset loader and eval).
+pub(crate) fn csv_error(path: &Path, err: csv::Error, line: u64) -> Error {
+    let column = match err.kind() {
+        csv::ErrorKind::UnequalLengths { len, .. } => *len + 1,
+        csv::ErrorKind::Utf8 { err, .. } => err.field() as u64 + 1,
+        _ => 1,
+    };
+    let message = match err.kind() {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => format!("this row has {len} fields but the header has {expected_len}"),
+        _ => format!("unreadable CSV: {err}"),
+    };
+    match err.into_kind() {
+        csv::ErrorKind::Io(io) => read_error(path, io),
+        _ => Error::input(path, line, column, message),
     }
 }

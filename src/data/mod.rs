@@ -265,6 +265,35 @@ pub struct LoadOptions {
     /// Reject rows whose radiance is below -TOL in any channel [default: keep all negatives].
     #[arg(long, value_name = "TOL")]
     pub negative_tolerance: Option<f64>,
+    /// Column separator of a CSV file with a header: one character, or `tab`
+    /// [default: tab for .tsv files, else a comma].
+    #[arg(long, value_name = "CHAR")]
+    pub delimiter: Option<String>,
+}
+
+impl LoadOptions {
+    /// The column separator of a header table at `path` (see `--delimiter`).
+    fn delimiter_for(&self, path: &Path) -> Result<u8> {
+        match self.delimiter.as_deref() {
+            None if has_extension(path, "tsv") => Ok(b'\t'),
+            None => Ok(b','),
+            Some(t) if t.eq_ignore_ascii_case("tab") || t == "\\t" || t == "\t" => Ok(b'\t'),
+            Some(t) if t.len() == 1 && !matches!(t, "\"" | "#" | "\n" | "\r") => {
+                Ok(t.as_bytes()[0])
+            }
+            Some(t) => Err(Error::Other(format!(
+                "--delimiter `{t}`: give one ASCII character such as `;` or `|`, or `tab` \
+                 (not a quote, `#` or a line break)"
+            ))),
+        }
+    }
+}
+
+/// True when `path` ends in `.ext` (any case).
+fn has_extension(path: &Path, ext: &str) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case(ext))
 }
 
 impl Default for LoadOptions {
@@ -277,6 +306,7 @@ impl Default for LoadOptions {
             maps: Vec::new(),
             missing: "?".into(),
             negative_tolerance: None,
+            delimiter: None,
         }
     }
 }
@@ -295,7 +325,7 @@ pub fn detect_format(path: &Path, options: &LoadOptions) -> Format {
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("csv") => Format::Csv,
+        Some("csv" | "tsv") => Format::Csv,
         Some("json") => Format::Json,
         _ => Format::Scan,
     }
@@ -303,6 +333,15 @@ pub fn detect_format(path: &Path, options: &LoadOptions) -> Format {
 
 /// Load samples from `path`, returning the accepted samples and a report on every row.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
+    // A missing file or a directory says so before any format-specific advice (a mistyped
+    // `data.cvs` would otherwise be read as a scan and asked for --columns).
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::Other(format!(
+            "{}: is a directory, not a data file",
+            path.display()
+        )));
+    }
     let format = detect_format(path, options);
     check_options_fit_format(path, format, options)?;
     if let Some(t) = options.negative_tolerance {
@@ -331,6 +370,13 @@ fn check_options_fit_format(path: &Path, format: Format, options: &LoadOptions) 
         ("--fixed", !options.fixed.is_empty()),
         ("--map", !options.maps.is_empty()),
     ];
+    if format != Format::Csv && options.delimiter.is_some() {
+        return Err(Error::Other(format!(
+            "{}: --delimiter applies to CSV files with a header; this file is read as {}",
+            path.display(),
+            format.name()
+        )));
+    }
     if format != Format::Scan {
         if let Some((name, _)) = scan_only.iter().find(|(_, given)| *given) {
             return Err(Error::Other(format!(
@@ -350,10 +396,19 @@ fn check_options_fit_format(path: &Path, format: Format, options: &LoadOptions) 
     Ok(())
 }
 
-/// Open `path` for buffered reading.
-fn open(path: &Path) -> Result<std::io::BufReader<std::fs::File>> {
+/// Open `path` for buffered reading of text (see [`lines::TextGuard`]).
+fn open(path: &Path) -> Result<std::io::BufReader<lines::TextGuard<std::fs::File>>> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    Ok(std::io::BufReader::with_capacity(1 << 16, file))
+    if file.metadata().is_ok_and(|m| m.is_dir()) {
+        return Err(Error::Other(format!(
+            "{}: is a directory, not a data file",
+            path.display()
+        )));
+    }
+    Ok(std::io::BufReader::with_capacity(
+        1 << 16,
+        lines::TextGuard::new(file),
+    ))
 }
 
 /// `hairfit load`: load `path` and return the report as text (a summary, or JSON when `json`).

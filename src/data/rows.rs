@@ -1,7 +1,7 @@
 //! Row validation shared by every format: each parsed row is accepted into the [`Dataset`] or
 //! rejected with a [`RejectReason`]; duplicates and kept negatives are settled in [`Rows::finish`].
 
-use std::f64::consts::FRAC_PI_2;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 use rayon::slice::ParallelSliceMut;
 
@@ -18,6 +18,30 @@ pub(crate) struct Rows {
 
 /// A parsed cell: `None` is a missing value.
 pub(crate) type Cell = Option<f64>;
+
+/// The cells of the row being parsed, filled column by column (CSV and scan readers alike).
+pub(crate) struct RowCells<'a> {
+    pub angles: &'a mut [Cell; 4],
+    pub radiance: &'a mut [Cell],
+    pub sigma: &'a mut [Cell],
+    pub weight: &'a mut [Cell],
+}
+
+impl RowCells<'_> {
+    /// Put `cell` where its column's role says (an unsuffixed sigma/weight goes to every channel).
+    pub fn place(&mut self, role: super::Role, cell: Cell) {
+        use super::Role;
+        match role {
+            Role::Angle(a) => self.angles[a] = cell,
+            Role::Radiance(c) => self.radiance[c] = cell,
+            Role::Sigma(Some(c)) => self.sigma[c] = cell,
+            Role::Sigma(None) => self.sigma.fill(cell),
+            Role::Weight(Some(c)) => self.weight[c] = cell,
+            Role::Weight(None) => self.weight.fill(cell),
+            Role::Ignored => {}
+        }
+    }
+}
 
 impl Rows {
     /// Rows for `channels`, with per-channel sigma/weight when the file has them.
@@ -119,6 +143,17 @@ impl Rows {
             .any(|t| t.unwrap_or(0.0).abs() >= theta_limit)
         {
             return Some(RejectReason::ThetaOutOfRange);
+        }
+        // Two turns either way covers every convention (−180..180, 0..360, unwrapped sweeps).
+        let phi_limit = match self.unit {
+            AngleUnit::Deg => 720.0,
+            AngleUnit::Rad => 4.0 * PI,
+        };
+        if [angles[1], angles[3]]
+            .iter()
+            .any(|p| p.unwrap_or(0.0).abs() > phi_limit)
+        {
+            return Some(RejectReason::PhiOutOfRange);
         }
         if let Some(tol) = self.negative_tolerance {
             if radiance.iter().any(|r| r.unwrap_or(0.0) < -tol) {

@@ -7,7 +7,8 @@ use std::path::Path;
 
 use super::csv::parse_cell;
 use super::expr::Linear;
-use super::rows::{Cell, Rows};
+use super::lines::read_error;
+use super::rows::{Cell, RowCells, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::error::{Error, Result};
 
@@ -34,7 +35,8 @@ fn layout(options: &LoadOptions) -> Result<Layout> {
     if options.columns.is_empty() {
         return Err(option_error(format!(
             "a headerless scan needs --columns (e.g. `--columns phi_r,theta_r,radiance`; \
-             valid names: {VALID})"
+             valid names: {VALID}); files are read by extension: .csv and .tsv as tables with \
+             a header, .json as a JSON dataset, anything else as a scan (or give --format)"
         )));
     }
     let mut targets = Vec::new();
@@ -215,9 +217,17 @@ fn parse_maps(options: &LoadOptions, names: &[String], targets: &[Role]) -> Resu
         }
         mapped[k] = true;
         maps[k] = Linear::parse(expr)
-            .map_err(|e| option_error(format!("--map `{item}`: expression `{expr}` {e}")))?;
+            .map_err(|e| option_error(format!("--map `{}`: expression {e}", abbreviate(item))))?;
     }
     Ok(maps)
+}
+
+/// At most 40 characters of `text` (a hostile `--map` can be 100k characters long).
+fn abbreviate(text: &str) -> String {
+    match text.char_indices().nth(40) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_string(),
+    }
 }
 
 /// Split a scan line into fields: on commas when it has any, else on runs of whitespace.
@@ -254,7 +264,10 @@ fn trim_bytes(mut s: &[u8]) -> &[u8] {
 
 /// Load a headerless scan.
 pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
-    let lay = layout(options)?;
+    let lay = layout(options).map_err(|e| match e {
+        Error::Other(m) => Error::Other(format!("{}: {m}", path.display())),
+        other => other,
+    })?;
     let unit = options.angles.unwrap_or(AngleUnit::Deg);
     check_fixed_theta(&lay.fixed, unit)?;
     let mut rows = Rows::new(
@@ -288,7 +301,7 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         buf.clear();
         let n = reader
             .read_until(b'\n', &mut buf)
-            .map_err(|e| Error::io(path, e))?;
+            .map_err(|e| read_error(path, e))?;
         if n == 0 {
             break;
         }
@@ -331,15 +344,13 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
                 &lay.names[k],
             )?
             .map(|x| lay.maps[k].apply(x));
-            match target {
-                Role::Angle(a) => angles[a] = cell,
-                Role::Radiance(c) => radiance[c] = cell,
-                Role::Sigma(Some(c)) => sigma[c] = cell,
-                Role::Sigma(None) => sigma.fill(cell),
-                Role::Weight(Some(c)) => weight[c] = cell,
-                Role::Weight(None) => weight.fill(cell),
-                Role::Ignored => {}
-            }
+            let mut cells = RowCells {
+                angles: &mut angles,
+                radiance: &mut radiance,
+                sigma: &mut sigma,
+                weight: &mut weight,
+            };
+            cells.place(target, cell);
         }
         rows.row(line_no, angles, &radiance, &sigma, &weight);
     }

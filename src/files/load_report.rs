@@ -19,6 +19,9 @@ pub enum RejectReason {
     NonFinite,
     /// `|θ_i|` or `|θ_r|` ≥ 90°: the direction lies on (or past) the fiber axis.
     ThetaOutOfRange,
+    /// `|φ_i|` or `|φ_r|` > 720° (4π): meaningless after wrapping (e.g. `1e20`, where one ulp
+    /// spans many turns), most likely a unit or column mix-up.
+    PhiOutOfRange,
     /// Radiance below `-negative_tolerance`.
     NegativeRadiance,
     /// A sigma ≤ 0 (a zero or negative uncertainty cannot weight a residual).
@@ -36,6 +39,7 @@ impl RejectReason {
             RejectReason::MissingValue => "missing value",
             RejectReason::NonFinite => "non-finite number",
             RejectReason::ThetaOutOfRange => "|theta| >= 90 deg",
+            RejectReason::PhiOutOfRange => "|phi| > 720 deg",
             RejectReason::NegativeRadiance => "negative radiance beyond tolerance",
             RejectReason::NonPositiveSigma => "sigma <= 0",
             RejectReason::NonPositiveWeight => "weight <= 0",

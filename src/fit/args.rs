@@ -103,6 +103,14 @@ impl FitArgs {
                 }
             }
         }
+        // Each start is an LM run on the subsample; a billion aborted allocating the design.
+        const MAX_STARTS: usize = 100_000;
+        if self.starts > MAX_STARTS {
+            return Err(Error::Other(format!(
+                "--starts {}: at most {MAX_STARTS} (each start is a short LM run; the default is 16)",
+                self.starts
+            )));
+        }
         if !(self.loss_scale.is_finite() && self.loss_scale > 0.0) {
             return Err(Error::Other(format!(
                 "--loss-scale {}: must be a positive number",

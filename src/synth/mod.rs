@@ -115,6 +115,7 @@ pub fn synthesize_directions(
         .collect();
     let clean = clean_values(params, config, &radians, scale, measurement)?;
     let noisy = noise.apply(&clean, nc, seed);
+    noise.check_finite(&noisy)?;
 
     let channels = channel_names(nc);
     let column = |k: usize| radians.iter().map(|a| a[k]).collect();
@@ -199,9 +200,14 @@ fn clean_values(
     if let Some(j) = values.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
         let a = radians[j / nc].map(round_trip_degrees);
         return Err(Error::Other(format!(
-            "the model returned {} at theta_i={}, phi_i={}, theta_r={}, phi_r={} (degrees): \
-             a model bug, please report it",
-            values[j], a[0], a[1], a[2], a[3]
+            "the model returned {} at theta_i={}, phi_i={}, theta_r={}, phi_r={} (degrees) for \
+             the parameters {}: use parameters the model can evaluate",
+            values[j],
+            a[0],
+            a[1],
+            a[2],
+            a[3],
+            serde_json::to_string(&ParamFile::from_params(params)).unwrap_or_default()
         )));
     }
     Ok(values)
@@ -283,6 +289,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     })?;
     let (file, notes) = reconcile_channels(file, args.channels, &args.params)?;
     let nc = file.n_channels();
+    rig.check_memory(nc, &args.rig)?;
     let scale = match args.scale.len() {
         1 => vec![args.scale[0]; nc],
         n if n == nc => args.scale.clone(),

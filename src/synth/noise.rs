@@ -164,12 +164,44 @@ impl Noise {
     }
 }
 
+impl Noise {
+    /// An error when the noise made a value or σ that is not finite (e.g. `relative:1e308`
+    /// overflows): the CSV would hold `inf`, which the loader then rejects row by row.
+    pub fn check_finite(&self, noisy: &Noisy) -> Result<()> {
+        let bad = |v: &[f64]| v.iter().position(|x| !x.is_finite());
+        let found = bad(&noisy.values)
+            .map(|i| ("value", i, noisy.values[i]))
+            .or_else(|| {
+                let s = noisy.sigma.as_deref()?;
+                bad(s).map(|i| ("sigma", i, s[i]))
+            });
+        match found {
+            None => Ok(()),
+            Some((what, i, v)) => Err(Error::Other(format!(
+                "--noise `{self}` makes a {what} of {v} (value {} of the dataset): the noise \
+                 overflows; use smaller noise terms",
+                i + 1
+            ))),
+        }
+    }
+}
+
 /// A Poisson count with mean λ (Gaussian limit above [`POISSON_GAUSSIAN_LIMIT`]).
 fn photon_count(rng: &mut impl rand_chacha::rand_core::RngCore, lambda: f64) -> f64 {
     if lambda > POISSON_GAUSSIAN_LIMIT {
         (lambda + lambda.sqrt() * normal(rng)).round()
     } else {
         poisson(rng, lambda)
+    }
+}
+
+/// A number as plain decimals, or in exponent form where plain decimals would run to hundreds
+/// of digits (`1e308`).
+fn readable(v: f64) -> String {
+    if v != 0.0 && !(1e-6..1e16).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -190,7 +222,7 @@ impl fmt::Display for Noise {
             ("outliers", self.outliers),
         ]
         .iter()
-        .filter_map(|(k, v)| v.map(|v| format!("{k}:{v}")))
+        .filter_map(|(k, v)| v.map(|v| format!("{k}:{}", readable(v))))
         .collect();
         if terms.is_empty() {
             f.write_str("none")

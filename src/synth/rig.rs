@@ -249,6 +249,54 @@ impl Rig {
     }
 }
 
+/// Bytes the synthesizer holds per sample with `nc` channels: the directions in degrees and
+/// radians and the dataset's four angle columns and source line (4 × 8 + 4 × 8 + 5 × 8), plus
+/// per channel the clean value, the noisy value and its σ (3 × 8).
+fn bytes_per_sample(nc: usize) -> u64 {
+    104 + 24 * nc as u64
+}
+
+/// Memory the synthesizer may use: half the machine's memory (`MemTotal` in /proc/meminfo),
+/// or 4 GiB where that is unknown.
+fn memory_limit() -> u64 {
+    let total = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kib * 1024)
+        });
+    total.map_or(4 << 30, |t| t / 2)
+}
+
+impl Rig {
+    /// Refuse before allocating a dataset that would not fit in memory (an azimuthal rig of
+    /// 10⁸ steps aborted at 9.6 GB); the error names the options that set the size.
+    pub fn check_memory(&self, n_channels: usize, spec: &str) -> Result<()> {
+        let samples = self.sample_count().unwrap_or(usize::MAX) as u64;
+        let need = samples.saturating_mul(bytes_per_sample(n_channels));
+        let limit = memory_limit();
+        if need > limit {
+            let sizes = match self {
+                Rig::Azimuthal { .. } => "incidences or steps",
+                Rig::Longitudinal { .. } => "incidences, phi or steps",
+                Rig::Sphere { .. } => "n",
+                Rig::Photo { .. } => "lights or views",
+            };
+            return Err(rig_error(
+                spec,
+                format!(
+                    "{samples} samples × {n_channels} channels need about {:.1} GB, more than \
+                     the {:.1} GB allowed (half this machine's memory): use fewer {sizes}",
+                    need as f64 / 1e9,
+                    limit as f64 / 1e9
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// φ_r of step k of n on the azimuthal sweep: (−180°, 180°], ending exactly at 180°.
 fn sweep_azimuth(k: usize, steps: usize) -> f64 {
     360.0 * k as f64 / steps as f64 - 180.0
@@ -259,9 +307,18 @@ fn sweep_inclination(k: usize, steps: usize, max: f64) -> f64 {
     -max + 2.0 * max * k as f64 / (steps - 1) as f64
 }
 
-/// A direction uniform on the sphere (sin θ uniform), redrawn while |θ| > max; degrees.
+/// Rejection tries before [`sphere_direction`] samples the band directly.
+const SPHERE_TRIES: usize = 1024;
+
+/// A direction uniform on the sphere restricted to |θ| ≤ max (sin θ uniform), in degrees.
+///
+/// Rejection first (what every dataset made so far used, so a seed still gives the same bytes),
+/// then, after [`SPHERE_TRIES`] misses, the band |sin θ| ≤ sin(max) sampled directly by its
+/// inverse CDF: sin θ uniform in [−sin max, sin max]. Both are the same distribution (a
+/// rejection sampler's output is the conditional law whenever it stops), and the direct step
+/// bounds the time: `max=1e-8` never finished, `max=1e-5` with n=100 took over 20 s.
 fn sphere_direction(rng: &mut impl RngCore, max: f64) -> (f64, f64) {
-    loop {
+    for _ in 0..SPHERE_TRIES {
         let z = 2.0 * uniform(rng) - 1.0;
         let phi = 180.0 - 360.0 * uniform(rng);
         let theta = z.asin().to_degrees();
@@ -269,6 +326,10 @@ fn sphere_direction(rng: &mut impl RngCore, max: f64) -> (f64, f64) {
             return (theta, phi);
         }
     }
+    let z = max.to_radians().sin() * (2.0 * uniform(rng) - 1.0);
+    let phi = 180.0 - 360.0 * uniform(rng);
+    // asin(sin max) can round a hair above max.
+    (z.asin().to_degrees().clamp(-max, max), phi)
 }
 
 /// Bend angle β of pixel j of the photo strip: evenly spaced over [−span/2, span/2].
