@@ -129,7 +129,7 @@ fn noisy_data_errors_lie_within_three_reported_standard_errors() {
 /// Spread of estimates over repeated noise vs the mean reported standard error.
 fn spread_vs_reported(set: usize, n_noise: usize) -> Vec<(String, f64, f64)> {
     let seed = 3000 + set as u64;
-    let nc = if set % 2 == 0 { 3 } else { 1 };
+    let nc = if set.is_multiple_of(2) { 3 } else { 1 };
     let truth = fit_support::random_params(seed, nc);
     let mut values: Vec<Vec<f64>> = Vec::new();
     let mut ses: Vec<Vec<f64>> = Vec::new();

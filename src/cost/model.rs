@@ -1,10 +1,10 @@
 //! The ledger's model section: every root mode × effect set on a seeded set of directions,
 //! time per evaluation against the relative error of S to exact roots with every effect.
 
-use crate::rng::SplitMix64;
 use super::{time_per_call, CostRow, COST_SEED};
 use crate::fit::demo::demo_truth;
 use crate::model::{scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
+use crate::rng::SplitMix64;
 
 /// A fixed, seeded set of directions: θ uniform in (−80°, 80°) (away from the degenerate ±90°),
 /// φ uniform over the circle — every lobe, the glints and grazing θ_d occur.

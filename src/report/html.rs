@@ -161,8 +161,8 @@ fn table_section(
 fn parameter_table(h: &mut String, fit: &FitJson) {
     let rows = fit.parameters.iter().map(|p| {
         // The parameter table knows each unit (σ_a: per fiber radius).
-        let unit = crate::model::ParamName::from_json_name(&p.name)
-            .map_or("", |n| n.spec().unit.label());
+        let unit =
+            crate::model::ParamName::from_json_name(&p.name).map_or("", |n| n.spec().unit.label());
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
             ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),

@@ -303,4 +303,3 @@ fn channel_list(fit: &FitJson, rows: &[CurveRow]) -> Vec<String> {
 fn panel_points(p: &SlicePanel) -> usize {
     p.channels.iter().map(|c| c.points.len()).sum()
 }
-
