@@ -463,3 +463,19 @@ fn a_billion_starts_is_refused() {
     ]);
     assert_fails_with(&out, &["--starts 1000000000", "at most"]);
 }
+
+#[test]
+fn contradicting_or_repeated_fixes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("fit");
+    let fit = |extra: &[&str]| {
+        let mut args = vec!["fit", "data/sphere_1ch.csv", "--out", s(&out_dir)];
+        args.extend_from_slice(extra);
+        hairfit(&args)
+    };
+    let out = fit(&["--fix", "eta=1.6", "--free", "eta"]);
+    assert_fails_with(&out, &["--fix `eta=1.6`", "--free eta", "contradict"]);
+    let out = fit(&["--fix", "k_g=2", "--fix", "k_g=3"]);
+    assert_fails_with(&out, &["--fix `k_g=3`", "already fixed"]);
+    assert!(!out_dir.exists(), "a refused fit writes nothing");
+}

@@ -103,6 +103,17 @@ impl FitArgs {
                 }
             }
         }
+        if free_eta {
+            if let Some(fix) = self
+                .fix
+                .iter()
+                .find(|f| f.split('=').next().map(str::trim) == Some("eta"))
+            {
+                return Err(Error::Other(format!(
+                    "--fix `{fix}` and --free eta contradict each other: give one of them"
+                )));
+            }
+        }
         // Each start is an LM run on the subsample; a billion aborted allocating the design.
         const MAX_STARTS: usize = 100_000;
         if self.starts > MAX_STARTS {

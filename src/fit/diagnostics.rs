@@ -19,36 +19,9 @@ pub const POORLY_DETERMINED: f64 = 0.2;
 /// of an undetermined parameter that would otherwise get a meaningless tiny standard error.
 pub const NULL_WEIGHT: f64 = 1e-6;
 
-/// Per column of `j`, the weight of its unit vector in the numerical null space of the
-/// column-scaled `j` (singular values below `lm::DEFAULT_RCOND`·σ_max), via QR then SVD of R.
-pub fn null_space_weights(j: &nalgebra::DMatrix<f64>) -> Vec<f64> {
-    let n = j.ncols();
-    if n == 0 || j.nrows() < n || j.iter().any(|v| !v.is_finite()) {
-        return vec![0.0; n];
-    }
-    let mut scaled = j.clone();
-    for mut col in scaled.column_iter_mut() {
-        let norm = col.norm();
-        if norm > 0.0 {
-            col /= norm;
-        }
-    }
-    let r = scaled.qr().r();
-    let svd = r.svd(false, true);
-    let Some(v_t) = svd.v_t else {
-        return vec![0.0; n];
-    };
-    let smax = svd.singular_values.max();
-    let mut w = vec![0.0; n];
-    for (k, &s) in svd.singular_values.iter().enumerate() {
-        if s <= crate::lm::DEFAULT_RCOND * smax {
-            for (j, wj) in w.iter_mut().enumerate() {
-                *wj += v_t[(k, j)].powi(2);
-            }
-        }
-    }
-    w
-}
+/// Per column of the Jacobian, its weight in the numerical null space (the solver's one
+/// computation, shared with the covariance).
+pub use crate::lm::null_space_weights;
 
 /// Samples within 2 w_c of the glint azimuth φ_c(θ_d) the model places (its caustic under the
 /// fit's root mode, index η), and the span of |φ| they cover.
@@ -104,13 +77,7 @@ pub fn why_undetermined(
             }
         }
         ParamName::Eccentricity => {
-            let c2: Vec<f64> = data
-                .angles
-                .iter()
-                .map(|a| (a.phi_i + a.phi_r).cos())
-                .collect();
-            let spread = c2.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                - c2.iter().copied().fold(f64::INFINITY, f64::min);
+            let spread = crate::model::eccentricity::cos_2phi_h_spread(&data.angles);
             format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
         }
         ParamName::SigmaA(_) => {

@@ -168,21 +168,10 @@ pub fn fit_data(ds: &Dataset) -> FitData {
     }
 }
 
-/// Every parameter name in output order for `nc` channels.
-pub fn all_parameters(nc: usize) -> Vec<ParamName> {
-    let mut v = vec![ParamName::Eta];
-    v.extend((0..nc).map(ParamName::SigmaA));
-    v.extend([
-        ParamName::AlphaR,
-        ParamName::BetaR,
-        ParamName::KG,
-        ParamName::WC,
-        ParamName::Eccentricity,
-        ParamName::DeltaEtaPrime,
-        ParamName::DeltaHM,
-    ]);
-    v
-}
+/// Every parameter name in output order (the parameter table's order).
+pub use crate::model::parameters::all_parameters;
+/// The model's parameters that a fit under `effects` varies before `--fix` (from the table).
+pub use crate::model::parameters::fitted_parameters as free_parameters;
 
 /// Parse `--fix NAME=VALUE` items into natural-unit values (`sigma_a=v` fixes every channel).
 pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>> {
@@ -203,10 +192,7 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>>
         let names: Vec<ParamName> = if name == "sigma_a" {
             (0..nc).map(ParamName::SigmaA).collect()
         } else {
-            match all_parameters(nc)
-                .into_iter()
-                .find(|p| p.json_name() == name)
-            {
+            match ParamName::from_json_name(name).filter(|p| all_parameters(nc).contains(p)) {
                 Some(p) => vec![p],
                 None => {
                     let known: Vec<String> =
@@ -227,6 +213,13 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>>
                     value: v,
                     message: format!("--fix value is outside the valid range {}", bound_text(p)),
                 });
+            }
+            if let Some((_, earlier)) = out.iter().find(|(q, _)| *q == p) {
+                return Err(Error::Other(format!(
+                    "--fix `{item}`: {} is already fixed (to {}) by an earlier --fix; give each parameter once",
+                    p.json_name(),
+                    earlier * report_factor(p)
+                )));
             }
             out.push((p, x));
         }
@@ -257,19 +250,6 @@ pub struct FitOutcome {
 /// Write the outcome's files into `dir` (fit.json, params.json, curves.csv, timing.json).
 pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
     crate::files::write_fit_dir(dir, &out.json, &out.curves, &out.timing)
-}
-
-/// The model's parameters that a fit under `effects` varies (before `--fix`).
-pub fn free_parameters(effects: &Effects, nc: usize, free_eta: bool) -> Vec<ParamName> {
-    effects
-        .parameters(nc)
-        .into_iter()
-        .filter(|p| match p {
-            ParamName::Eta => free_eta,
-            ParamName::DeltaEtaPrime | ParamName::DeltaHM => false,
-            _ => true,
-        })
-        .collect()
 }
 
 /// Fit `data` (from file `file`, loader report `load_report`) with `opts`.

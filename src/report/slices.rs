@@ -93,16 +93,8 @@ pub fn short(v: f64) -> String {
     }
 }
 
-/// MODEL.md's `wrap`, in degrees: to (−180, 180].
-pub fn wrap_deg(x: f64) -> f64 {
-    let mut y = x % 360.0;
-    if y <= -180.0 {
-        y += 360.0;
-    } else if y > 180.0 {
-        y -= 360.0;
-    }
-    y
-}
+/// MODEL.md's `wrap`, in degrees: to (−180, 180] (the model's one implementation).
+pub use crate::model::angles::wrap_deg;
 
 /// θ_h = (θ_i + θ_r)/2 in degrees.
 pub fn theta_h_deg(angles: &[f64; 4]) -> f64 {

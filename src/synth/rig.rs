@@ -355,16 +355,10 @@ fn fiber_frame_direction(d: [f64; 3], bend: f64) -> (f64, f64) {
     let du = d[0] * cb + d[1] * sb;
     let dv = -d[0] * sb + d[1] * cb;
     let theta = du.clamp(-1.0, 1.0).asin().to_degrees();
-    (theta, wrap_degrees(d[2].atan2(dv).to_degrees()))
-}
-
-/// Map an azimuth in [−180°, 180°] to (−180°, 180°].
-fn wrap_degrees(phi: f64) -> f64 {
-    if phi <= -180.0 {
-        phi + 360.0
-    } else {
-        phi
-    }
+    (
+        theta,
+        crate::model::angles::wrap_deg(d[2].atan2(dv).to_degrees()),
+    )
 }
 
 fn rig_error(spec: &str, message: impl fmt::Display) -> Error {
