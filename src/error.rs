@@ -18,7 +18,7 @@ pub enum Error {
         message: String,
     },
     /// A parameter outside its valid domain.
-    #[error("parameter `{name}` = {value} is invalid: {message}")]
+    #[error("parameter `{name}` = {} is invalid: {message}", readable(*value))]
     Parameter {
         name: String,
         value: f64,
@@ -34,6 +34,16 @@ pub enum Error {
     /// Anything else, with a message that says what to do.
     #[error("{0}")]
     Other(String),
+}
+
+/// A number for a message: every digit of an ordinary value, exponent form for extreme ones
+/// (1e200, not 201 digits).
+pub fn readable(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        x.to_string()
+    } else {
+        format!("{x:e}")
+    }
 }
 
 impl Error {

@@ -70,11 +70,7 @@ pub struct MergeSummary {
 
 /// Every digit (shortest round trip), in exponent form where plain digits would run long.
 fn number(x: Option<f64>) -> String {
-    match x {
-        Some(v) if v == 0.0 || (1e-4..1e15).contains(&v.abs()) => v.to_string(),
-        Some(v) => format!("{v:e}"),
-        None => String::new(),
-    }
+    x.map(crate::error::readable).unwrap_or_default()
 }
 
 const FIXED_COLUMNS: [&str; 8] = [
