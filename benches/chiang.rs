@@ -9,6 +9,7 @@ use hairfit::chiang::{
     ChiangParamName, ChiangParams,
 };
 use hairfit::model::{scattering as marschner_s, Angles, Effects, Lobes, ModelConfig};
+use hairfit::params::ParameterFile as _;
 
 const NODE_COUNTS: [usize; 5] = [256, 512, 768, 1024, 2048];
 

@@ -6,6 +6,7 @@ use hairfit::model::{
     scattering, scattering_jacobian, Angles, Effects, Lobes, ModelConfig, ParamName, Params,
     RootMode, StaticJacobian,
 };
+use hairfit::params::ParameterFile as _;
 
 const BATCH: usize = 1024;
 

@@ -3,6 +3,7 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use hairfit::model::{Measurement, ModelConfig};
 use hairfit::params::ParamFile;
+use hairfit::params::ParameterFile as _;
 use hairfit::synth::{synthesize, Noise, Rig};
 
 const N: usize = 10_000;

@@ -10,7 +10,7 @@ use clap::{Parser, Subcommand};
 
 use hairfit::cli::ModelArgs;
 use hairfit::eval::{eval_file, output_columns, EvalRequest};
-use hairfit::params::ParamFile;
+use hairfit::params::{ParamFile, ParameterFile as _};
 
 #[derive(Parser)]
 #[command(

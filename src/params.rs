@@ -1,8 +1,6 @@
 //! The parameter file (`PARAMS.json`) with MODEL.md's names, degrees in the file, radians in
 //! [`Params`]; loading, defaults, unknown-key rejection and domain validation.
 
-use std::path::Path;
-
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -36,6 +34,31 @@ pub enum SigmaA {
     PerChannel(Vec<f64>),
 }
 
+impl SigmaA {
+    /// Number of colour channels it gives.
+    pub fn n_channels(&self) -> usize {
+        match self {
+            SigmaA::Scalar(_) => 1,
+            SigmaA::PerChannel(v) => v.len(),
+        }
+    }
+
+    /// An empty array gives no channel: an error naming `sigma_a`.
+    pub fn require_channels(&self) -> Result<()> {
+        if self.n_channels() == 0 {
+            return Err(Error::Parameter {
+                name: "sigma_a".into(),
+                value: f64::NAN,
+                message: "the array is empty: give one value per colour channel".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Reading, parsing and validating a parameter file (`load`, `from_json_str`, `validate`).
+pub use crate::files::ParameterFile;
+
 /// The JSON parameter file, angles in degrees.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -55,51 +78,25 @@ pub struct ParamFile {
     pub delta_h_m: f64,
 }
 
-impl ParamFile {
-    /// Read and validate a parameter file.
-    pub fn load(path: impl AsRef<Path>) -> Result<ParamFile> {
-        let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_json_str(&text, path)
-    }
-
-    /// Parse and validate JSON text; `path` only names the source in error messages.
-    pub fn from_json_str(s: &str, path: impl AsRef<Path>) -> Result<ParamFile> {
-        let file: ParamFile = serde_json::from_str(s).map_err(|e| {
-            Error::input(
-                path.as_ref(),
-                e.line() as u64,
-                e.column() as u64,
-                format!(
-                    "{e}; a parameter file is a JSON object with keys {}",
-                    TABLE.map(|s| s.json).join(", ")
-                ),
-            )
-        })?;
-        file.validate()?;
-        Ok(file)
+impl crate::files::ParameterFile for ParamFile {
+    fn hint() -> String {
+        format!(
+            "a parameter file is a JSON object with keys {}",
+            TABLE.map(|s| s.json).join(", ")
+        )
     }
 
     /// Check every value against the parameter table's domain (see [`Params::validate`]).
-    pub fn validate(&self) -> Result<()> {
-        if let SigmaA::PerChannel(v) = &self.sigma_a {
-            if v.is_empty() {
-                return Err(Error::Parameter {
-                    name: "sigma_a".into(),
-                    value: f64::NAN,
-                    message: "the array is empty: give one value per colour channel".into(),
-                });
-            }
-        }
+    fn validate(&self) -> Result<()> {
+        self.sigma_a.require_channels()?;
         self.to_params().validate()
     }
+}
 
+impl ParamFile {
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
-        match &self.sigma_a {
-            SigmaA::Scalar(_) => 1,
-            SigmaA::PerChannel(v) => v.len(),
-        }
+        self.sigma_a.n_channels()
     }
 
     /// True when `sigma_a` was a single number (eval then writes one column `s`).

@@ -1,6 +1,7 @@
 //! `hairfit eval` end to end, as a user runs it: the output contract, the values (identical to the
 //! library's), streaming and the errors for bad input.
 
+use hairfit::params::ParameterFile as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

@@ -1,6 +1,7 @@
 //! `hairfit demo` / `hairfit fit` end to end through the binary: the output files of
 //! contracts.md, bit-identical numbers with 1 and 2 threads, and a fit of the demo's own CSV.
 
+use hairfit::params::ParameterFile as _;
 use std::path::Path;
 use std::process::Command;
 

@@ -2,6 +2,7 @@
 
 use hairfit::model::{Effects, ParamName};
 use hairfit::params::ParamFile;
+use hairfit::params::ParameterFile as _;
 use hairfit::Error;
 
 const FULL: &str =
@@ -242,4 +243,25 @@ fn units_come_from_the_table() {
     );
     assert_eq!(ParamName::from_json_name("w_c_deg"), Some(ParamName::WC));
     assert_eq!(ParamName::from_json_name("w_c"), None);
+}
+
+/// serde fills a struct from an array by position; a parameter file written as an array is a
+/// mistake and is refused where it starts (issue 11), for both model families.
+#[test]
+fn a_parameter_file_that_is_an_array_is_refused_at_its_start() {
+    let text = "\n  [1.55, 0.4, -7, 7, 2, 15]";
+    let e = ParamFile::from_json_str(text, "p.json")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("p.json:2:3:") && e.contains("JSON object"),
+        "{e}"
+    );
+    let e = hairfit::chiang::file::ChiangParamFile::from_json_str("[1.55]", "c.json")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("c.json:1:1:") && e.contains("JSON object"),
+        "{e}"
+    );
 }

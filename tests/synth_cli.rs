@@ -1,6 +1,7 @@
 //! `hairfit synth` end to end: reproducible bytes, a bit-exact round trip through the loader and
 //! the model, the truth sidecar, channel handling, and clear errors for bad options.
 
+use hairfit::params::ParameterFile as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

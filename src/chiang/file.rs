@@ -2,12 +2,11 @@
 //! per channel, `beta_m`, `beta_n`, `alpha_deg`), an optional `"model": "chiang"` tag, unknown
 //! keys rejected, domains checked against [`super::PARAMETERS`].
 
-use std::path::Path;
-
 use serde::{Deserialize, Serialize};
 
 use super::ChiangParams;
 use crate::error::{Error, Result};
+pub use crate::files::ParameterFile;
 use crate::params::SigmaA;
 
 /// The model tag a Chiang file may carry.
@@ -32,34 +31,15 @@ pub struct ChiangParamFile {
     pub alpha_deg: f64,
 }
 
-impl ChiangParamFile {
-    /// Read and validate a parameter file.
-    pub fn load(path: impl AsRef<Path>) -> Result<ChiangParamFile> {
-        let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_json_str(&text, path)
-    }
-
-    /// Parse and validate JSON text; `path` only names the source in error messages.
-    pub fn from_json_str(s: &str, path: impl AsRef<Path>) -> Result<ChiangParamFile> {
-        let file: ChiangParamFile = serde_json::from_str(s).map_err(|e| {
-            Error::input(
-                path.as_ref(),
-                e.line() as u64,
-                e.column() as u64,
-                format!(
-                    "{e}; a Chiang parameter file is a JSON object with keys model (optional, \
-                     \"chiang\"), eta (optional, 1.55), sigma_a (number or array), beta_m, beta_n, \
-                     alpha_deg"
-                ),
-            )
-        })?;
-        file.validate()?;
-        Ok(file)
+impl crate::files::ParameterFile for ChiangParamFile {
+    fn hint() -> String {
+        "a Chiang parameter file is a JSON object with keys model (optional, \"chiang\"), eta \
+         (optional, 1.55), sigma_a (number or array), beta_m, beta_n, alpha_deg"
+            .into()
     }
 
     /// Check the model tag, a non-empty `sigma_a` and every domain.
-    pub fn validate(&self) -> Result<()> {
+    fn validate(&self) -> Result<()> {
         if let Some(tag) = &self.model {
             if tag != MODEL_TAG {
                 return Err(Error::Parameter {
@@ -72,24 +52,15 @@ impl ChiangParamFile {
                 });
             }
         }
-        if let SigmaA::PerChannel(v) = &self.sigma_a {
-            if v.is_empty() {
-                return Err(Error::Parameter {
-                    name: "sigma_a".into(),
-                    value: f64::NAN,
-                    message: "the array is empty: give one value per colour channel".into(),
-                });
-            }
-        }
+        self.sigma_a.require_channels()?;
         self.to_params().validate()
     }
+}
 
+impl ChiangParamFile {
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
-        match &self.sigma_a {
-            SigmaA::Scalar(_) => 1,
-            SigmaA::PerChannel(v) => v.len(),
-        }
+        self.sigma_a.n_channels()
     }
 
     /// Model parameters, α converted to radians.

@@ -302,13 +302,7 @@ impl<T: Clone> ChiangParams<T> {
 impl ChiangParams<f64> {
     /// Check CHIANG.md's domains; the error names the parameter (file name and units) and range.
     pub fn validate(&self) -> Result<()> {
-        if self.sigma_a.is_empty() {
-            return Err(Error::Parameter {
-                name: "sigma_a".into(),
-                value: f64::NAN,
-                message: "give at least one colour channel".into(),
-            });
-        }
+        crate::model::require_channels(&self.sigma_a)?;
         let mut checks = vec![
             (ChiangParamName::Eta, self.eta),
             (ChiangParamName::BetaM, self.beta_m),

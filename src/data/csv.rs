@@ -7,7 +7,7 @@ use std::collections::{HashMap, HashSet};
 use std::io::{BufRead, Read};
 use std::path::Path;
 
-use super::lines::{csv_error, read_error, LineCounter};
+use super::lines::{csv_error, next_line, read_error, LineCounter};
 use super::rows::{Cell, RowCells, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::atomic::write_atomically;
@@ -68,11 +68,7 @@ fn read_preamble(reader: &mut impl BufRead, delimiter: u8, path: &Path) -> Resul
     let mut lines = 0u64;
     let mut directive = None;
     loop {
-        buf.clear();
-        let n = reader
-            .read_until(b'\n', &mut buf)
-            .map_err(|e| read_error(path, e))?;
-        if n == 0 {
+        if !next_line(reader, &mut buf, path)? {
             return Err(Error::input(
                 path,
                 lines.max(1),

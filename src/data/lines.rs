@@ -181,6 +181,19 @@ impl<R: Read> Read for TextGuard<R> {
 
 /// A read error on `path` as the library's error: input that is not text is an input error at
 /// its line, anything else an I/O error on the file.
+/// Read the next line (with its `\n`) into `buf`, replacing what it held; `false` at the end.
+pub(crate) fn next_line(
+    reader: &mut impl std::io::BufRead,
+    buf: &mut Vec<u8>,
+    path: &Path,
+) -> crate::error::Result<bool> {
+    buf.clear();
+    let n = reader
+        .read_until(b'\n', buf)
+        .map_err(|e| read_error(path, e))?;
+    Ok(n > 0)
+}
+
 pub(crate) fn read_error(path: &Path, err: std::io::Error) -> Error {
     if let Some(not_text) = err.get_ref().and_then(|e| e.downcast_ref::<NotText>()) {
         return Error::input(path, not_text.line, 1, not_text.message.clone());

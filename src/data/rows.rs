@@ -74,26 +74,10 @@ impl Rows {
     /// copies and fresh page faults dominate large loads).
     pub fn reserve(&mut self, rows: usize) {
         let nc = self.ds.n_channels();
-        let ds = &mut self.ds;
-        for v in [
-            &mut ds.theta_i,
-            &mut ds.phi_i,
-            &mut ds.theta_r,
-            &mut ds.phi_r,
-        ] {
-            v.reserve(rows);
-        }
-        for v in [
-            Some(&mut ds.radiance),
-            ds.sigma.as_mut(),
-            ds.weight.as_mut(),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            v.reserve(rows * nc);
-        }
-        ds.source_line.reserve(rows);
+        for_each_column(&mut self.ds, |v, per_row| {
+            v.reserve(if per_row { rows } else { rows * nc })
+        });
+        self.ds.source_line.reserve(rows);
     }
 
     /// Number of rows seen so far.
@@ -327,25 +311,31 @@ fn retain_samples(ds: &mut Dataset, keep: &[bool]) {
 fn shrink_if_loose(ds: &mut Dataset) {
     let loose = |v: &Vec<f64>| v.capacity() > v.len() + v.len() / 8 + 1024;
     if loose(&ds.theta_i) {
-        for v in [
-            &mut ds.theta_i,
-            &mut ds.phi_i,
-            &mut ds.theta_r,
-            &mut ds.phi_r,
-        ] {
-            v.shrink_to_fit();
-        }
-        for v in [
-            Some(&mut ds.radiance),
-            ds.sigma.as_mut(),
-            ds.weight.as_mut(),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            v.shrink_to_fit();
-        }
+        for_each_column(ds, |v, _| v.shrink_to_fit());
         ds.source_line.shrink_to_fit();
+    }
+}
+
+/// Apply `f` to every numeric column of `ds`: the four angles (`true`: one value per row) and
+/// radiance, sigma and weight (`false`: one value per row and channel).
+fn for_each_column(ds: &mut Dataset, mut f: impl FnMut(&mut Vec<f64>, bool)) {
+    for v in [
+        &mut ds.theta_i,
+        &mut ds.phi_i,
+        &mut ds.theta_r,
+        &mut ds.phi_r,
+    ] {
+        f(v, true);
+    }
+    for v in [
+        Some(&mut ds.radiance),
+        ds.sigma.as_mut(),
+        ds.weight.as_mut(),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        f(v, false);
     }
 }
 

@@ -2,12 +2,10 @@
 //! columns mapped by `--columns`, the other angles given by `--fixed`, optional `--map NAME=EXPR`
 //! (linear in x) per column, and a missing token (`?`) where the rig could not measure.
 
-use std::io::BufRead;
 use std::path::Path;
 
 use super::csv::parse_cell;
 use super::expr::Linear;
-use super::lines::read_error;
 use super::rows::{Cell, RowCells, Rows};
 use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::error::{Error, Result};
@@ -298,11 +296,7 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
     let mut weight: Vec<Cell> = vec![None; if lay.has_weight { nc } else { 0 }];
     let mut line_no = 0u64;
     loop {
-        buf.clear();
-        let n = reader
-            .read_until(b'\n', &mut buf)
-            .map_err(|e| read_error(path, e))?;
-        if n == 0 {
+        if !super::lines::next_line(&mut reader, &mut buf, path)? {
             break;
         }
         line_no += 1;

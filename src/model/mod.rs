@@ -259,17 +259,23 @@ impl<T> Params<T> {
     }
 }
 
+/// A parameter set needs at least one colour channel (one σ_a).
+pub fn require_channels(sigma_a: &[f64]) -> Result<()> {
+    if sigma_a.is_empty() {
+        return Err(Error::Parameter {
+            name: "sigma_a".into(),
+            value: f64::NAN,
+            message: "give at least one colour channel".into(),
+        });
+    }
+    Ok(())
+}
+
 impl Params<f64> {
     /// Check every parameter against its domain in the parameter table; the error names the
     /// parameter, its value in file units (degrees for angles) and the allowed range.
     pub fn validate(&self) -> Result<()> {
-        if self.sigma_a.is_empty() {
-            return Err(Error::Parameter {
-                name: "sigma_a".into(),
-                value: f64::NAN,
-                message: "give at least one colour channel".into(),
-            });
-        }
+        require_channels(&self.sigma_a)?;
         for name in parameters::all_parameters(self.sigma_a.len()) {
             let spec = name.spec();
             let value = self.get(name) * spec.unit.file_factor();

@@ -21,6 +21,7 @@ use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 use crate::files::{read_curves_csv, CurveRow, FitJson};
 use crate::model::{scattering_by_lobe, Angles};
+use crate::params::ParameterFile as _;
 
 use crate::plot::{render, YScale};
 use decimate::stride_indices;

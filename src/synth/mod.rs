@@ -19,6 +19,7 @@ use crate::data::{round_trip_degrees, write_csv, Dataset};
 use crate::error::{Error, Result};
 pub use crate::files::{ScaleEntry, Truth};
 use crate::model::{scattering, Angles, Measurement, ModelConfig, Params};
+use crate::params::ParameterFile as _;
 use crate::params::{ParamFile, SigmaA};
 
 pub use self::noise::{Noise, Noisy, OUTLIER_FACTOR};

@@ -413,23 +413,38 @@ impl Options<'_> {
 
     /// Inclinations in degrees, each within ±MAX_THETA_DEG.
     fn angles(&self, key: &str, default: &[f64]) -> Result<Vec<f64>> {
-        let values = self.list(key, default)?;
-        if let Some(bad) = values.iter().find(|v| v.abs() > MAX_THETA_DEG) {
-            return Err(rig_error(
-                self.spec,
-                format!("{key}: {bad}° is outside ±{MAX_THETA_DEG}° (90° lies on the fiber axis)"),
-            ));
-        }
-        Ok(values)
+        self.checked_list(
+            key,
+            default,
+            |v| v.abs() <= MAX_THETA_DEG,
+            || format!("±{MAX_THETA_DEG}° (90° lies on the fiber axis)"),
+        )
     }
 
     /// Azimuths in degrees, each within (−180°, 180°].
     fn azimuths(&self, key: &str, default: &[f64]) -> Result<Vec<f64>> {
+        self.checked_list(
+            key,
+            default,
+            |v| v > -180.0 && v <= 180.0,
+            || "(-180°, 180°] (write -180 as 180)".into(),
+        )
+    }
+
+    /// A list whose every value passes `ok`; the error names the first that does not and the
+    /// allowed `range`.
+    fn checked_list(
+        &self,
+        key: &str,
+        default: &[f64],
+        ok: impl Fn(f64) -> bool,
+        range: impl Fn() -> String,
+    ) -> Result<Vec<f64>> {
         let values = self.list(key, default)?;
-        if let Some(bad) = values.iter().find(|v| !(**v > -180.0 && **v <= 180.0)) {
+        if let Some(bad) = values.iter().find(|v| !ok(**v)) {
             return Err(rig_error(
                 self.spec,
-                format!("{key}: {bad}° is outside (-180°, 180°] (write -180 as 180)"),
+                format!("{key}: {bad}° is outside {}", range()),
             ));
         }
         Ok(values)

@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+use hairfit::params::ParameterFile as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
