@@ -9,7 +9,8 @@
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
-//! - [`fit`]: `hairfit fit` / `hairfit demo`: least squares with exact Jacobians and uncertainties.
+//! - [`fit`]: least squares with exact Jacobians and uncertainties (`hairfit fit`, `demo`).
+//! - [`cli`]: the command line's option groups, flag-worded checks and the fit summary.
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`, and the covariance of its solution.
 //! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
 //! - [`plot`]: the plotting kit (chart set-up, scales, SVG + PNG rendering) of report and cost.

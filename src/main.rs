@@ -30,7 +30,7 @@ enum Command {
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
     /// Fit the model to a data file; writes fit.json, params.json and curves.csv into --out.
-    Fit(hairfit::fit::args::FitCommandArgs),
+    Fit(hairfit::cli::fit::FitCommandArgs),
     /// Fit every item of a manifest (or one shard of it) into --out/NAME; --merge summarises.
     Batch(BatchArgs),
     /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
@@ -85,7 +85,7 @@ struct BatchArgs {
 #[derive(clap::Args)]
 struct DemoArgs {
     #[command(flatten)]
-    fit: hairfit::fit::args::FitArgs,
+    fit: hairfit::cli::fit::FitArgs,
     /// Output directory.
     #[arg(long, default_value = "fits/demo")]
     out: PathBuf,
@@ -212,14 +212,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Fit(a) => {
             let cancel = Some(ctrl_c_flag());
-            let outcome =
-                hairfit::fit::args::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
+            let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
         }
         Command::Batch(a) => return batch(a),
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());
-            let outcome = hairfit::fit::demo::demo_command(&a.fit, &a.out, cancel)?;
+            let outcome = hairfit::fit::demo::demo_command(&a.fit.options(cancel)?, &a.out)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
             print!("{}", hairfit::fit::demo::truth_line(&a.out));
         }
@@ -279,7 +278,7 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
 
 /// The fit's summary, then its plotted report, drawn from the fit's result in memory.
 fn fit_summary_and_report(outcome: &hairfit::fit::FitOutcome, dir: &std::path::Path) -> String {
-    hairfit::fit::summary(outcome, Some(dir))
+    hairfit::cli::summary::summary(outcome, Some(dir))
         + &hairfit::report::report_line(dir, &outcome.json, &outcome.curves)
 }
 

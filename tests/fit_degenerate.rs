@@ -3,7 +3,8 @@
 
 mod fit_support;
 
-use hairfit::fit::{fit, summary, write_outputs, EffectsChoice, FitOptions, FitOutcome};
+use hairfit::cli::summary::summary;
+use hairfit::fit::{fit, write_outputs, EffectsChoice, FitOptions, FitOutcome};
 use hairfit::model::Angles;
 
 fn fit_angles(angles: Vec<Angles>, effects: EffectsChoice) -> FitOutcome {

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use clap::{CommandFactory, Parser};
 
+use crate::cli::fit::FitCommandArgs;
 use crate::error::{Error, Result};
-use crate::fit::args::FitCommandArgs;
 
 /// `hairfit fit`'s own argument parser, so a manifest item means what the command line means.
 #[derive(Debug, Parser)]

@@ -137,7 +137,7 @@ pub fn run_batch(
 fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOutcome {
     let dir = out.join(&item.name);
     let result = item.fit_args(&dir).and_then(|a| {
-        crate::fit::args::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel.clone())
+        crate::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel.clone())
     });
     match result {
         Err(e) => ItemOutcome::Failed(e.to_string()),

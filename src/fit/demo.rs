@@ -3,11 +3,9 @@
 //! [`synthesize`] gives the fit's tests and benchmark the same synthesizer in memory.
 
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 
-use super::args::FitArgs;
 use super::problem::FitData;
+use super::FitOptions;
 use super::{fit, write_outputs, FitOutcome};
 use crate::error::Result;
 use crate::files::LoadReport;
@@ -96,12 +94,7 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
 
 /// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
 /// `data.csv` and `truth.json`, fit from the default start design, write the fit's files.
-pub fn demo_command(
-    args: &FitArgs,
-    out: &Path,
-    cancel: Option<Arc<AtomicBool>>,
-) -> Result<FitOutcome> {
-    let opts = args.options(cancel)?;
+pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
     let truth = demo_truth();
     let config = ModelConfig {
         mode: opts.mode,
@@ -134,7 +127,7 @@ pub fn demo_command(
         ..LoadReport::default()
     };
     let data = super::fit_data(&dataset);
-    let outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
+    let outcome = fit(&data, &data_path.display().to_string(), report, opts)?;
     write_outputs(out, &outcome)?;
     Ok(outcome)
 }

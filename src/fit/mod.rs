@@ -8,7 +8,6 @@
 //! statistics, curves ([`assemble`]). The result is typed ([`FitOutcome`], formats from
 //! [`crate::files`]); the caller writes it and hands it to the report.
 
-pub mod args;
 pub mod assemble;
 pub mod auto;
 pub mod bounds;
@@ -20,7 +19,6 @@ pub mod loss;
 pub mod problem;
 pub mod solve;
 pub mod stages;
-pub mod summary;
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -33,7 +31,6 @@ pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
 pub use loss::Loss;
 pub use problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode, Space};
-pub use summary::summary;
 
 use crate::data::Dataset;
 use crate::error::{Error, Result};

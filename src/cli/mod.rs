@@ -1,5 +1,9 @@
-//! Option groups shared by several commands (clap `Args`), so `main.rs` only composes them and
-//! every command spells the same option the same way.
+//! The command line's side of the library: clap option groups shared by several commands (so
+//! `main.rs` only composes them and every command spells an option the same way), the fit
+//! command's options and flag-worded checks ([`fit`]), and the summary it prints ([`summary`]).
+
+pub mod fit;
+pub mod summary;
 
 use clap::Args;
 

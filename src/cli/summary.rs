@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::FitOutcome;
+use crate::fit::FitOutcome;
 use crate::model::Measurement;
 
 /// `v ± e` with a sensible number of digits.

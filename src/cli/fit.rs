@@ -1,5 +1,6 @@
-//! The clap options of `hairfit fit` / `hairfit demo`, and the fit command itself (load, fit,
-//! write), so `main.rs` only parses, calls, and hands the result to the report.
+//! The clap options of `hairfit fit` / `hairfit demo` / `hairfit batch` items, their
+//! flag-worded checks, and the fit command itself (load, fit, write), so `main.rs` only parses,
+//! calls, and hands the result to the report.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -7,12 +8,12 @@ use std::sync::Arc;
 
 use clap::Args;
 
-use super::{
-    fit, fit_data, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
-};
-use crate::cli::{MeasurementArgs, ModelArgs};
+use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
+use crate::fit::{
+    fit, fit_data, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
+};
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
 #[derive(Debug, Clone, Args)]
