@@ -17,25 +17,10 @@ fn params() -> Params<f64> {
         .to_params()
 }
 
-/// Deterministic spread of angles over the whole domain (θ in (−85°, 85°), φ any).
+/// The ledger's seeded spread over the whole domain (θ in (−80°, 80°), φ any): the same
+/// directions the cost ledger times, so the two agree.
 fn angle_set() -> Vec<Angles> {
-    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut next = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        (x >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..BATCH)
-        .map(|_| {
-            Angles::from_degrees(
-                next() * 170.0 - 85.0,
-                next() * 360.0 - 180.0,
-                next() * 170.0 - 85.0,
-                next() * 360.0 - 180.0,
-            )
-        })
-        .collect()
+    hairfit::cost::representative_angles(BATCH, 0x9E37_79B9)
 }
 
 fn effect_sets() -> Vec<(&'static str, Effects)> {
