@@ -258,7 +258,7 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
     let cancel = ctrl_c_flag();
     let run = run_batch(&manifest, &a.out, shard, Some(cancel), |item, outcome| {
         let what = match outcome {
-            ItemOutcome::Fitted { status } => status.clone(),
+            ItemOutcome::Fitted { status, report } => format!("{status}; {report}"),
             ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
             ItemOutcome::Failed(e) => format!("FAILED: {e}"),
             ItemOutcome::Interrupted => "interrupted".into(),

@@ -86,35 +86,37 @@ const FIXED_COLUMNS: [&str; 8] = [
 
 /// Build the summary table of every manifest item under `out`.
 pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSummary) {
-    let mut fits: Vec<(usize, Result<FitJson>)> = Vec::new();
+    // One entry per item, in manifest order: `None` when it has no fit.json yet.
     let mut missing = Vec::new();
     let mut unreadable = Vec::new();
-    for (i, item) in manifest.items.iter().enumerate() {
-        let path = out.join(&item.name).join("fit.json");
-        if !path.exists() {
-            missing.push(item.name.clone());
-            continue;
-        }
-        let fit = FitJson::load(&path);
-        if let Err(e) = &fit {
-            unreadable.push((item.name.clone(), e.to_string()));
-        }
-        fits.push((i, fit));
-    }
+    let fits: Vec<Option<Result<FitJson>>> = manifest
+        .items
+        .iter()
+        .map(|item| {
+            let path = out.join(&item.name).join("fit.json");
+            if !path.exists() {
+                missing.push(item.name.clone());
+                return None;
+            }
+            let fit = FitJson::load(&path);
+            if let Err(e) = &fit {
+                unreadable.push((item.name.clone(), e.to_string()));
+            }
+            Some(fit)
+        })
+        .collect();
     // Columns: the fixed ones, then every parameter and scale channel in order of first use.
     let mut params: Vec<String> = Vec::new();
     let mut channels: Vec<String> = Vec::new();
-    for (_, fit) in &fits {
-        if let Ok(f) = fit {
-            for p in &f.parameters {
-                if !params.contains(&p.name) {
-                    params.push(p.name.clone());
-                }
+    for f in fits.iter().flatten().flatten() {
+        for p in &f.parameters {
+            if !params.contains(&p.name) {
+                params.push(p.name.clone());
             }
-            for s in &f.scale {
-                if !channels.contains(&s.channel) {
-                    channels.push(s.channel.clone());
-                }
+        }
+        for s in &f.scale {
+            if !channels.contains(&s.channel) {
+                channels.push(s.channel.clone());
             }
         }
     }
@@ -126,12 +128,12 @@ pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSum
         header.extend([format!("scale_{c}"), format!("scale_{c}_se")]);
     }
     let mut rows = Vec::new();
-    for (i, item) in manifest.items.iter().enumerate() {
+    for (item, fit) in manifest.items.iter().zip(&fits) {
         let data = item.argv.first().cloned().unwrap_or_default();
         let mut row = vec![String::new(); header.len()];
         row[0] = item.name.clone();
         row[1] = data;
-        match fits.iter().find(|(j, _)| *j == i).map(|(_, f)| f) {
+        match fit {
             None => row[2] = "missing".into(),
             Some(Err(_)) => row[2] = "unreadable".into(),
             Some(Ok(f)) => {

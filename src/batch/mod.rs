@@ -49,8 +49,9 @@ impl ItemStamp {
 /// What happened to one item of this shard.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ItemOutcome {
-    /// Fitted now; the fit's status (`converged`, …).
-    Fitted { status: String },
+    /// Fitted now; the fit's status (`converged`, …) and the report's line (where it is, or
+    /// why it could not be drawn), as `hairfit fit` prints it.
+    Fitted { status: String, report: String },
     /// A finished result made with the same arguments was already there.
     Skipped,
     /// The fit could not run (bad data file, …): the error.
@@ -143,7 +144,7 @@ fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOut
         Err(e) => ItemOutcome::Failed(e.to_string()),
         Ok(outcome) => {
             // The report, as `hairfit fit` draws it after the fit.
-            let _ = crate::report::report_line(&dir, &outcome.json, &outcome.curves);
+            let report = crate::report::report_line(&dir, &outcome.json, &outcome.curves);
             let status = merge::fit_status(&dir).unwrap_or_else(|| "unknown".into());
             if status == "interrupted" {
                 return ItemOutcome::Interrupted;
@@ -152,7 +153,10 @@ fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOut
                 argv: item.argv.clone(),
             };
             match stamp.write(out, &item.name) {
-                Ok(()) => ItemOutcome::Fitted { status },
+                Ok(()) => ItemOutcome::Fitted {
+                    status,
+                    report: report.trim_end().to_string(),
+                },
                 Err(e) => ItemOutcome::Failed(format!("fitted, but {e}")),
             }
         }
