@@ -1,15 +1,10 @@
 //! `hairfit load` end to end: the summary, `--json`, and errors on stderr with a failing status.
 
-use std::path::Path;
-use std::process::Command;
+#[path = "support/cli.rs"]
+mod cli;
 
-fn hairfit(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
-}
+use cli::hairfit;
+use std::path::Path;
 
 #[test]
 fn load_prints_the_documented_scan_report() {

@@ -1,9 +1,13 @@
 //! `hairfit synth` end to end: reproducible bytes, a bit-exact round trip through the loader and
 //! the model, the truth sidecar, channel handling, and clear errors for bad options.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::{hairfit, s, write};
 use hairfit::params::ParameterFile as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
 use hairfit::data::{load, write_csv, LoadOptions};
 use hairfit::model::{scattering, Angles, Effects, Measurement, ModelConfig, RootMode};
@@ -14,23 +18,6 @@ const PARAMS_3: &str = r#"{"eta": 1.55, "sigma_a": [0.2, 0.4, 0.8], "alpha_r_deg
   "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#;
 const PARAMS_1: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
   "w_c_deg": 15, "eccentricity": 0.9}"#;
-
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn ok(out: &Output) {
     assert!(

@@ -3,14 +3,13 @@
 //! bytes and the same truth file, and every shipped synthetic CSV (one with a truth sidecar)
 //! must have its line.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::root;
+use std::path::Path;
 
 use hairfit::synth::Truth;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// The `hairfit synth ...` lines of data/README.md.
 fn documented_commands() -> Vec<String> {
@@ -43,16 +42,8 @@ fn every_documented_command_reproduces_its_shipped_files() {
         let mut rerun: Vec<String> = args.iter().map(|s| s.to_string()).collect();
         let k = rerun.iter().position(|a| a == "--output").unwrap();
         rerun[k + 1] = fresh.to_str().unwrap().to_string();
-        let out = Command::new(env!("CARGO_BIN_EXE_hairfit"))
-            .args(&rerun)
-            .current_dir(root())
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{line}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let rerun: Vec<&str> = rerun.iter().map(String::as_str).collect();
+        cli::hairfit_ok(&rerun);
         let want = std::fs::read(root().join(&shipped)).unwrap();
         let got = std::fs::read(&fresh).unwrap();
         assert!(
