@@ -25,7 +25,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r in degrees).
+    /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r; degrees unless --angles rad or `# angles: rad`).
     Eval(EvalArgs),
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
@@ -107,6 +107,9 @@ struct EvalArgs {
     output: Option<PathBuf>,
     #[command(flatten)]
     model: ModelArgs,
+    /// Unit of the input's angles [default: deg, or what a `# angles: rad` line says].
+    #[arg(long, value_enum)]
+    angles: Option<hairfit::data::AngleUnit>,
 }
 
 #[derive(clap::Args)]
@@ -158,6 +161,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
                 params: file.to_params(),
                 config: args.model.config()?,
+                angles: args.angles,
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
             if let Some(out) = args.output {

@@ -166,10 +166,12 @@ pub fn fit_command(
     let opts = args.options(cancel)?;
     publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
         let (ds, report) = load(data_path, load_options)?;
+        let load_warnings = report.warnings.clone();
         let data = fit_data(&ds);
         let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
-        // The loader's settings are options of this fit too.
+        // The loader's settings are options of this fit too, and its warnings the fit's.
         outcome.json.options.load = Some(format!("{load_options:?}"));
+        outcome.json.warnings.splice(0..0, load_warnings);
         Ok(outcome)
     })
 }
