@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::data::lines::{csv_error, LineCounter, TextGuard};
+use crate::data::AngleUnit;
 use crate::error::{Error, Result};
 use crate::model::{scattering, Angles, ModelConfig, Params};
 
@@ -32,6 +33,9 @@ pub struct EvalRequest {
     /// Column names for the appended values: `["s"]` or `["s_0", …]`.
     pub output_columns: Vec<String>,
     pub config: ModelConfig,
+    /// `--angles`: the input's angle unit; the file's `# angles:` line decides when absent
+    /// (degrees when neither says).
+    pub angles: Option<AngleUnit>,
 }
 
 /// Summary of an evaluation run.
@@ -63,6 +67,16 @@ pub fn eval_file(
         )));
     }
     let file = TextGuard::new(file);
+    // The unit line is read before the stream, so `eval_stream` sees the settled unit.
+    let directive = crate::data::unit::file_directive(input, 1)?;
+    let request = &EvalRequest {
+        angles: Some(crate::data::unit::resolve(
+            request.angles,
+            directive,
+            input,
+        )?),
+        ..request.clone()
+    };
     match output {
         Some(out) => {
             let mut summary = EvalSummary { rows: 0 };
@@ -169,6 +183,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
                 &spare,
                 &angle_index,
                 &header_names,
+                request.angles.unwrap_or(AngleUnit::Deg),
             )?);
             records.push(std::mem::take(&mut spare));
         }
@@ -235,14 +250,19 @@ fn locate_angle_columns(source: &Path, header_line: u64, headers: &[String]) -> 
     }
 }
 
-/// Parse one row's angles (degrees) with errors naming line and column.
+/// Parse one row's angles (in `unit`) with errors naming line and column.
 fn parse_angles(
     source: &Path,
     line: u64,
     record: &csv::ByteRecord,
     index: &[usize; 4],
     headers: &[String],
+    unit: AngleUnit,
 ) -> Result<Angles> {
+    let (theta_limit, unit_name) = match unit {
+        AngleUnit::Deg => (90.0, "degrees"),
+        AngleUnit::Rad => (std::f64::consts::FRAC_PI_2, "radians"),
+    };
     let mut deg = [0.0f64; 4];
     for (k, &col) in index.iter().enumerate() {
         let field = record.get(col).unwrap_or_default();
@@ -255,7 +275,7 @@ fn parse_angles(
                 line,
                 col as u64 + 1,
                 format!(
-                    "`{}` is not a number (column `{}`, degrees)",
+                    "`{}` is not a number (column `{}`, {unit_name})",
                     text.trim(),
                     headers[col]
                 ),
@@ -274,20 +294,28 @@ fn parse_angles(
             ));
         }
         let is_theta = k % 2 == 0;
-        if is_theta && value.abs() >= 90.0 {
+        if is_theta && value.abs() >= theta_limit {
             return Err(Error::input(
                 source,
                 line,
                 col as u64 + 1,
                 format!(
-                    "{} = {value}° lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90°",
+                    "{} = {value} {unit_name} lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90° (π/2)",
                     headers[col]
                 ),
             ));
         }
         deg[k] = value;
     }
-    Ok(Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]))
+    Ok(match unit {
+        AngleUnit::Deg => Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]),
+        AngleUnit::Rad => Angles {
+            theta_i: deg[0],
+            phi_i: deg[1],
+            theta_r: deg[2],
+            phi_r: deg[3],
+        },
+    })
 }
 
 /// A non-finite S is an error naming the row and the parameters, never a `NaN` in the output.

@@ -25,7 +25,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r in degrees).
+    /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r; degrees unless --angles rad or `# angles: rad`).
     Eval(EvalArgs),
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
@@ -50,6 +50,9 @@ enum Command {
         /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
         #[arg(long)]
         quick: bool,
+        /// Replace an output directory that holds files other than a hairfit result.
+        #[arg(long)]
+        force: bool,
         /// Output directory.
         #[arg(long, default_value = "fits/cost")]
         out: PathBuf,
@@ -104,6 +107,9 @@ struct EvalArgs {
     output: Option<PathBuf>,
     #[command(flatten)]
     model: ModelArgs,
+    /// Unit of the input's angles [default: deg, or what a `# angles: rad` line says].
+    #[arg(long, value_enum)]
+    angles: Option<hairfit::data::AngleUnit>,
 }
 
 #[derive(clap::Args)]
@@ -155,6 +161,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
                 params: file.to_params(),
                 config: args.model.config()?,
+                angles: args.angles,
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
             if let Some(out) = args.output {
@@ -201,9 +208,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 dir.join("index.html").display()
             );
         }
-        Command::Cost { quick, out } => {
+        Command::Cost { quick, force, out } => {
             remove_partial_output_on_interrupt();
-            let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
+            let options = hairfit::cost::CostOptions { quick, force };
+            let ledger = hairfit::cost::run_cost(&out, &options)?;
             print!("{}", hairfit::cost::summary_text(&ledger));
             eprintln!(
                 "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
@@ -214,13 +222,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let cancel = Some(ctrl_c_flag());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
+            outcome.report_result(&a.out)?;
         }
         Command::Batch(a) => return batch(a),
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());
-            let outcome = hairfit::fit::demo::demo_command(&a.fit.options(cancel)?, &a.out)?;
+            let opts = a.fit.options(cancel)?;
+            let outcome = hairfit::fit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
             print!("{}", hairfit::fit::demo::truth_line(&a.out));
+            outcome.report_result(&a.out)?;
         }
     }
     Ok(())
@@ -276,10 +287,9 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The fit's summary, then its plotted report, drawn from the fit's result in memory.
-fn fit_summary_and_report(outcome: &hairfit::fit::FitOutcome, dir: &std::path::Path) -> String {
-    hairfit::cli::summary::summary(outcome, Some(dir))
-        + &hairfit::report::report_line(dir, &outcome.json, &outcome.curves)
+/// The fit's summary, then where its plotted report is.
+fn fit_summary_and_report(run: &hairfit::outdir::PublishedFit, dir: &std::path::Path) -> String {
+    hairfit::cli::summary::summary(&run.outcome, Some(dir)) + &run.report_line(dir)
 }
 
 /// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far; a
@@ -292,6 +302,7 @@ fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     if let Err(e) = ctrlc::set_handler(move || {
         if f.swap(true, std::sync::atomic::Ordering::SeqCst) {
             hairfit::atomic::remove_in_flight();
+            hairfit::outdir::remove_in_flight();
             std::process::exit(130);
         }
     }) {
@@ -305,6 +316,7 @@ fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
 fn remove_partial_output_on_interrupt() {
     if let Err(e) = ctrlc::set_handler(|| {
         hairfit::atomic::remove_in_flight();
+        hairfit::outdir::remove_in_flight();
         std::process::exit(130);
     }) {
         eprintln!("hairfit: warning: Ctrl-C may leave a temporary file: {e}");

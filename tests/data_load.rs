@@ -79,10 +79,7 @@ fn messy_csv_counts_every_reason_exactly() {
         text.contains("14 rows read, 4 accepted, 10 rejected"),
         "{text}"
     );
-    assert!(
-        text.contains("line 15 repeats the angles of line 3"),
-        "{text}"
-    );
+    assert!(text.contains("line 15 repeats line 3"), "{text}");
 }
 
 #[test]
@@ -533,7 +530,8 @@ fn format_is_detected_from_extension_and_overridable() {
 }
 
 #[test]
-fn duplicates_match_signed_zeros_and_keep_channels_aligned() {
+fn duplicates_match_signed_zeros_and_wrapped_azimuths_and_keep_channels_aligned() {
+    // Only identical lines are duplicates; the same direction with other values is a replicate.
     let dir = tempfile::tempdir().unwrap();
     let p = write(
         dir.path(),
@@ -541,19 +539,57 @@ fn duplicates_match_signed_zeros_and_keep_channels_aligned() {
         "theta_i,phi_i,theta_r,phi_r,radiance_r,radiance_g,sigma_r,sigma_g\n\
          0,0,10,20,1,2,0.1,0.2\n\
          1,0,10,20,3,4,0.3,0.4\n\
-         -0,0,10,20,5,6,0.5,0.6\n\
-         0,-0,10,20,7,8,0.7,0.8\n\
+         -0,0,10,20,1,2,0.1,0.2\n\
+         0,-0,10,20,1,2,0.1,0.2\n\
          2,0,10,20,9,10,0.9,1.0\n\
-         1,0,10,20,11,12,1.1,1.2\n",
+         1,360,10,20,3,4,0.3,0.4\n\
+         1,0,10,-340,5,6,0.5,0.6\n\
+         1,0,10,20,3,4,0.3,0.5\n",
     );
     let (ds, r) = load(&p, &LoadOptions::default()).unwrap();
     assert_accounts(&r, &ds);
     assert_eq!(r.rejected[&Duplicate].first_lines, [4, 5, 7]);
     assert_eq!(r.duplicate_of, [[4, 2], [5, 2], [7, 3]]);
-    assert_eq!(ds.source_line, [2, 3, 6]);
-    assert_eq!(ds.radiance, [1.0, 2.0, 3.0, 4.0, 9.0, 10.0]);
+    assert_eq!(ds.source_line, [2, 3, 6, 8, 9]);
+    // φ_r = −340° is 20° after wrapping; line 9 differs from line 3 in one sigma only.
+    assert_eq!(r.replicates.count, 2);
+    assert_eq!(r.replicates.first_lines, [8, 9]);
+    assert_eq!(
+        ds.radiance,
+        [1.0, 2.0, 3.0, 4.0, 9.0, 10.0, 5.0, 6.0, 3.0, 4.0]
+    );
     assert_eq!(
         ds.sigma.as_deref(),
-        Some(&[0.1, 0.2, 0.3, 0.4, 0.9, 1.0][..])
+        Some(&[0.1, 0.2, 0.3, 0.4, 0.9, 1.0, 0.5, 0.6, 0.3, 0.5][..])
     );
+    let text = r.to_string();
+    assert!(
+        text.contains("replicates (a direction measured again, kept): 2"),
+        "{text}"
+    );
+    // fit.json and `load --json` carry the count; an older report without it reads as 0.
+    let v = serde_json::to_value(&r).unwrap();
+    assert_eq!(v["replicates"]["count"], 2);
+    let old: hairfit::data::LoadReport = serde_json::from_str(r#"{"rows_read": 3}"#).unwrap();
+    assert_eq!(old.replicates.count, 0);
+}
+
+#[test]
+fn repeated_measurements_of_one_direction_are_all_kept() {
+    // Five readings at each of two directions, as a goniometer repeating a scan: all ten kept.
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("theta_i,phi_i,theta_r,phi_r,radiance\n");
+    for k in 0..5 {
+        text += &format!(
+            "30,0,-30,{},{}\n",
+            170 + 360 * (k % 2),
+            1.0 + 0.01 * k as f64
+        );
+        text += &format!("30,0,-30,-10,{}\n", 2.0 + 0.01 * k as f64);
+    }
+    let p = write(dir.path(), "rep.csv", &text);
+    let (ds, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!((r.accepted, r.rejected_total()), (10, 0));
+    assert_eq!(r.replicates.count, 8, "two directions, four repeats each");
 }

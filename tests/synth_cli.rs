@@ -470,3 +470,102 @@ fn explicit_directions_are_used_as_given() {
         "{err}"
     );
 }
+
+/// The data and its truth are published together: a truth file that cannot be written leaves
+/// no CSV (and an earlier CSV untouched), and no temporary file.
+#[test]
+fn the_csv_and_its_truth_are_written_both_or_neither() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "p.json", PARAMS_1);
+    let csv = dir.path().join("d.csv");
+    // A directory where the sidecar goes: its rename fails.
+    std::fs::create_dir(truth_path(&csv)).unwrap();
+    let args = [
+        "synth",
+        "--params",
+        s(&p),
+        "--rig",
+        "sphere:n=50",
+        "--output",
+        s(&csv),
+    ];
+    let out = hairfit(&args);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!csv.exists(), "the CSV was published without its truth");
+    std::fs::write(&csv, "an earlier dataset").unwrap();
+    assert_eq!(hairfit(&args).status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), "an earlier dataset");
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["d.csv", "d.truth.json", "p.json"],
+        "temporaries left"
+    );
+}
+
+#[test]
+fn synth_refuses_to_replace_its_own_parameter_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = write(dir.path(), "x.truth.json", PARAMS_1);
+    let out = hairfit(&[
+        "synth",
+        "--params",
+        s(&truth),
+        "--rig",
+        "sphere:n=50",
+        "--output",
+        s(&dir.path().join("x.csv")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("would replace --params"), "{err}");
+    assert_eq!(std::fs::read_to_string(&truth).unwrap(), PARAMS_1);
+    assert!(!dir.path().join("x.csv").exists());
+}
+
+/// The case: 10⁸ azimuthal steps aborted at 9.6 GB. Refused before allocating, naming
+/// the options; `--max-memory` sets the limit either way.
+#[test]
+fn synth_estimates_memory_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "p.json", PARAMS_1);
+    let csv = dir.path().join("d.csv");
+    let run = |rig: &str, extra: &[&str]| {
+        let mut a = vec![
+            "synth",
+            "--params",
+            s(&p),
+            "--rig",
+            rig,
+            "--output",
+            s(&csv),
+        ];
+        a.extend_from_slice(extra);
+        hairfit(&a)
+    };
+    let t0 = std::time::Instant::now();
+    let out = run("azimuthal:steps=100000000", &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--rig") && err.contains("steps") && err.contains("--max-memory"),
+        "{err}"
+    );
+    // Refused, not attempted: allocating 9.6 GB alone takes longer than this.
+    assert!(t0.elapsed() < std::time::Duration::from_secs(5));
+    // 3 incidences × 10k steps ≈ 3.8 MB: refused under 1M, written under 100M.
+    let out = run("azimuthal:steps=10000", &["--max-memory", "1M"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--max-memory"));
+    ok(&run("azimuthal:steps=10000", &["--max-memory", "100M"]));
+    let out = run("sphere:n=10", &["--max-memory", "lots"]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "clap refuses a size it cannot read"
+    );
+}

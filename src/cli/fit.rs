@@ -11,9 +11,8 @@ use clap::Args;
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
-use crate::fit::{
-    fit, fit_data, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
-};
+use crate::fit::{fit, fit_data, EffectsChoice, FitOptions, Global, Loss, Space};
+use crate::outdir::{publish_fit, PublishedFit};
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
 #[derive(Debug, Clone, Args)]
@@ -61,6 +60,10 @@ pub struct FitArgs {
     /// Never show a progress bar.
     #[arg(long)]
     pub no_progress: bool,
+    /// Replace an output directory that holds files other than a hairfit result (the run's own
+    /// input data file is never replaced).
+    #[arg(long)]
+    pub force: bool,
     #[command(flatten)]
     pub model: ModelArgs,
     #[command(flatten)]
@@ -151,22 +154,26 @@ impl FitArgs {
     }
 }
 
-/// `hairfit fit DATA --out DIR`: load, fit, write the fit's files into `out`; the outcome.
+/// `hairfit fit DATA --out DIR`: lock `out`, load, fit, and publish the fit's files with its
+/// report as one set (see [`crate::outdir`]).
 pub fn fit_command(
     data_path: &Path,
     load_options: &LoadOptions,
     args: &FitArgs,
     out: &Path,
     cancel: Option<Arc<AtomicBool>>,
-) -> Result<FitOutcome> {
+) -> Result<PublishedFit> {
     let opts = args.options(cancel)?;
-    let (ds, report) = load(data_path, load_options)?;
-    let data = fit_data(&ds);
-    let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
-    // The loader's settings are options of this fit too.
-    outcome.json.options.load = Some(format!("{load_options:?}"));
-    write_outputs(out, &outcome)?;
-    Ok(outcome)
+    publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
+        let (ds, report) = load(data_path, load_options)?;
+        let load_warnings = report.warnings.clone();
+        let data = fit_data(&ds);
+        let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
+        // The loader's settings are options of this fit too, and its warnings the fit's.
+        outcome.json.options.load = Some(format!("{load_options:?}"));
+        outcome.json.warnings.splice(0..0, load_warnings);
+        Ok(outcome)
+    })
 }
 
 /// Everything `hairfit fit` takes: the data file, the loader's options, the fit's options and

@@ -35,6 +35,8 @@ pub const COST_SEED: u64 = 20_03;
 pub struct CostOptions {
     /// Fewer angles, shorter timings, fewer fit variants: under a minute on 2 cores.
     pub quick: bool,
+    /// Replace an output directory that holds files other than a hairfit result.
+    pub force: bool,
 }
 
 /// One measured setting of one knob.
@@ -93,6 +95,8 @@ fn time_per_call(min_s: f64, mut f: impl FnMut()) -> f64 {
 
 /// Measure everything and write cost.csv, cost.json, cost.svg and cost.png into `out`.
 pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
+    // Locked before measuring, so a second run fails fast; the files are published as one set.
+    let set = crate::outdir::OutputSet::begin(out, "hairfit cost", options.force, &[])?;
     let t0 = Instant::now();
     let quick = options.quick;
     let mut rows = model::model_rows(quick);
@@ -113,6 +117,7 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
         rows,
         wall_time_s: t0.elapsed().as_secs_f64(),
     };
-    ledger::write_ledger(out, &ledger)?;
+    ledger::write_ledger(set.staging(), &ledger)?;
+    set.publish()?;
     Ok(ledger)
 }

@@ -6,10 +6,11 @@ use std::path::Path;
 
 use super::problem::FitData;
 use super::FitOptions;
-use super::{fit, write_outputs, FitOutcome};
+use super::{fit, FitOutcome};
 use crate::error::Result;
 use crate::files::LoadReport;
 use crate::model::{Angles, ModelConfig, Params};
+use crate::outdir::PublishedFit;
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
 pub fn demo_truth() -> Params<f64> {
@@ -93,8 +94,16 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
 }
 
 /// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
-/// `data.csv` and `truth.json`, fit from the default start design, write the fit's files.
-pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
+/// `data.csv` and `truth.json`, fit from the default start design, and publish them with the
+/// fit's files as one set (`force` as `hairfit fit --force`).
+pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
+    crate::outdir::publish_fit(out, "hairfit demo", force, &[], |staging| {
+        demo_into(opts, out, staging)
+    })
+}
+
+/// The demo's data, truth and fit, written into `staging` (published later as `out`).
+fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome> {
     let truth = demo_truth();
     let config = ModelConfig {
         mode: opts.mode,
@@ -111,10 +120,10 @@ pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
         opts.measurement,
         opts.seed,
     )?;
-    std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;
+    // Files go to the staging directory; the fit records where they will be.
     let data_path = out.join("data.csv");
-    crate::data::write_csv(&dataset, &data_path)?;
-    truth_record.save(&out.join("truth.json"))?;
+    crate::data::write_csv(&dataset, &staging.join("data.csv"))?;
+    truth_record.save(&staging.join("truth.json"))?;
     let report = LoadReport {
         file: data_path.display().to_string(),
         format: "synthetic".into(),
@@ -127,9 +136,7 @@ pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
         ..LoadReport::default()
     };
     let data = super::fit_data(&dataset);
-    let outcome = fit(&data, &data_path.display().to_string(), report, opts)?;
-    write_outputs(out, &outcome)?;
-    Ok(outcome)
+    fit(&data, &data_path.display().to_string(), report, opts)
 }
 
 /// The demo's truth, for the end of its summary.

@@ -75,10 +75,17 @@ pub fn write_report(dir: &Path) -> Result<ReportSummary> {
 }
 
 /// `hairfit report DIR`: read the fit's fit.json and curves.csv from `dir` and report them.
+/// The directory is republished as one set: its other files carried over, the figures redrawn.
 pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSummary> {
+    // A missing directory is reported as such before any lock is taken beside it.
+    std::fs::metadata(dir).map_err(|e| crate::Error::io(dir, e))?;
+    let set = crate::outdir::OutputSet::begin(dir, "hairfit report", false, &[])?;
     let fit = FitJson::load(&dir.join("fit.json"))?;
     let rows = read_curves_csv(&dir.join("curves.csv"))?;
-    write_report_of(dir, &fit, &rows, options)
+    set.keep_all_but(crate::outdir::is_report_file)?;
+    let summary = write_report_of(set.staging(), &fit, &rows, options)?;
+    set.publish()?;
+    Ok(summary)
 }
 
 /// Report the fit `fit` with curves `rows` into `dir`: the dense curves evaluate the fit's
@@ -112,15 +119,6 @@ pub fn write_report_of(
     let mut summary = render_report(dir, fit, rows, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
-}
-
-/// Draw the report of a fit just written to `dir`; the fit's files stand whatever happens
-/// here, so a drawing failure is a line of the summary, not an error.
-pub fn report_line(dir: &Path, fit: &FitJson, rows: &[CurveRow]) -> String {
-    match write_report_of(dir, fit, rows, &ReportOptions::default()) {
-        Ok(_) => format!("report: {}\n", dir.join("index.html").display()),
-        Err(e) => format!("warning: the plotted report could not be drawn: {e}\n"),
-    }
 }
 
 /// Render the report of `fit` and its `rows` into `dir`, evaluating `model` (with `n_model`

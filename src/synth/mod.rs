@@ -6,6 +6,7 @@
 //! per purpose (see [`random`]), so a seed gives the same draws on any machine and any future
 //! build; the model values themselves can differ in the last digit with the platform's `libm`.
 
+pub mod memory;
 mod noise;
 pub mod random;
 mod rig;
@@ -249,6 +250,10 @@ pub struct SynthArgs {
     pub model: ModelArgs,
     #[command(flatten)]
     pub measurement: MeasurementArgs,
+    /// Most memory the dataset may take, e.g. 500M or 2G (checked before allocating)
+    /// [default: half this machine's memory].
+    #[arg(long, value_parser = memory::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 /// What `hairfit synth` wrote.
@@ -281,6 +286,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
             args.output.display()
         )));
     }
+    refuse_overwriting_input(&args.params, &args.output)?;
     let rig = Rig::parse(&args.rig)?;
     let noise = Noise::parse(&args.noise)?;
     let config = args.model.config()?;
@@ -290,7 +296,8 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     })?;
     let (file, notes) = reconcile_channels(file, args.channels, &args.params)?;
     let nc = file.n_channels();
-    rig.check_memory(nc, &args.rig)?;
+    let limit = args.max_memory.unwrap_or_else(memory::machine_default);
+    rig.check_memory(nc, &args.rig, limit)?;
     let scale = match args.scale.len() {
         1 => vec![args.scale[0]; nc],
         n if n == nc => args.scale.clone(),
@@ -315,9 +322,16 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     truth.command_line = command_line;
     record_truth(&mut dataset, &truth)?;
 
+    // The data and its truth are published together: both or neither.
     let truth_file = truth_path(&args.output);
-    write_csv(&dataset, &args.output)?;
-    truth.save(&truth_file)?;
+    let mut staged = crate::atomic::StagedFiles::new();
+    let csv_tmp = staged.stage(&args.output);
+    write_csv(&dataset, &csv_tmp).map_err(|e| name_target(e, &csv_tmp, &args.output))?;
+    let truth_tmp = staged.stage(&truth_file);
+    truth
+        .save(&truth_tmp)
+        .map_err(|e| name_target(e, &truth_tmp, &truth_file))?;
+    staged.publish()?;
     Ok(SynthSummary {
         csv: args.output.clone(),
         truth: truth_file,
@@ -325,6 +339,38 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
         n_outliers: truth.outliers.len(),
         notes: truth.notes,
     })
+}
+
+/// `--params X.truth.json --output X.csv` would replace the parameter file being read (or the
+/// CSV itself): refuse.
+fn refuse_overwriting_input(params: &Path, output: &Path) -> Result<()> {
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    for target in [output.to_path_buf(), truth_path(output)] {
+        if same(params, &target) {
+            return Err(Error::Other(format!(
+                "--output {} would replace --params {} (the truth goes to {}): write the new \
+                 dataset under another name",
+                output.display(),
+                params.display(),
+                truth_path(output).display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// An error about the staged temporary file `tmp`, worded about the file the user asked for.
+fn name_target(e: Error, tmp: &Path, target: &Path) -> Error {
+    let text = e.to_string();
+    let tmp = tmp.display().to_string();
+    if text.contains(&tmp) {
+        Error::Other(text.replace(&tmp, &target.display().to_string()))
+    } else {
+        e
+    }
 }
 
 /// Apply `--channels`: a scalar sigma_a is replicated (with a note), an array must match.
