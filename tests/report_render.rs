@@ -223,6 +223,10 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
                 history: vec![0.2, 0.05, 0.011, 0.01],
             },
         ],
+        verdict: hairfit::files::Verdict::Undetermined,
+        reasons: vec!["k_g is undetermined — no sample near the glint".into()],
+        goodness_of_fit: Default::default(),
+        suggestions: vec![],
     }
 }
 

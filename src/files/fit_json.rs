@@ -68,6 +68,105 @@ impl std::fmt::Display for ParamStatus {
     }
 }
 
+/// `fit.json` → `verdict`: what a fit's result is good for. Exit codes follow it (0 for
+/// `good`, `poor_fit`, `undetermined`; 1 for `failed`; 128 + the signal for `interrupted`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// The model describes the data within their noise and every free parameter is determined.
+    Good,
+    /// The residuals show the model does not describe the data (χ² test with a σ column, else
+    /// structure along scans or lack of fit against replicates).
+    PoorFit,
+    /// The fit describes the data but some parameter is not determined by them.
+    #[default]
+    Undetermined,
+    /// The numbers are not a fit (no progress, non-finite values, overflowing weights).
+    Failed,
+    /// Stopped by a signal: the best point so far.
+    Interrupted,
+}
+
+impl Verdict {
+    /// The JSON spelling.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Verdict::Good => "good",
+            Verdict::PoorFit => "poor_fit",
+            Verdict::Undetermined => "undetermined",
+            Verdict::Failed => "failed",
+            Verdict::Interrupted => "interrupted",
+        }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// `fit.json` → `suggestions[]`: one thing to try and why this fit points to it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Suggestion {
+    /// What to change, as options of `hairfit fit` where possible (e.g. `--loss cauchy`).
+    pub action: String,
+    /// The evidence from this fit, with its numbers.
+    pub evidence: String,
+}
+
+/// `fit.json` → `goodness_of_fit.thresholds`: the limits the verdict applied (see
+/// `src/fit/verdict.rs` for why each is what it is).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GofThresholds {
+    /// A test's p-value below this rejects the model.
+    pub p_value: f64,
+    /// With σ: reduced χ² must also exceed this (a misfit worth acting on).
+    pub reduced_chi2: f64,
+    /// Without σ: lag-1 autocorrelation must also exceed this.
+    pub lag1: f64,
+    /// Without σ: observed/expected runs must also be below this.
+    pub runs_ratio: f64,
+    /// Without σ: the lack-of-fit F must also exceed this.
+    pub lack_of_fit_f: f64,
+    /// With a robust loss and σ: residuals beyond this many σ are left out of the χ² test.
+    pub robust_exclusion_sigma: f64,
+}
+
+/// `fit.json` → `goodness_of_fit`: the statistics of the residuals (normalised, in the fit's
+/// space) that decide between `good` and `poor_fit`. `null` where a test does not apply.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GoodnessOfFit {
+    /// The data carry a σ column: the χ² test decides.
+    pub sigma_given: bool,
+    /// Σ r² over the residuals the test uses, its degrees of freedom and upper-tail p-value.
+    pub chi2: Option<f64>,
+    pub chi2_dof: usize,
+    pub chi2_p_value: Option<f64>,
+    /// Residuals left out of the χ² test (a robust loss discounts them; see thresholds).
+    pub chi2_excluded: usize,
+    /// The factor already in every linearised standard error: √(Σr̃²/dof), the residual
+    /// scale (with σ: √(reduced χ²), the PDG scale factor of a poor fit).
+    pub se_scale_factor: Option<f64>,
+    /// Noise level the residuals show, robustly: 1.4826 × median |r| (normalised units).
+    pub robust_noise: Option<f64>,
+    /// Residuals beyond 5 × `robust_noise`, and their share of Σ r².
+    pub large_residuals: usize,
+    pub large_residual_share: Option<f64>,
+    /// Scan slices (fixed incidence and one outgoing angle, ≥ 3 points) the structure tests use.
+    pub slices: usize,
+    /// Wald–Wolfowitz runs test of residual signs along the slices.
+    pub runs: Option<crate::fit::gof::RunsTest>,
+    /// Lag-1 autocorrelation of residuals along the slices.
+    pub lag1: Option<crate::fit::gof::Autocorrelation>,
+    /// Directions (per channel) measured more than once, and the lack-of-fit F test on them.
+    pub replicate_groups: usize,
+    pub lack_of_fit: Option<crate::fit::gof::LackOfFit>,
+    pub thresholds: GofThresholds,
+}
+
 /// `fit.json` → `data`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DataInfo {
@@ -212,6 +311,20 @@ pub struct FitJson {
     pub residuals: ResidualSummary,
     #[serde(default)]
     pub trace: Vec<TraceStage>,
+    /// What the result is good for (`src/fit/verdict.rs` decides; precedence interrupted >
+    /// failed > poor_fit > undetermined > good). Files written before verdicts read as
+    /// `undetermined`: nobody judged them.
+    #[serde(default)]
+    pub verdict: Verdict,
+    /// Why: sentences carrying their numbers, the deciding ones first.
+    #[serde(default)]
+    pub reasons: Vec<String>,
+    /// Every goodness-of-fit statistic computed for the verdict.
+    #[serde(default)]
+    pub goodness_of_fit: GoodnessOfFit,
+    /// What to try, each with the evidence from this fit that suggests it.
+    #[serde(default)]
+    pub suggestions: Vec<Suggestion>,
 }
 
 impl FitJson {

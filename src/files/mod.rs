@@ -22,8 +22,9 @@ pub use crate::params::ParamFile;
 
 pub use curves::{read_curves_csv, write_curves_csv, CurveRow, CURVES_HEADER};
 pub use fit_json::{
-    ChannelResiduals, Correlation, DataInfo, FitJson, FitStatus, Floored, OptionsRecord,
-    ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, TraceStage,
+    ChannelResiduals, Correlation, DataInfo, FitJson, FitStatus, Floored, GofThresholds,
+    GoodnessOfFit, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
+    Suggestion, TraceStage, Verdict,
 };
 pub use load_report::{LineTally, LoadReport, RejectReason, FIRST_LINES};
 pub use timing::{StageTiming, Timing};

@@ -1,6 +1,7 @@
 //! The fit's typed result at the solver's final point ([`assemble`]): parameter values and
 //! statuses with standard errors in natural units, the scale, correlations, residual
-//! statistics, the curves at every sample, and the warnings that explain them.
+//! statistics, the curves at every sample, the warnings that explain them, and the verdict
+//! ([`super::verdict`]) that says what the result is good for.
 
 use std::time::Instant;
 
@@ -325,6 +326,26 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             .collect(),
     };
     let residuals = residual_summary(ev, data, &e, &unc);
+    // Everything fixed: no solver unknowns, the scales come in closed form (variable
+    // projection). The solver has nothing to run on and says `failed`; the fit is complete.
+    let status = if ev.n_params() == 0 && status == FitStatus::Failed && e.cost().is_finite() {
+        FitStatus::Converged
+    } else {
+        status
+    };
+    let judgement = super::verdict::judge(&super::verdict::Evidence {
+        data,
+        ev,
+        e: &e,
+        config: &config,
+        params: &params,
+        status,
+        parameters: &parameters,
+        scale: &scale,
+        trace: &trace,
+        warnings: &warnings,
+        dof: unc.dof,
+    });
     let curves = curve_rows(ev, data, &params, &e);
     if curves.iter().any(|r| {
         ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
@@ -353,6 +374,10 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         warnings,
         residuals,
         trace,
+        verdict: judgement.verdict,
+        reasons: judgement.reasons,
+        goodness_of_fit: judgement.goodness_of_fit,
+        suggestions: judgement.suggestions,
     };
     Ok(FitOutcome {
         json,

@@ -5,8 +5,9 @@
 //! Pipeline ([`fit`], its stages in [`stages`]): choose effects → free parameters →
 //! Latin-hypercube starts → short LM runs on a subsample (parallel over starts) → optional
 //! global stage → LM polish of the best few on all data → covariance, warnings, residual
-//! statistics, curves ([`assemble`]). The result is typed ([`FitOutcome`], formats from
-//! [`crate::files`]); the caller writes it and hands it to the report.
+//! statistics, curves ([`assemble`]), the verdict ([`verdict`]). The result is typed
+//! ([`FitOutcome`], formats from [`crate::files`]); the caller writes it and hands it to the
+//! report.
 
 pub mod assemble;
 pub mod auto;
@@ -19,6 +20,8 @@ pub mod loss;
 pub mod problem;
 pub mod solve;
 pub mod stages;
+pub mod suggest;
+pub mod verdict;
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
