@@ -136,6 +136,9 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             5 => ParamStatus::Undetermined,
             _ => ParamStatus::Free,
         },
+        interval_68: None,
+        interval_95: None,
+        profile: Vec::new(),
     };
     let free: Vec<String> = names[1..].iter().map(|s| s.to_string()).collect();
     let n = free.len();
@@ -208,6 +211,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             reduced_chi2: Some(1.04),
             dof: 500,
             per_channel: vec![],
+            down_weighted: None,
         },
         trace: vec![
             TraceStage {

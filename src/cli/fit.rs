@@ -11,7 +11,9 @@ use clap::Args;
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
-use crate::fit::{fit, fit_data, EffectsChoice, FitOptions, Global, Loss, Space};
+use crate::fit::{
+    fit, fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
+};
 use crate::outdir::{publish_fit, PublishedFit};
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
@@ -23,9 +25,16 @@ pub struct FitArgs {
     /// Loss: l2, huber, cauchy or soft-l1.
     #[arg(long, default_value = "l2")]
     pub loss: Loss,
-    /// Robust-loss scale C, in normalised residual units.
-    #[arg(long, default_value_t = 1.0)]
-    pub loss_scale: f64,
+    /// Robust-loss scale C in normalised residual units, or `auto`: the loss's tuning constant
+    /// (huber/soft-l1 1.345, cauchy 2.385) times the residuals' noise level (1.4826·MAD of a
+    /// least-squares fit, refined once from the robust fit); fit.json records the value used.
+    #[arg(long, default_value = "auto")]
+    pub loss_scale: LossScale,
+    /// Parameter intervals: `profile` (profile likelihood, Δχ² = 1 and 3.84, beside the
+    /// linearised standard error), `linear` (standard errors only) or `auto` (profile when the
+    /// estimated cost is at most a few seconds; fit.json records the choice and why).
+    #[arg(long, default_value = "auto")]
+    pub intervals: Intervals,
     /// Number of multi-start points (Latin hypercube over MODEL.md's typical ranges).
     #[arg(long, default_value_t = 16)]
     pub starts: usize,
@@ -126,12 +135,6 @@ impl FitArgs {
                 self.starts
             )));
         }
-        if !(self.loss_scale.is_finite() && self.loss_scale > 0.0) {
-            return Err(Error::Other(format!(
-                "--loss-scale {}: must be a positive number",
-                self.loss_scale
-            )));
-        }
         Ok(FitOptions {
             space: self.space,
             loss: self.loss,
@@ -150,6 +153,7 @@ impl FitArgs {
             polish_iters: self.polish_iters,
             cancel,
             progress: !self.no_progress,
+            intervals: self.intervals,
         })
     }
 }

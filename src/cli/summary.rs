@@ -14,6 +14,15 @@ fn pm(v: Option<f64>, e: Option<f64>) -> String {
     }
 }
 
+/// The 68% profile interval column: `  68% [lo, hi]` (an open side reads "open"); empty when
+/// the parameter was not profiled.
+fn interval(i: Option<&crate::files::Interval>) -> String {
+    let side = |v: Option<f64>| v.map_or("open".to_string(), |v| format!("{v:.6}"));
+    i.map_or(String::new(), |i| {
+        format!("  68% [{}, {}]", side(i.lower), side(i.upper))
+    })
+}
+
 /// The summary of `out`; `dir` is where its files were written, if they were.
 pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     let j = &out.json;
@@ -49,10 +58,11 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     s += "parameters:\n";
     for p in &j.parameters {
         s += &format!(
-            "  {:<16} {}  {}\n",
+            "  {:<16} {}  {}{}\n",
             p.name,
             pm(p.value, p.std_error),
-            p.status
+            p.status,
+            interval(p.interval_68.as_ref())
         );
     }
     for c in &j.scale {
@@ -72,6 +82,28 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         r.reduced_chi2.map_or("null".into(), |v| format!("{v:.4e}")),
         r.dof
     );
+    if !j.options.intervals.is_empty() {
+        s += &format!(
+            "intervals: {} ({})\n",
+            j.options.intervals, j.options.intervals_reason
+        );
+    }
+    if let Some(d) = &r.down_weighted {
+        let lines: Vec<String> = d.lines.iter().take(12).map(|l| l.to_string()).collect();
+        s += &format!(
+            "robust loss (scale {:.4e}{}): {} value(s) down-weighted (weight < {}){}{}\n",
+            j.options.loss_scale,
+            if j.options.loss_scale_auto {
+                ", auto"
+            } else {
+                ""
+            },
+            d.count,
+            d.threshold,
+            if lines.is_empty() { "" } else { ", lines " },
+            lines.join(", ") + if d.lines.len() > 12 { ", …" } else { "" }
+        );
+    }
     for t in &j.trace {
         s += &format!(
             "  stage {:<18} iterations {:>5}  cost {:.6e}  {:.2} s\n",

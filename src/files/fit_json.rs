@@ -187,6 +187,41 @@ pub struct ParameterEntry {
     /// `null` when fixed or undetermined.
     pub std_error: Option<f64>,
     pub status: ParamStatus,
+    /// Profile-likelihood interval where Δχ² = 1 (68%); `null` when not profiled
+    /// (`options.intervals` = `linear`, or fixed).
+    #[serde(default)]
+    pub interval_68: Option<Interval>,
+    /// Profile-likelihood interval where Δχ² = 3.84 (95%).
+    #[serde(default)]
+    pub interval_95: Option<Interval>,
+    /// The profile's points `[value, Δχ²]` in reporting units, ascending in value (the report
+    /// draws them without refitting); empty when not profiled.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub profile: Vec<[f64; 2]>,
+}
+
+/// A profile-likelihood interval in reporting units: `null` on a side where the profile stays
+/// below the Δχ² threshold up to the parameter's fit bound (or the search limit), an open side.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Interval {
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+}
+
+/// `fit.json` → `residuals.down_weighted`: values the robust loss really discounted (weight
+/// below [`crate::files::DOWN_WEIGHT`]).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct DownWeighted {
+    /// The weight below which a value counts as discounted.
+    pub threshold: f64,
+    pub count: usize,
+    /// Source lines of the discounted values (the first [`DownWeighted::MAX_LINES`]).
+    pub lines: Vec<u64>,
+}
+
+impl DownWeighted {
+    /// At most this many lines are listed (curves.csv has every weight).
+    pub const MAX_LINES: usize = 200;
 }
 
 /// One channel's scale factor: `fit.json` → `scale[]` (fitted, with its standard error) and
@@ -227,6 +262,9 @@ pub struct ResidualSummary {
     pub dof: usize,
     #[serde(default)]
     pub per_channel: Vec<ChannelResiduals>,
+    /// Robust losses only: how many values the loss discounted, and which.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub down_weighted: Option<DownWeighted>,
 }
 
 /// `fit.json` → `trace[]`: one solver stage and its cost per iteration (its wall time is in
@@ -270,12 +308,19 @@ pub struct OptionsRecord {
     /// Parameters freed that are fixed by default (`--free eta`).
     pub freed: Vec<String>,
     pub global: String,
+    /// How the parameter intervals were computed: `profile` or `linear` (`--intervals`).
+    pub intervals: String,
+    /// Why (`--intervals auto` records its estimate of the profiling cost).
+    pub intervals_reason: String,
     /// The loader's settings (`hairfit fit` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load: Option<String>,
     pub log_floored: Floored,
     pub loss: String,
+    /// The robust-loss scale used (normalised residual units).
     pub loss_scale: f64,
+    /// True when `loss_scale` was estimated from the residuals (`--loss-scale auto`).
+    pub loss_scale_auto: bool,
     /// What the data's values are: `s` (scale·S) or `radiance` (scale·S·cos θ_i).
     pub measurement: Measurement,
     pub mode: RootMode,
@@ -374,7 +419,7 @@ mod tests {
         let mut sorted = written.clone();
         sorted.sort();
         assert_eq!(written, sorted);
-        assert_eq!(written.len(), 20);
+        assert_eq!(written.len(), 23);
     }
 
     /// A fit.json written before the load report was typed (the demo's five fields) still reads.

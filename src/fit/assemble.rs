@@ -13,9 +13,9 @@ use super::problem::{Evaluation, Evaluator, FitData, Forward, ModelForward, Scal
 use super::{all_parameters, FitOutcome};
 use crate::error::Result;
 use crate::files::{
-    finite, ChannelResiduals, Correlation, CurveRow, DataInfo, FitJson, FitStatus, LoadReport,
-    OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, StageTiming, Timing,
-    TraceStage,
+    finite, ChannelResiduals, Correlation, CurveRow, DataInfo, DownWeighted, FitJson, FitStatus,
+    LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
+    StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
 use crate::model::{ModelConfig, ParamName, Params};
 use crate::params::ParamFile;
@@ -169,6 +169,9 @@ fn parameter_entries(
                     value: finite(value),
                     std_error: if undetermined { None } else { se },
                     status,
+                    interval_68: None,
+                    interval_95: None,
+                    profile: Vec::new(),
                 }
             }
             None => ParameterEntry {
@@ -176,6 +179,9 @@ fn parameter_entries(
                 value: finite(value),
                 std_error: None,
                 status: ParamStatus::Fixed,
+                interval_68: None,
+                interval_95: None,
+                profile: Vec::new(),
             },
         };
         if entry.value.is_none() {
@@ -221,7 +227,39 @@ fn residual_summary(
         reduced_chi2: finite(rt_ss / dof as f64),
         dof,
         per_channel,
+        down_weighted: down_weighted(ev, data, e),
     }
+}
+
+/// Robust losses: the values the loss really discounted (weight below [`DOWN_WEIGHT`]).
+fn down_weighted(
+    ev: &Evaluator<'_, ModelForward>,
+    data: &FitData,
+    e: &Evaluation,
+) -> Option<DownWeighted> {
+    if ev.loss == super::Loss::L2 {
+        return None;
+    }
+    let nc = data.n_channels();
+    let hit: Vec<usize> = (0..e.robust_weight.len())
+        .filter(|&k| e.robust_weight[k] < DOWN_WEIGHT)
+        .collect();
+    let mut lines: Vec<u64> = hit
+        .iter()
+        .map(|&k| {
+            data.line
+                .get(k / nc)
+                .copied()
+                .unwrap_or((k / nc) as u64 + 1)
+        })
+        .collect();
+    lines.dedup();
+    lines.truncate(DownWeighted::MAX_LINES);
+    Some(DownWeighted {
+        threshold: DOWN_WEIGHT,
+        count: hit.len(),
+        lines,
+    })
 }
 
 /// One row per sample and channel: the data, the fit and its lobes (with the evaluator's
@@ -299,7 +337,8 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         let v = params.get(p);
         params.set(p, Bound::of(p).clamp(v));
     }
-    let e = ev.eval_internal(u, false);
+    // The scale in the noise model's space (unbiased; the log-space optimum is a geometric mean).
+    let e = ev.noise_space_scale(&x, ev.eval_internal(u, false), data.sigma.is_some());
     let unc = uncertainty(ev, &x, &e.scale, &mut warnings);
     let parameters = parameter_entries(ev, data, &config, &params, &unc, &mut warnings);
     let scale: Vec<ScaleEntry> = (0..nc)

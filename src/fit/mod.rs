@@ -18,6 +18,7 @@ pub mod diagnostics;
 pub mod gof;
 pub mod loss;
 pub mod problem;
+pub mod profile;
 pub mod solve;
 pub mod stages;
 pub mod suggest;
@@ -32,8 +33,9 @@ use serde::Serialize;
 
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
-pub use loss::Loss;
+pub use loss::{Loss, LossScale};
 pub use problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode, Space};
+pub use profile::Intervals;
 
 use crate::data::Dataset;
 use crate::error::{Error, Result};
@@ -97,8 +99,8 @@ impl std::str::FromStr for Global {
 pub struct FitOptions {
     pub space: Space,
     pub loss: Loss,
-    /// Robust-loss scale C (in normalised residual units).
-    pub loss_scale: f64,
+    /// Robust-loss scale C (normalised residual units), or estimated from the residuals.
+    pub loss_scale: LossScale,
     /// Number of multi-start points.
     pub starts: usize,
     pub seed: u64,
@@ -122,6 +124,8 @@ pub struct FitOptions {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Show a progress bar on a terminal.
     pub progress: bool,
+    /// Profile-likelihood or linearised intervals (or profile when cheap).
+    pub intervals: Intervals,
 }
 
 impl Default for FitOptions {
@@ -129,7 +133,7 @@ impl Default for FitOptions {
         FitOptions {
             space: Space::Log,
             loss: Loss::L2,
-            loss_scale: 1.0,
+            loss_scale: LossScale::Auto,
             starts: 16,
             seed: 1,
             global: Global::None,
@@ -144,6 +148,7 @@ impl Default for FitOptions {
             polish_iters: 300,
             cancel: None,
             progress: false,
+            intervals: Intervals::Auto,
         }
     }
 }
@@ -273,18 +278,18 @@ pub fn fit(
         measurement: opts.measurement,
     };
     let set = stages::free_set(&choice.config.effects, nc, opts, &mut warnings)?;
-    let evaluator = |d: &FitData| {
+    let evaluator = |d: &FitData, loss: Loss, loss_scale: f64| {
         Evaluator::new(
             &forward,
             d,
             opts.space,
-            opts.loss,
-            opts.loss_scale,
+            loss,
+            loss_scale,
             set.base.clone(),
             set.free.clone(),
         )
     };
-    let (ev_full, floored) = evaluator(data)?;
+    let (mut ev_full, floored) = evaluator(data, opts.loss, 1.0)?;
     stages::warn_floored(data, &floored, &mut warnings);
     let sub_idx = design::subsample(
         data.len(),
@@ -292,19 +297,40 @@ pub fn fit(
         opts.seed ^ 0x5b5b_0000_0001,
     );
     let sub_data = data.subset(&sub_idx);
-    let (ev_sub, _) = evaluator(&sub_data)?;
+    let (mut ev_sub, _) = evaluator(&sub_data, opts.loss, 1.0)?;
 
     let ranges: Vec<(f64, f64)> = set.free.iter().map(|&p| typical_range(p)).collect();
     let starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
-    let bar = stages::progress_bar(opts, opts.starts.max(1) + opts.polish.max(1));
+    let auto_scale = opts.loss != Loss::L2 && opts.loss_scale == LossScale::Auto;
+    let runs_total = opts.starts.max(1) * if auto_scale { 2 } else { 1 } + opts.polish.max(1);
+    let bar = stages::progress_bar(opts, runs_total);
     let mut log = stages::StageLog::default();
+    // The loss scale: given, or the tuning constant times the noise level of a least-squares
+    // multi-start's residuals (MAD, so the outliers a robust loss is for barely move it).
+    let loss_scale = match opts.loss_scale {
+        LossScale::Fixed(c) => c,
+        LossScale::Auto if !auto_scale => 1.0,
+        LossScale::Auto => {
+            let (ev_l2, _) = evaluator(&sub_data, Loss::L2, 1.0)?;
+            let (runs, order) =
+                stages::multistart_as("loss-scale-l2", &ev_l2, &starts, opts, &bar, &mut log);
+            let e = ev_l2.eval_internal(&runs[order[0]].u, false);
+            loss::noise_mad(&e.raw).map_or(1.0, |s| opts.loss.tuning() * s)
+        }
+    };
+    ev_full.loss_scale = loss_scale;
+    ev_sub.loss_scale = loss_scale;
     let (runs, order) = stages::multistart(&ev_sub, &starts, opts, &bar, &mut log);
     let mut candidates = stages::distinct_candidates(&ev_sub, &runs, &order, &ranges, opts.polish);
     stages::global_stage(&ev_sub, &mut candidates, &ranges, opts, &mut log);
-    let best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
+    let mut best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
+    if auto_scale {
+        // Refine once from the robust fit's own residuals (outliers no longer bias the shape).
+        best = stages::rescale_loss(&mut ev_full, best, opts, &mut log);
+    }
     let status = stages::final_status(&best, data, opts, &mut warnings);
 
-    let options = stages::options_record(
+    let mut options = stages::options_record(
         opts,
         &choice,
         &set,
@@ -312,7 +338,9 @@ pub fn fit(
         ev_full.explicit_scale,
         floored,
     );
-    assemble::assemble(assemble::Assembly {
+    options.loss_scale = ev_full.loss_scale;
+    let x_best = ev_full.natural(&best.u[..set.free.len()]);
+    let mut out = assemble::assemble(assemble::Assembly {
         data,
         file,
         load_report,
@@ -325,7 +353,24 @@ pub fn fit(
         trace: log.trace,
         stage_times: log.times,
         started,
-    })
+    })?;
+    let optimum = profile::Optimum {
+        forward: &forward,
+        data,
+        space: opts.space,
+        loss: opts.loss,
+        loss_scale: ev_full.loss_scale,
+        params: ev_full.params_at(&x_best),
+        free: set.free.clone(),
+        u: best.u.clone(),
+        cost: best.cost,
+        chi2_unit: 0.0,
+        dof: 0,
+        max_iters: opts.polish_iters,
+        cancel: opts.cancel.clone(),
+    };
+    profile::intervals(&mut out, optimum, &best, opts, started)?;
+    Ok(out)
 }
 
 /// `get` re-exported for callers that index parameters by name.

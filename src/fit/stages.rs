@@ -109,7 +109,8 @@ pub struct StageLog {
 }
 
 impl StageLog {
-    fn record(
+    /// Record a finished stage.
+    pub fn record(
         &mut self,
         stage: &str,
         iterations: u64,
@@ -151,6 +152,18 @@ pub fn multistart(
     bar: &indicatif::ProgressBar,
     log: &mut StageLog,
 ) -> (Vec<LocalRun>, Vec<usize>) {
+    multistart_as("multistart", ev_sub, starts, opts, bar, log)
+}
+
+/// [`multistart`] recorded as stage `stage`.
+pub fn multistart_as(
+    stage: &str,
+    ev_sub: &Evaluator<'_, ModelForward>,
+    starts: &[Vec<f64>],
+    opts: &FitOptions,
+    bar: &indicatif::ProgressBar,
+    log: &mut StageLog,
+) -> (Vec<LocalRun>, Vec<usize>) {
     let ts = Instant::now();
     let runs: Vec<LocalRun> = starts
         .par_iter()
@@ -182,7 +195,7 @@ pub fn multistart(
     let mut order: Vec<usize> = (0..runs.len()).collect();
     order.sort_by(|&a, &b| runs[a].cost.total_cmp(&runs[b].cost).then(a.cmp(&b)));
     log.record(
-        "multistart",
+        stage,
         runs.iter().map(|r| r.iterations).sum(),
         runs[order[0]].cost,
         ts,
@@ -305,6 +318,36 @@ pub fn polish(
     best
 }
 
+/// `--loss-scale auto`, refined: the loss scale from the robust fit's own residuals (tuning
+/// constant × 1.4826·MAD), then a polish from `best` with it. Skipped when cancelled or when the
+/// scale moves by less than 1%.
+pub fn rescale_loss(
+    ev_full: &mut Evaluator<'_, ModelForward>,
+    best: LocalRun,
+    opts: &FitOptions,
+    log: &mut StageLog,
+) -> LocalRun {
+    let e = ev_full.eval_internal(&best.u, false);
+    let Some(noise) = super::loss::noise_mad(&e.raw) else {
+        return best;
+    };
+    let c = opts.loss.tuning() * noise;
+    if is_cancelled(&opts.cancel) || (c / ev_full.loss_scale - 1.0).abs() < 0.01 {
+        return best;
+    }
+    let tp = Instant::now();
+    ev_full.loss_scale = c;
+    let r = run_local(ev_full, &best.u, opts.polish_iters, &opts.cancel);
+    log.record(
+        "polish-rescaled",
+        r.iterations,
+        r.cost,
+        tp,
+        r.history.clone(),
+    );
+    r
+}
+
 /// How the fit ended: interrupted, failed (no finite cost anywhere), or as the polish ended.
 pub fn final_status(
     best: &LocalRun,
@@ -355,10 +398,16 @@ pub fn options_record(
             vec![]
         },
         global: opts.global.to_string(),
+        intervals: opts.intervals.to_string(),
+        intervals_reason: String::new(),
         load: None,
         log_floored: floored,
         loss: opts.loss.to_string(),
-        loss_scale: opts.loss_scale,
+        loss_scale: match opts.loss_scale {
+            super::LossScale::Fixed(c) => c,
+            super::LossScale::Auto => 1.0,
+        },
+        loss_scale_auto: opts.loss_scale == super::LossScale::Auto,
         measurement: opts.measurement,
         mode: opts.mode,
         polish: opts.polish,

@@ -23,7 +23,11 @@ const MIN_GLINT_SAMPLES: usize = 5;
 const MIN_TREND_T: f64 = 5.0;
 
 /// Suggestions for a fit with `verdict` and statistics `g`.
-pub fn suggestions(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit, verdict: Verdict) -> Vec<Suggestion> {
+pub fn suggestions(
+    x: &Evidence<'_, '_, '_>,
+    g: &GoodnessOfFit,
+    verdict: Verdict,
+) -> Vec<Suggestion> {
     let mut out = Vec::new();
     if verdict == Verdict::PoorFit {
         out.extend(robust_loss(x, g));
@@ -67,8 +71,7 @@ fn robust_loss(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion
 }
 
 fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion> {
-    if x.config.mode != RootMode::Cubic || !x.config.effects.glints || !x.config.effects.lobes.trt
-    {
+    if x.config.mode != RootMode::Cubic || !x.config.effects.glints || !x.config.effects.lobes.trt {
         return None;
     }
     let nc = x.data.n_channels().max(1);
@@ -96,20 +99,19 @@ fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion>
 /// Least-squares slope of ln(data/fit) against ln cos θ_i, with its standard error.
 fn theta_i_trend(x: &Evidence<'_, '_, '_>) -> Option<(f64, f64)> {
     let nc = x.data.n_channels().max(1);
-    let points: Vec<(f64, f64)> = x
-        .e
-        .model
-        .iter()
-        .enumerate()
-        .filter_map(|(k, &m)| {
-            let fit = x.e.scale[k % nc] * m;
-            let y = x.data.values[k];
-            let c = x.data.angles[k / nc].theta_i.cos();
-            (y > 0.0 && fit > 0.0 && c > 0.0)
-                .then(|| (c.ln(), (y / fit).ln()))
-                .filter(|(a, b)| a.is_finite() && b.is_finite())
-        })
-        .collect();
+    let points: Vec<(f64, f64)> =
+        x.e.model
+            .iter()
+            .enumerate()
+            .filter_map(|(k, &m)| {
+                let fit = x.e.scale[k % nc] * m;
+                let y = x.data.values[k];
+                let c = x.data.angles[k / nc].theta_i.cos();
+                (y > 0.0 && fit > 0.0 && c > 0.0)
+                    .then(|| (c.ln(), (y / fit).ln()))
+                    .filter(|(a, b)| a.is_finite() && b.is_finite())
+            })
+            .collect();
     let n = points.len() as f64;
     if n < 3.0 {
         return None;

@@ -178,12 +178,30 @@ fn parameter_table(h: &mut String, fit: &FitJson) {
             Cell::Text(escape(&with_channel(&p.name, &fit.data.channels))),
             Cell::Num(opt(p.value)),
             Cell::Num(err),
+            Cell::Num(interval_cell(p.interval_68.as_ref())),
+            Cell::Num(interval_cell(p.interval_95.as_ref())),
             Cell::Text(unit.into()),
             Cell::Text(status),
         ]
     });
-    let head = ["parameter", "value", "std. error", "unit", "status"];
+    let head = [
+        "parameter",
+        "value",
+        "std. error",
+        "68% profile interval",
+        "95% profile interval",
+        "unit",
+        "status",
+    ];
     table_section(h, "Parameters", &head, rows);
+}
+
+/// A profile interval `[lower, upper]` (an open side reads "open"); "—" when not profiled.
+fn interval_cell(i: Option<&crate::files::Interval>) -> String {
+    let side = |v: Option<f64>| v.map_or("open".to_string(), fmt_num);
+    i.map_or("—".into(), |i| {
+        format!("[{}, {}]", side(i.lower), side(i.upper))
+    })
 }
 
 /// `sigma_a[1]` → `sigma_a[1] (g)`: name the channel of a per-channel parameter.

@@ -26,7 +26,8 @@ use crate::params::ParameterFile as _;
 use crate::plot::{render, YScale};
 use decimate::stride_indices;
 use figures::{
-    channel_color, ConvergenceFigure, CorrelationFigure, CurvesFigure, PolarFigure, SlicePanel,
+    channel_color, ConvergenceFigure, CorrelationFigure, CurvesFigure, PolarFigure, ProfileFigure,
+    ProfilePanel, SlicePanel,
 };
 use panels::Ctx;
 use slices::{collect_samples, find_slices, Slice, SliceKind};
@@ -252,6 +253,12 @@ pub fn render_report(
         };
         summary.figures.push(render(dir, &fig)?);
     }
+    let profiles = profile_panels(fit);
+    if !profiles.is_empty() {
+        summary
+            .figures
+            .push(render(dir, &ProfileFigure { panels: profiles })?);
+    }
     let stages: Vec<(String, Vec<f64>)> = fit
         .trace
         .iter()
@@ -283,6 +290,29 @@ pub fn render_report(
     })?;
     summary.files.push("index.html".into());
     Ok(summary)
+}
+
+/// The profiled parameters' panels (fit.json stores the points, so nothing is refitted).
+fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
+    fit.parameters
+        .iter()
+        .filter(|p| !p.profile.is_empty())
+        .map(|p| {
+            let unit = crate::model::ParamName::from_json_name(&p.name)
+                .map_or("", |n| n.spec().unit.label());
+            ProfilePanel {
+                title: if unit.is_empty() {
+                    p.name.clone()
+                } else {
+                    format!("{} ({unit})", p.name)
+                },
+                value: p.value.unwrap_or(f64::NAN),
+                std_error: p.std_error,
+                points: p.profile.iter().map(|q| (q[0], q[1])).collect(),
+            }
+        })
+        .filter(|p| p.value.is_finite())
+        .collect()
 }
 
 /// Channels in fit.json's order, then any other channel named in curves.csv.
