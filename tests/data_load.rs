@@ -282,15 +282,21 @@ fn shipped_scan_example_loads_as_documented() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scan_example.txt");
     let mut options = scan_options(
         "phi_r,theta_r,radiance",
-        "theta_i=-20,phi_i=0",
+        "theta_i=20,phi_i=0",
         &["theta_r=90-x"],
     );
     options.missing = "?".into();
     let (ds, r) = load(&path, &options).unwrap();
     assert_accounts(&r, &ds);
-    assert_eq!((r.rows_read, r.accepted), (90, 86));
-    assert_eq!(r.rejected[&MissingValue].first_lines, [6, 60, 61, 82]);
-    assert_eq!(r.negative_kept.first_lines, [73]);
+    assert_eq!((r.rows_read, r.accepted), (169, 167));
+    assert_eq!(r.rejected[&MissingValue].first_lines, [152, 165]);
+    assert_eq!((r.negative_kept.count, r.replicates.count), (0, 0));
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    // The polar column mapped through 90 − x: θ_r spans −72° … 72°.
+    let theta_r: Vec<f64> = (0..ds.len()).map(|i| ds.angles_deg(i)[2]).collect();
+    let max = theta_r.iter().cloned().fold(f64::MIN, f64::max);
+    let min = theta_r.iter().cloned().fold(f64::MAX, f64::min);
+    assert_eq!((min, max), (-72.0, 72.0));
 }
 
 #[test]

@@ -107,3 +107,30 @@ fn shipped_data_cover_both_channel_counts_and_every_rig() {
         .sum();
     assert!(total < 400_000, "data/ is {total} bytes");
 }
+
+/// `data/scan_example.txt` is `data/scan_example.csv` rewritten by the documented awk script:
+/// rerun it and compare the bytes (the CSV itself is checked with the other synth lines).
+#[test]
+fn the_scan_example_is_its_documented_rewrite_of_the_synthetic_csv() {
+    let readme = std::fs::read_to_string(root().join("data/README.md")).unwrap();
+    let line = "awk -f data/scan_example.awk data/scan_example.csv > data/scan_example.txt";
+    assert!(
+        readme.contains(line),
+        "data/README.md lost the command `{line}`"
+    );
+    let out = Command::new("awk")
+        .args(["-f", "data/scan_example.awk", "data/scan_example.csv"])
+        .current_dir(root())
+        .output()
+        .expect("awk runs (POSIX)");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let shipped = std::fs::read(root().join("data/scan_example.txt")).unwrap();
+    assert!(
+        out.stdout == shipped,
+        "data/scan_example.txt differs from what the awk command makes: regenerate it"
+    );
+}

@@ -191,7 +191,7 @@ pub struct FitCommandArgs {
     pub load: LoadOptions,
     #[command(flatten)]
     pub fit: FitArgs,
-    /// Output directory (e.g. fits/NAME).
+    /// Output directory (e.g. fits/NAME), replaced as a whole by the new result (see --force).
     #[arg(long)]
     pub out: std::path::PathBuf,
 }

@@ -97,6 +97,8 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
 /// `data.csv` and `truth.json`, fit from the default start design, and publish them with the
 /// fit's files as one set (`force` as `hairfit fit --force`).
 pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
+    // A bad --fix is an error about the option, before anything touches the output directory.
+    super::parse_fixes(&opts.fix, demo_truth().sigma_a.len())?;
     crate::outdir::publish_fit(out, "hairfit demo", force, &[], |staging| {
         demo_into(opts, out, staging)
     })
