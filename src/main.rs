@@ -10,7 +10,7 @@ use clap::{Parser, Subcommand};
 
 use hairfit::cli::ModelArgs;
 use hairfit::eval::{eval_file, output_columns, EvalRequest};
-use hairfit::params::{ParamFile, ParameterFile as _};
+use hairfit::family::{FamilyModel, FamilyParams};
 
 #[derive(Parser)]
 #[command(
@@ -53,7 +53,13 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "fits/cost")]
         out: PathBuf,
+        /// `chiang`: the Chiang model's ledger (width nodes, cache) against the Marschner model's time.
+        #[arg(long = "model", value_enum, default_value_t = hairfit::family::ModelFamily::Marschner)]
+        family: hairfit::family::ModelFamily,
     },
+    /// Fit both model families to the same data and compare them: DIR/{marschner,chiang}/,
+    /// DIR/compare.json, DIR/index.html.
+    Compare(hairfit::cli::compare::CompareArgs),
 }
 
 #[derive(clap::Args)]
@@ -93,7 +99,7 @@ struct DemoArgs {
 
 #[derive(clap::Args)]
 struct EvalArgs {
-    /// Parameter file (JSON, MODEL.md's names).
+    /// Parameter file (JSON, MODEL.md's names; CHIANG.md's with --model chiang).
     #[arg(long)]
     params: PathBuf,
     /// Angles CSV with a header; other columns are carried through.
@@ -149,12 +155,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Eval(args) => {
             remove_partial_output_on_interrupt();
-            let file =
-                ParamFile::load(&args.params).map_err(|e| name_parameter_file(e, &args.params))?;
+            args.model.check_family_options()?;
+            let file = FamilyParams::load(&args.params, args.model.family)
+                .map_err(|e| name_parameter_file(e, &args.params))?;
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
-                params: file.to_params(),
-                config: args.model.config()?,
+                model: FamilyModel::new(&file, args.model.config()?, &args.model.chiang()?),
+                params: file,
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
             if let Some(out) = args.output {
@@ -201,9 +208,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 dir.join("index.html").display()
             );
         }
-        Command::Cost { quick, out } => {
+        Command::Cost { quick, out, family } => {
             remove_partial_output_on_interrupt();
-            let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
+            let ledger =
+                hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick, family })?;
             print!("{}", hairfit::cost::summary_text(&ledger));
             eprintln!(
                 "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
@@ -216,11 +224,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             print!("{}", fit_summary_and_report(&outcome, &a.out));
         }
         Command::Batch(a) => return batch(a),
+        Command::Compare(a) => {
+            let cancel = Some(ctrl_c_flag());
+            let done = hairfit::cli::compare::compare_command(&a, cancel)?;
+            for line in &done.report_lines {
+                print!("{line}");
+            }
+            print!(
+                "{}",
+                hairfit::compare::summary_text(&done.comparison, &a.out)
+            );
+        }
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());
-            let outcome = hairfit::fit::demo::demo_command(&a.fit.options(cancel)?, &a.out)?;
+            let opts = a.fit.options(cancel)?;
+            let outcome = hairfit::fit::demo::demo_command(&opts, &a.out)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
-            print!("{}", hairfit::fit::demo::truth_line(&a.out));
+            print!("{}", hairfit::fit::demo::truth_line(&a.out, opts.family));
         }
     }
     Ok(())
@@ -277,7 +297,7 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
 }
 
 /// The fit's summary, then its plotted report, drawn from the fit's result in memory.
-fn fit_summary_and_report(outcome: &hairfit::fit::FitOutcome, dir: &std::path::Path) -> String {
+fn fit_summary_and_report<P>(outcome: &hairfit::fit::FitOutcome<P>, dir: &std::path::Path) -> String {
     hairfit::cli::summary::summary(outcome, Some(dir))
         + &hairfit::report::report_line(dir, &outcome.json, &outcome.curves)
 }

@@ -11,8 +11,10 @@ use clap::Args;
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
+use crate::family::{FamilyParams, ModelFamily};
 use crate::fit::{
-    fit, fit_data, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
+    fit_data, fit_family, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss,
+    Space,
 };
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
@@ -36,7 +38,8 @@ pub struct FitArgs {
     /// Global stage between multi-start and polish: none, pso or nelder-mead.
     #[arg(long, default_value = "none")]
     pub global: Global,
-    /// Fix a parameter, NAME=VALUE (MODEL.md names, degrees for *_deg); repeatable.
+    /// Fix a parameter, NAME=VALUE (MODEL.md's or, with --model chiang, CHIANG.md's names;
+    /// degrees for *_deg); repeatable.
     #[arg(long = "fix")]
     pub fix: Vec<String>,
     /// Free a parameter that is fixed by default (only `eta`).
@@ -70,6 +73,7 @@ pub struct FitArgs {
 impl FitArgs {
     /// The fit options these arguments ask for.
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
+        self.model.check_family_options()?;
         let cfg = self.model.config()?;
         let default_lobes = crate::model::Lobes::default();
         let explicit = cfg.effects.lobes != default_lobes
@@ -99,7 +103,12 @@ impl FitArgs {
                 "eta" => free_eta = true,
                 other => {
                     return Err(Error::Other(format!(
-                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on; delta_eta_prime and delta_h_m stay fixed)"
+                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on{})",
+                        if self.model.family == ModelFamily::Marschner {
+                            "; delta_eta_prime and delta_h_m stay fixed"
+                        } else {
+                            ""
+                        }
                     )))
                 }
             }
@@ -147,6 +156,8 @@ impl FitArgs {
             polish_iters: self.polish_iters,
             cancel,
             progress: !self.no_progress,
+            family: self.model.family,
+            chiang: self.model.chiang()?,
         })
     }
 }
@@ -158,11 +169,11 @@ pub fn fit_command(
     args: &FitArgs,
     out: &Path,
     cancel: Option<Arc<AtomicBool>>,
-) -> Result<FitOutcome> {
+) -> Result<FitOutcome<FamilyParams>> {
     let opts = args.options(cancel)?;
     let (ds, report) = load(data_path, load_options)?;
     let data = fit_data(&ds);
-    let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
+    let mut outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
     // The loader's settings are options of this fit too.
     outcome.json.options.load = Some(format!("{load_options:?}"));
     write_outputs(out, &outcome)?;

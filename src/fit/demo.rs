@@ -6,7 +6,8 @@ use std::path::Path;
 
 use super::problem::FitData;
 use super::FitOptions;
-use super::{fit, write_outputs, FitOutcome};
+use super::{fit_family, write_outputs, FitOutcome};
+use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily};
 use crate::error::Result;
 use crate::files::LoadReport;
 use crate::model::{Angles, ModelConfig, Params};
@@ -92,18 +93,64 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
         .collect()
 }
 
-/// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
-/// `data.csv` and `truth.json`, fit from the default start design, write the fit's files.
-pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
-    let truth = demo_truth();
+/// The Chiang demo's true parameters (CHIANG.md's ranges, the same brown-ish absorption; R
+/// toward the root, so `alpha_deg` < 0).
+pub fn chiang_demo_truth() -> crate::chiang::ChiangParams<f64> {
+    crate::chiang::ChiangParams {
+        eta: 1.55,
+        sigma_a: vec![0.25, 0.45, 0.8],
+        beta_m: 0.25,
+        beta_n: 0.35,
+        alpha: (-2.5f64).to_radians(),
+    }
+}
+
+/// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`) and the
+/// model family `opts.family`, write `data.csv` and `truth.json`, fit the same family from the
+/// default start design, write the fit's files.
+pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome<FamilyParams>> {
     let config = ModelConfig {
         mode: opts.mode,
         ..ModelConfig::default()
     };
+    let (model, file, config, chiang) = match opts.family {
+        ModelFamily::Marschner => {
+            let truth = demo_truth();
+            (
+                FamilyModel::Marschner {
+                    params: truth.clone(),
+                    config,
+                },
+                FamilyParams::Marschner(crate::params::ParamFile::from_params(&truth)),
+                config,
+                None,
+            )
+        }
+        ModelFamily::Chiang => {
+            let truth = chiang_demo_truth();
+            (
+                FamilyModel::Chiang {
+                    params: truth.clone(),
+                    model: opts.chiang.clone(),
+                },
+                FamilyParams::Chiang(crate::chiang::ChiangParamFile::from_params(&truth)),
+                crate::chiang::fit::lobes_config(&opts.chiang.effects),
+                Some(ChiangRecord {
+                    effects: opts.chiang.effects,
+                    width_nodes: opts.chiang.width_nodes(),
+                }),
+            )
+        }
+    };
     let noise = crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}"))?;
-    let (dataset, truth_record) = crate::synth::synthesize_directions(
-        &truth,
-        &config,
+    let source = crate::synth::Source {
+        model: &model,
+        file: &file,
+        config: &config,
+        chiang,
+    };
+    let (dataset, truth_record) = crate::synth::synthesize_model(
+        &source,
         &demo_directions(),
         "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
         &noise,
@@ -127,18 +174,34 @@ pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
         ..LoadReport::default()
     };
     let data = super::fit_data(&dataset);
-    let outcome = fit(&data, &data_path.display().to_string(), report, opts)?;
+    let outcome = fit_family(&data, &data_path.display().to_string(), report, opts)?;
     write_outputs(out, &outcome)?;
     Ok(outcome)
 }
 
-/// The demo's truth, for the end of its summary.
-pub fn truth_line(out: &Path) -> String {
-    let truth = demo_truth();
-    format!(
-        "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
-        truth.sigma_a,
-        DEMO_SCALE,
-        out.join("truth.json").display()
-    )
+/// The demo's truth (of `family`), for the end of its summary.
+pub fn truth_line(out: &Path, family: ModelFamily) -> String {
+    match family {
+        ModelFamily::Marschner => {
+            let truth = demo_truth();
+            format!(
+                "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
+                truth.sigma_a,
+                DEMO_SCALE,
+                out.join("truth.json").display()
+            )
+        }
+        ModelFamily::Chiang => {
+            let t = chiang_demo_truth();
+            format!(
+                "truth: sigma_a {:?}, beta_m {}, beta_n {}, alpha_deg {}, scale {:?} (see {})\n",
+                t.sigma_a,
+                t.beta_m,
+                t.beta_n,
+                t.alpha.to_degrees(),
+                DEMO_SCALE,
+                out.join("truth.json").display()
+            )
+        }
+    }
 }
