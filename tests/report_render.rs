@@ -10,6 +10,7 @@ use hairfit::files::{
     TraceStage,
 };
 use hairfit::model::{Angles, ModelConfig};
+use hairfit::family::FamilyParams;
 use hairfit::params::{ParamFile, SigmaA};
 use hairfit::report::{
     render_report, write_report_with, ReportOptions, ReportSummary, MAX_PANELS, MAX_SCATTER_POINTS,
@@ -174,7 +175,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             seed: 7,
             ..OptionsRecord::default()
         },
-        params: ParamFile {
+        params: FamilyParams::Marschner(ParamFile {
             eta: 1.55,
             sigma_a: SigmaA::PerChannel(vec![0.3, 0.7, 1.1][..n_ch].to_vec()),
             alpha_r_deg: -7.0,
@@ -184,7 +185,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             eccentricity: 0.9,
             delta_eta_prime: 0.3,
             delta_h_m: 0.5,
-        },
+        }),
         parameters: names.iter().enumerate().map(|(i, n)| entry(i, n)).collect(),
         scale: (0..n_ch)
             .map(|c| ScaleEntry {
@@ -223,6 +224,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
                 history: vec![0.2, 0.05, 0.011, 0.01],
             },
         ],
+        chiang: None,
     }
 }
 
@@ -565,7 +567,9 @@ fn write_report_reads_the_fit_directory() {
     let angles = measurement_angles();
     let rows = fixture_rows(&angles, &toy_model, 3);
     let mut fit = fixture_fit(angles.len(), 3);
-    fit.params.eccentricity = 0.5;
+    if let FamilyParams::Marschner(p) = &mut fit.params {
+        p.eccentricity = 0.5;
+    }
     fit.save(&dir.path().join("fit.json")).unwrap();
     write_curves_csv(&dir.path().join("curves.csv"), &rows).unwrap();
     let summary = write_report_with(dir.path(), &ReportOptions::default()).unwrap();
@@ -584,7 +588,7 @@ fn report_of_a_real_model_fixture_matches_the_fit_column() {
     // column to rounding (no calibration note), and every figure is written.
     let dir = tempfile::tempdir().unwrap();
     let fit = fixture_fit(measurement_angles().len(), 3);
-    let params = fit.params.to_params();
+    let params = fit.params.marschner().unwrap().to_params();
     let config = fit.model;
     let model = |a: &Angles, out: &mut [[f64; 3]]| {
         hairfit::model::scattering_by_lobe(&params, &config, a, out)
