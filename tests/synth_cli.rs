@@ -230,7 +230,7 @@ fn truth_records_every_input() {
     assert!(cmd.starts_with("hairfit synth --params ") && cmd.contains("--no-glints"));
     // The truth's params are a valid parameter file that reproduces the synthesis inputs.
     let json = serde_json::to_string(&t.params).unwrap();
-    assert_eq!(ParamFile::from_json_str(&json, "truth").unwrap(), t.params);
+    assert_eq!(Some(&ParamFile::from_json_str(&json, "truth").unwrap()), t.params.marschner());
 }
 
 #[test]
