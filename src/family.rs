@@ -8,8 +8,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::chiang::{
-    self, scattering_batch, ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams,
-    AzimuthalTable,
+    self, scattering_batch, AzimuthalTable, ChiangEffects, ChiangModel, ChiangParamFile,
+    ChiangParams,
 };
 use crate::error::{Error, Result};
 use crate::files::ParameterFile;
@@ -145,7 +145,11 @@ impl FamilyParams {
                     "{}: the file says \"model\": {tag}, but --model is {family}: pass --model {} \
                      (or use a {family} parameter file)",
                     path.display(),
-                    if named.is_empty() { "marschner|chiang" } else { named }
+                    if named.is_empty() {
+                        "marschner|chiang"
+                    } else {
+                        named
+                    }
                 )));
             }
         }
@@ -279,8 +283,7 @@ pub fn chiang_by_lobe(
         let l = &table.lobes[c];
         o[0] = m[0] * l[0] / cos_i;
         o[1] = m[1] * l[1] / cos_i;
-        o[2] = (m[2] * l[2] + m[3] * table.residual[c] * 0.5 * std::f64::consts::FRAC_1_PI)
-            / cos_i;
+        o[2] = (m[2] * l[2] + m[3] * table.residual[c] * 0.5 * std::f64::consts::FRAC_1_PI) / cos_i;
     }
 }
 
@@ -298,12 +301,17 @@ impl ChiangRecord {
     /// `R+TT+TRT+residual`: the terms that were on.
     pub fn effects_text(&self) -> String {
         let e = &self.effects;
-        [(e.r, "R"), (e.tt, "TT"), (e.trt, "TRT"), (e.residual, "residual")]
-            .iter()
-            .filter(|(on, _)| *on)
-            .map(|(_, n)| *n)
-            .collect::<Vec<_>>()
-            .join("+")
+        [
+            (e.r, "R"),
+            (e.tt, "TT"),
+            (e.trt, "TRT"),
+            (e.residual, "residual"),
+        ]
+        .iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, n)| *n)
+        .collect::<Vec<_>>()
+        .join("+")
     }
 
     /// The model this record describes (an out-of-range node count is an error).

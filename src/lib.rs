@@ -28,8 +28,8 @@
 pub mod atomic;
 pub mod batch;
 pub mod chiang;
-pub mod compare;
 pub mod cli;
+pub mod compare;
 pub mod cost;
 pub mod data;
 pub mod error;

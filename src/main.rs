@@ -297,7 +297,10 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
 }
 
 /// The fit's summary, then its plotted report, drawn from the fit's result in memory.
-fn fit_summary_and_report<P>(outcome: &hairfit::fit::FitOutcome<P>, dir: &std::path::Path) -> String {
+fn fit_summary_and_report<P>(
+    outcome: &hairfit::fit::FitOutcome<P>,
+    dir: &std::path::Path,
+) -> String {
     hairfit::cli::summary::summary(outcome, Some(dir))
         + &hairfit::report::report_line(dir, &outcome.json, &outcome.curves)
 }

@@ -69,7 +69,8 @@ fn agrees(got: f64, printed: f64) -> bool {
     (got - printed).abs() <= 0.5 * unit + 1e-6 * printed.abs()
 }
 
-const SET_A: &str = r#"{"eta": 1.55, "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2}"#;
+const SET_A: &str =
+    r#"{"eta": 1.55, "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2}"#;
 const SET_B: &str = r#"{"sigma_a": 1.2, "beta_m": 0.1, "beta_n": 0.5, "alpha_deg": -3}"#;
 
 #[test]
@@ -126,13 +127,23 @@ fn eval_matches_the_known_values_in_both_directions() {
 #[test]
 fn the_model_tag_must_agree_with_the_option() {
     let dir = tempfile::tempdir().unwrap();
-    let input = write(dir.path(), "a.csv", "theta_i,phi_i,theta_r,phi_r\n0,0,0,30\n");
+    let input = write(
+        dir.path(),
+        "a.csv",
+        "theta_i,phi_i,theta_r,phi_r\n0,0,0,30\n",
+    );
     let chiang = write(
         dir.path(),
         "c.json",
         r#"{"model": "chiang", "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2}"#,
     );
-    let e = err(&hairfit(&["eval", "--params", p(&chiang), "--input", p(&input)]));
+    let e = err(&hairfit(&[
+        "eval",
+        "--params",
+        p(&chiang),
+        "--input",
+        p(&input),
+    ]));
     assert!(e.contains("c.json") && e.contains("--model"), "{e}");
     let marschner = write(
         dir.path(),
@@ -140,11 +151,23 @@ fn the_model_tag_must_agree_with_the_option() {
         r#"{"model": "marschner", "sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15}"#,
     );
     let e = err(&hairfit(&[
-        "eval", "--model", "chiang", "--params", p(&marschner), "--input", p(&input),
+        "eval",
+        "--model",
+        "chiang",
+        "--params",
+        p(&marschner),
+        "--input",
+        p(&input),
     ]));
     assert!(e.contains("m.json") && e.contains("--model"), "{e}");
     // The Marschner tag is accepted by the Marschner model and dropped.
-    ok(&hairfit(&["eval", "--params", p(&marschner), "--input", p(&input)]));
+    ok(&hairfit(&[
+        "eval",
+        "--params",
+        p(&marschner),
+        "--input",
+        p(&input),
+    ]));
     // Unknown keys are an error naming the key.
     let extra = write(
         dir.path(),
@@ -152,7 +175,13 @@ fn the_model_tag_must_agree_with_the_option() {
         r#"{"sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2, "k_g": 1}"#,
     );
     let e = err(&hairfit(&[
-        "eval", "--model", "chiang", "--params", p(&extra), "--input", p(&input),
+        "eval",
+        "--model",
+        "chiang",
+        "--params",
+        p(&extra),
+        "--input",
+        p(&input),
     ]));
     assert!(e.contains("k_g"), "{e}");
     // A domain error names the parameter and the file; η is capped so η² cannot overflow.
@@ -162,16 +191,36 @@ fn the_model_tag_must_agree_with_the_option() {
         r#"{"eta": 1e200, "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2}"#,
     );
     let e = err(&hairfit(&[
-        "eval", "--model", "chiang", "--params", p(&huge), "--input", p(&input),
+        "eval",
+        "--model",
+        "chiang",
+        "--params",
+        p(&huge),
+        "--input",
+        p(&input),
     ]));
     assert!(e.contains("eta") && e.contains("h.json"), "{e}");
     // Options of the other family are refused, not ignored.
     let e = err(&hairfit(&[
-        "eval", "--model", "chiang", "--lobes", "R", "--params", p(&chiang), "--input", p(&input),
+        "eval",
+        "--model",
+        "chiang",
+        "--lobes",
+        "R",
+        "--params",
+        p(&chiang),
+        "--input",
+        p(&input),
     ]));
     assert!(e.contains("--lobes"), "{e}");
     let e = err(&hairfit(&[
-        "eval", "--width-nodes", "64", "--params", p(&marschner), "--input", p(&input),
+        "eval",
+        "--width-nodes",
+        "64",
+        "--params",
+        p(&marschner),
+        "--input",
+        p(&input),
     ]));
     assert!(e.contains("--width-nodes"), "{e}");
 }
@@ -250,7 +299,14 @@ fn synth_then_fit_recovers_noise_free_truth() {
     assert!(curves.iter().all(|r| r.residual.abs() < 1e-9));
     // The Chiang fit reads with --fix by CHIANG.md's names; Marschner names are refused.
     let e = err(&hairfit(&[
-        "fit", p(&data), "--model", "chiang", "--fix", "k_g=1", "--out", p(&dir.path().join("x")),
+        "fit",
+        p(&data),
+        "--model",
+        "chiang",
+        "--fix",
+        "k_g=1",
+        "--out",
+        p(&dir.path().join("x")),
     ]));
     assert!(e.contains("k_g") && e.contains("beta_m"), "{e}");
 }
@@ -275,7 +331,10 @@ fn demo_runs_the_chiang_family() {
         "--out",
         p(&out),
     ]));
-    assert!(text.contains("model: chiang") && text.contains("beta_n 0.35"), "{text}");
+    assert!(
+        text.contains("model: chiang") && text.contains("beta_n 0.35"),
+        "{text}"
+    );
     let fit = FitJson::load(&out.join("fit.json")).unwrap();
     let truth = Truth::load(&out.join("truth.json")).unwrap();
     assert_eq!(fit.family(), hairfit::family::ModelFamily::Chiang);

@@ -85,7 +85,11 @@ fn compare_prefers_the_family_that_made_the_data() {
     assert_eq!(m.better, "marschner", "{text}");
     assert!(m.delta_aic > 0.0);
     assert!(text.contains("Marschner fits better"), "{text}");
-    assert!(m.findings.iter().any(|f| f.starts_with("Chiang misses")), "{:?}", m.findings);
+    assert!(
+        m.findings.iter().any(|f| f.starts_with("Chiang misses")),
+        "{:?}",
+        m.findings
+    );
     assert!(m.scale_note.contains("not comparable"));
 
     let (c, text) = compare_on(
@@ -95,7 +99,11 @@ fn compare_prefers_the_family_that_made_the_data() {
     );
     assert_eq!(c.better, "chiang", "{text}");
     assert!(c.delta_aic < 0.0);
-    assert!(c.findings.iter().any(|f| f.starts_with("Marschner misses")), "{:?}", c.findings);
+    assert!(
+        c.findings.iter().any(|f| f.starts_with("Marschner misses")),
+        "{:?}",
+        c.findings
+    );
     // σ is in the data (relative noise), so χ² is a log-likelihood and AIC = χ² + 2k.
     for s in &c.models {
         assert!((s.aic - (s.chi2 + 2.0 * s.n_params as f64)).abs() < 1e-6 * s.aic.abs());

@@ -13,10 +13,14 @@ fn find<'a>(rows: &'a [CostRow], section: &str, setting: &str) -> &'a CostRow {
 #[test]
 fn quick_ledger_runs_and_its_numbers_make_sense() {
     let dir = tempfile::tempdir().unwrap();
-    let ledger = run_cost(dir.path(), &CostOptions {
+    let ledger = run_cost(
+        dir.path(),
+        &CostOptions {
             quick: true,
             ..CostOptions::default()
-        }).unwrap();
+        },
+    )
+    .unwrap();
     for f in ["cost.csv", "cost.json", "cost.svg", "cost.png"] {
         assert!(dir.path().join(f).is_file(), "{f} missing");
     }

@@ -4,13 +4,13 @@
 
 use std::path::Path;
 
+use hairfit::family::FamilyParams;
 use hairfit::files::{
     read_curves_csv, write_curves_csv, Correlation, CurveRow, DataInfo, FitJson, FitStatus,
     LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
     TraceStage,
 };
 use hairfit::model::{Angles, ModelConfig};
-use hairfit::family::FamilyParams;
 use hairfit::params::{ParamFile, SigmaA};
 use hairfit::report::{
     render_report, write_report_with, ReportOptions, ReportSummary, MAX_PANELS, MAX_SCATTER_POINTS,

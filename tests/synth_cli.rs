@@ -208,7 +208,10 @@ fn truth_records_every_input() {
     );
     // A scalar sigma_a replicated to 3 channels: the truth holds the per-channel values, with a
     // note saying so.
-    assert_eq!(t.params.marschner().unwrap().sigma_a, SigmaA::PerChannel(vec![0.4; 3]));
+    assert_eq!(
+        t.params.marschner().unwrap().sigma_a,
+        SigmaA::PerChannel(vec![0.4; 3])
+    );
     assert_eq!(t.params.marschner().unwrap().alpha_r_deg, -7.0);
     assert!(t
         .notes
@@ -230,7 +233,10 @@ fn truth_records_every_input() {
     assert!(cmd.starts_with("hairfit synth --params ") && cmd.contains("--no-glints"));
     // The truth's params are a valid parameter file that reproduces the synthesis inputs.
     let json = serde_json::to_string(&t.params).unwrap();
-    assert_eq!(Some(&ParamFile::from_json_str(&json, "truth").unwrap()), t.params.marschner());
+    assert_eq!(
+        Some(&ParamFile::from_json_str(&json, "truth").unwrap()),
+        t.params.marschner()
+    );
 }
 
 #[test]

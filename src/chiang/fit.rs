@@ -131,7 +131,9 @@ fn why_undetermined(
                 .iter()
                 .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * std::f64::consts::PI)
                 .count();
-            format!("absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}")
+            format!(
+                "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
+            )
         }
         ChiangParamName::BetaM | ChiangParamName::Alpha => {
             let th: Vec<f64> = data
@@ -264,7 +266,9 @@ fn exit_direction_order(data: &FitData) -> Vec<usize> {
     let mut order: Vec<usize> = (0..data.len()).collect();
     order.sort_by(|&i, &j| {
         let (a, b) = (key(i), key(j));
-        a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)).then(i.cmp(&j))
+        a.0.total_cmp(&b.0)
+            .then(a.1.total_cmp(&b.1))
+            .then(i.cmp(&j))
     });
     order
 }

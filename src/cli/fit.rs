@@ -13,8 +13,7 @@ use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
 use crate::family::{FamilyParams, ModelFamily};
 use crate::fit::{
-    fit_data, fit_family, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss,
-    Space,
+    fit_data, fit_family, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
 };
 
 /// Fit options (`hairfit fit`, `hairfit demo`).

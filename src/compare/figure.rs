@@ -110,10 +110,9 @@ impl Figure for OverlayFigure {
             Axes::new(panel.x_label.as_str(), "|residual|", &sfmt, &yfmt)
                 .ticks(7, 5)
                 .draw(&mut chart)?;
-            for (colour, name, pick) in [
-                (MARSCHNER, "Marschner", 1usize),
-                (CHIANG, "Chiang", 2usize),
-            ] {
+            for (colour, name, pick) in
+                [(MARSCHNER, "Marschner", 1usize), (CHIANG, "Chiang", 2usize)]
+            {
                 let line: Vec<(f64, f64)> = panel
                     .points
                     .iter()

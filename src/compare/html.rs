@@ -25,11 +25,7 @@ pub fn write_index(
 ) -> Result<()> {
     let mut h = String::new();
     h.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>hairfit compare</title>\n<style>body{font-family:sans-serif;max-width:1500px;margin:1em auto}table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}td.n{text-align:right}</style>\n</head><body>\n");
-    let _ = writeln!(
-        h,
-        "<h1>Marschner vs Chiang on {}</h1>",
-        escape(&c.data)
-    );
+    let _ = writeln!(h, "<h1>Marschner vs Chiang on {}</h1>", escape(&c.data));
     h.push_str("<ul>\n");
     for f in &c.findings {
         let _ = writeln!(h, "<li>{}</li>", escape(f));

@@ -281,8 +281,7 @@ pub fn compare(
     let [(m_out, m_dir), (c_out, c_dir)] = fits;
     let (m, c) = (&m_out.curves, &c_out.curves);
     if m.len() != c.len()
-        || m
-            .iter()
+        || m.iter()
             .zip(c)
             .any(|(a, b)| a.sample != b.sample || a.channel != b.channel)
     {
@@ -319,8 +318,7 @@ pub fn compare(
         criterion: if sigma_known {
             "chi2 + 2k (AIC), chi2 + k ln n (BIC): the data give sigma".into()
         } else {
-            "n ln(chi2/n) + 2k (AIC), n ln(chi2/n) + k ln n (BIC): sigma unknown, estimated"
-                .into()
+            "n ln(chi2/n) + 2k (AIC), n ln(chi2/n) + k ln n (BIC): sigma unknown, estimated".into()
         },
         models,
         better,
@@ -378,7 +376,13 @@ pub fn compare_command(
     comparison.save(&out.join("compare.json"))?;
     let fig = figure::overlay(&outcomes[0].curves, &outcomes[1].curves);
     let info = crate::plot::render(out, &fig)?;
-    html::write_index(out, &comparison, &info, &outcomes[0].json, &outcomes[1].json)?;
+    html::write_index(
+        out,
+        &comparison,
+        &info,
+        &outcomes[0].json,
+        &outcomes[1].json,
+    )?;
     Ok(CompareOutcome {
         comparison,
         report_lines,

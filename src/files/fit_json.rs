@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use crate::error::Result;
-use crate::model::{Measurement, ModelConfig, RootMode};
 use crate::family::{ChiangRecord, FamilyParams};
+use crate::model::{Measurement, ModelConfig, RootMode};
 
 /// How a fit (or one solver run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

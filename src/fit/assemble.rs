@@ -10,12 +10,12 @@ use super::diagnostics::{null_space_weights, NULL_WEIGHT, POORLY_DETERMINED};
 use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode};
 use super::FitOutcome;
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyParams};
 use crate::files::{
     finite, ChannelResiduals, Correlation, CurveRow, DataInfo, FitJson, FitStatus, LoadReport,
     OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, StageTiming, Timing,
     TraceStage,
 };
-use crate::family::{ChiangRecord, FamilyParams};
 use crate::model::ModelConfig;
 
 /// Why the data cannot determine a parameter: words for its warning, from the parameter, the

@@ -7,8 +7,8 @@ use std::path::Path;
 use super::problem::FitData;
 use super::FitOptions;
 use super::{fit_family, write_outputs, FitOutcome};
-use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily};
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 use crate::model::{Angles, ModelConfig, Params};
 

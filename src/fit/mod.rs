@@ -31,7 +31,9 @@ use serde::Serialize;
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
 pub use loss::Loss;
-pub use problem::{Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space};
+pub use problem::{
+    Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
+};
 
 use crate::chiang::ChiangModel;
 use crate::data::Dataset;

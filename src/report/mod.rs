@@ -19,8 +19,8 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::files::{read_curves_csv, CurveRow, FitJson};
 use crate::family::FamilyModel;
+use crate::files::{read_curves_csv, CurveRow, FitJson};
 use crate::model::Angles;
 
 use crate::plot::{render, YScale};

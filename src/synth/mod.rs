@@ -17,8 +17,8 @@ use rayon::prelude::*;
 use crate::cli::{MeasurementArgs, ModelArgs};
 use crate::data::{round_trip_degrees, write_csv, Dataset};
 use crate::error::{Error, Result};
-pub use crate::files::{ScaleEntry, Truth};
 use crate::family::{ChiangRecord, FamilyModel, FamilyParams};
+pub use crate::files::{ScaleEntry, Truth};
 use crate::model::{Angles, Measurement, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
 

@@ -99,7 +99,6 @@ impl ModelForward {
             }
         }
     }
-
 }
 
 impl Forward for ModelForward {
