@@ -16,6 +16,7 @@ pub const REFERENCE_NODES: usize = 4096;
 /// CHIANG.md's parameter set A as three channels, and the same with narrow lobes
 /// (β_m = β_n = 0.05: the hardest case of the width integral).
 fn parameter_sets() -> [(&'static str, ChiangParams<f64>); 2] {
+    // The labels are the ledger's section names (one Pareto front and one panel each).
     let a = ChiangParams {
         eta: 1.55,
         sigma_a: vec![0.25, 0.45, 0.8],
@@ -28,7 +29,7 @@ fn parameter_sets() -> [(&'static str, ChiangParams<f64>); 2] {
         beta_n: 0.05,
         ..a.clone()
     };
-    [("beta 0.3", a), ("beta 0.05", narrow)]
+    [("chiang-b0.3", a), ("chiang-b0.05", narrow)]
 }
 
 /// A rig: 5 θ_i × 13 θ_r × 36 φ_r (every θ_i sees each exit direction; 247 distinct (θ_r, |φ|)).
@@ -76,7 +77,7 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
         }
     });
     rows.push(CostRow {
-        section: "chiang".into(),
+        section: "baseline".into(),
         knob: "marschner (yardstick)".into(),
         setting: "marschner cubic, every effect".into(),
         time_s: t / random.len() as f64,
@@ -111,8 +112,8 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
                     let (max, rms, at) = relative_error(&s, &reference);
                     let a = &angles[at / nc];
                     rows.push(CostRow {
-                        section: "chiang".into(),
-                        knob: format!("width nodes, {label}"),
+                        section: label.into(),
+                        knob: "width nodes".into(),
                         setting: format!("{nodes} nodes, {dirs_label}, {how}"),
                         time_s: t / angles.len() as f64,
                         error_max: max,
