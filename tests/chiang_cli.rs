@@ -297,6 +297,23 @@ fn synth_then_fit_recovers_noise_free_truth() {
     let curves = hairfit::files::read_curves_csv(&out.join("curves.csv")).unwrap();
     assert!(curves.windows(2).all(|w| w[0].line <= w[1].line));
     assert!(curves.iter().all(|r| r.residual.abs() < 1e-9));
+    // Determinism: the same fit again writes the same fit.json, byte for byte.
+    let again = dir.path().join("again");
+    ok(&hairfit(&[
+        "fit",
+        p(&data),
+        "--model",
+        "chiang",
+        "--width-nodes",
+        "256",
+        "--starts",
+        "4",
+        "--no-progress",
+        "--out",
+        p(&again),
+    ]));
+    let text = |d: &Path| std::fs::read_to_string(d.join("fit.json")).unwrap();
+    assert_eq!(text(&out), text(&again));
     // The Chiang fit reads with --fix by CHIANG.md's names; Marschner names are refused.
     let e = err(&hairfit(&[
         "fit",
