@@ -14,7 +14,8 @@ use crate::atomic::write_atomically;
 use crate::data::lines::{csv_error, LineCounter, TextGuard};
 use crate::data::AngleUnit;
 use crate::error::{Error, Result};
-use crate::model::{scattering, Angles, ModelConfig, Params};
+use crate::family::{FamilyModel, FamilyParams};
+use crate::model::Angles;
 
 /// Rows evaluated per parallel chunk: large enough to amortise the rayon fork, small enough that
 /// memory does not grow with the file.
@@ -24,15 +25,20 @@ const CHUNK_ROWS: usize = 16_384;
 /// stays bounded by the channel count too (16k rows × 1M channels asked for 131 GB).
 const CHUNK_VALUES: usize = 1 << 20;
 
+/// Rows per parallel work item of a chunk (a batch shares work per exit direction).
+const EVAL_BATCH: usize = 256;
+
 pub use crate::data::ANGLE_COLUMNS;
 
 /// What `hairfit eval` needs besides the files.
 #[derive(Debug, Clone)]
 pub struct EvalRequest {
-    pub params: Params<f64>,
+    /// The model family with its parameters and configuration.
+    pub model: FamilyModel,
     /// Column names for the appended values: `["s"]` or `["s_0", …]`.
     pub output_columns: Vec<String>,
-    pub config: ModelConfig,
+    /// The parameters as read, for error messages.
+    pub params: FamilyParams,
     /// `--angles`: the input's angle unit; the file's `# angles:` line decides when absent
     /// (degrees when neither says).
     pub angles: Option<AngleUnit>,
@@ -157,7 +163,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         .write_record(&out_header)
         .map_err(|e| write_error(&e))?;
 
-    let n_channels = request.params.sigma_a.len().max(1);
+    let n_channels = request.model.n_channels().max(1);
     let chunk_rows = (CHUNK_VALUES / n_channels).clamp(1, CHUNK_ROWS);
     let mut records: Vec<csv::ByteRecord> = Vec::with_capacity(chunk_rows);
     let mut angles: Vec<Angles> = Vec::with_capacity(chunk_rows);
@@ -192,10 +198,11 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         }
         values.clear();
         values.resize(records.len() * n_channels, 0.0);
+        // Chunks of rows share the Chiang width integral per exit direction.
         values
-            .par_chunks_mut(n_channels)
-            .zip(angles.par_iter())
-            .for_each(|(out, a)| scattering(&request.params, &request.config, a, out));
+            .par_chunks_mut(n_channels * EVAL_BATCH)
+            .zip(angles.par_chunks(EVAL_BATCH))
+            .for_each(|(out, a)| request.model.eval_batch(a, out));
         if let Some(j) = values.iter().position(|v| !v.is_finite()) {
             return Err(non_finite_error(
                 source,
@@ -335,8 +342,7 @@ fn non_finite_error(
          parameters the model can evaluate",
         source.display(),
         fields.join(","),
-        serde_json::to_string(&crate::params::ParamFile::from_params(&request.params))
-            .unwrap_or_default()
+        request.params.json_line()
     ))
 }
 

@@ -6,6 +6,8 @@
 //!   the number type so that forward-mode AD gives exact Jacobians.
 //! - [`chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a whole-fibre S),
 //!   generic over the number type like [`model`].
+//! - [`family`]: the model families (`--model marschner|chiang`), a parameter file of either.
+//! - [`compare`]: `hairfit compare`, both families fitted to the same data, side by side.
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
@@ -27,10 +29,12 @@ pub mod atomic;
 pub mod batch;
 pub mod chiang;
 pub mod cli;
+pub mod compare;
 pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;
+pub mod family;
 pub mod files;
 pub mod fit;
 pub mod lm;

@@ -10,7 +10,7 @@ use clap::{Parser, Subcommand};
 
 use hairfit::cli::ModelArgs;
 use hairfit::eval::{eval_file, output_columns, EvalRequest};
-use hairfit::params::{ParamFile, ParameterFile as _};
+use hairfit::family::{FamilyModel, FamilyParams};
 
 #[derive(Parser)]
 #[command(
@@ -56,7 +56,13 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "fits/cost")]
         out: PathBuf,
+        /// `chiang`: the Chiang model's ledger (width nodes, cache) against the Marschner model's time.
+        #[arg(long = "model", value_enum, default_value_t = hairfit::family::ModelFamily::Marschner)]
+        family: hairfit::family::ModelFamily,
     },
+    /// Fit both model families to the same data and compare them: DIR/{marschner,chiang}/,
+    /// DIR/compare.json, DIR/index.html.
+    Compare(hairfit::cli::compare::CompareArgs),
 }
 
 #[derive(clap::Args)]
@@ -96,7 +102,7 @@ struct DemoArgs {
 
 #[derive(clap::Args)]
 struct EvalArgs {
-    /// Parameter file (JSON, MODEL.md's names).
+    /// Parameter file (JSON, MODEL.md's names; CHIANG.md's with --model chiang).
     #[arg(long)]
     params: PathBuf,
     /// Angles CSV with a header; other columns are carried through.
@@ -155,12 +161,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Eval(args) => {
             remove_partial_output_on_interrupt();
-            let file =
-                ParamFile::load(&args.params).map_err(|e| name_parameter_file(e, &args.params))?;
+            args.model.check_family_options()?;
+            let file = FamilyParams::load(&args.params, args.model.family)
+                .map_err(|e| name_parameter_file(e, &args.params))?;
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
-                params: file.to_params(),
-                config: args.model.config()?,
+                model: FamilyModel::new(&file, args.model.config()?, &args.model.chiang()?),
+                params: file,
                 angles: args.angles,
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
@@ -208,9 +215,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 dir.join("index.html").display()
             );
         }
-        Command::Cost { quick, force, out } => {
+        Command::Cost {
+            quick,
+            force,
+            out,
+            family,
+        } => {
             remove_partial_output_on_interrupt();
-            let options = hairfit::cost::CostOptions { quick, force };
+            let options = hairfit::cost::CostOptions {
+                quick,
+                force,
+                family,
+            };
             let ledger = hairfit::cost::run_cost(&out, &options)?;
             print!("{}", hairfit::cost::summary_text(&ledger));
             eprintln!(
@@ -225,12 +241,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             outcome.report_result(&a.out)?;
         }
         Command::Batch(a) => return batch(a),
+        Command::Compare(a) => {
+            let cancel = Some(ctrl_c_flag());
+            let done = hairfit::cli::compare::compare_command(&a, cancel)?;
+            for line in &done.report_lines {
+                print!("{line}");
+            }
+            print!(
+                "{}",
+                hairfit::compare::summary_text(&done.comparison, &a.out)
+            );
+        }
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());
             let opts = a.fit.options(cancel)?;
             let outcome = hairfit::fit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
-            print!("{}", hairfit::fit::demo::truth_line(&a.out));
+            print!("{}", hairfit::fit::demo::truth_line(&a.out, opts.family));
             outcome.report_result(&a.out)?;
         }
     }

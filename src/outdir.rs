@@ -228,13 +228,13 @@ pub fn is_report_file(name: &str) -> bool {
 /// A fit published into its output directory: the outcome, and whether its plotted report
 /// could be drawn (the fit's files are published either way).
 #[derive(Debug)]
-pub struct PublishedFit {
-    pub outcome: FitOutcome,
+pub struct PublishedFit<P = crate::family::FamilyParams> {
+    pub outcome: FitOutcome<P>,
     /// Why the report could not be drawn, if it could not.
     pub report_error: Option<String>,
 }
 
-impl PublishedFit {
+impl<P> PublishedFit<P> {
     /// The summary's last line: where the report is (nothing when it failed: see
     /// [`PublishedFit::report_result`]).
     pub fn report_line(&self, dir: &Path) -> String {
@@ -260,13 +260,13 @@ impl PublishedFit {
 /// Run `produce` (which may write extra files, e.g. the demo's data, into the staging directory
 /// it is given) under the lock of `out`, write the fit's files and its report beside them, and
 /// publish the whole set. `inputs` are the files the run reads (see [`OutputSet::begin`]).
-pub fn publish_fit(
+pub fn publish_fit<P>(
     out: &Path,
     command: &str,
     force: bool,
     inputs: &[&Path],
-    produce: impl FnOnce(&Path) -> Result<FitOutcome>,
-) -> Result<PublishedFit> {
+    produce: impl FnOnce(&Path) -> Result<FitOutcome<P>>,
+) -> Result<PublishedFit<P>> {
     let set = OutputSet::begin(out, command, force, inputs)?;
     let outcome = produce(set.staging())?;
     crate::fit::write_outputs(set.staging(), &outcome)?;

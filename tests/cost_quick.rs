@@ -18,7 +18,7 @@ fn quick_ledger_runs_and_its_numbers_make_sense() {
         &out,
         &CostOptions {
             quick: true,
-            force: false,
+            ..CostOptions::default()
         },
     )
     .unwrap();

@@ -220,7 +220,7 @@ fn optimum<'a>(
     data: &'a FitData,
     out: &FitOutcome,
     cancel: Option<Arc<AtomicBool>>,
-) -> Optimum<'a> {
+) -> Optimum<'a, ModelForward> {
     let free: Vec<ParamName> = out
         .json
         .parameters

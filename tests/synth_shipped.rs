@@ -8,6 +8,7 @@ mod cli;
 
 use cli::root;
 use std::path::Path;
+use std::process::Command;
 
 use hairfit::synth::Truth;
 

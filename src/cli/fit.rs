@@ -11,8 +11,9 @@ use clap::Args;
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
+use crate::family::ModelFamily;
 use crate::fit::{
-    fit, fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
+    fit_data, fit_family, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
 use crate::outdir::{publish_fit, PublishedFit};
 
@@ -44,7 +45,8 @@ pub struct FitArgs {
     /// Global stage between multi-start and polish: none, pso or nelder-mead.
     #[arg(long, default_value = "none")]
     pub global: Global,
-    /// Fix a parameter, NAME=VALUE (MODEL.md names, degrees for *_deg); repeatable.
+    /// Fix a parameter, NAME=VALUE (MODEL.md's or, with --model chiang, CHIANG.md's names;
+    /// degrees for *_deg); repeatable.
     #[arg(long = "fix")]
     pub fix: Vec<String>,
     /// Free a parameter that is fixed by default (only `eta`).
@@ -82,6 +84,7 @@ pub struct FitArgs {
 impl FitArgs {
     /// The fit options these arguments ask for.
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
+        self.model.check_family_options()?;
         let cfg = self.model.config()?;
         let default_lobes = crate::model::Lobes::default();
         let explicit = cfg.effects.lobes != default_lobes
@@ -111,7 +114,12 @@ impl FitArgs {
                 "eta" => free_eta = true,
                 other => {
                     return Err(Error::Other(format!(
-                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on; delta_eta_prime and delta_h_m stay fixed)"
+                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on{})",
+                        if self.model.family == ModelFamily::Marschner {
+                            "; delta_eta_prime and delta_h_m stay fixed"
+                        } else {
+                            ""
+                        }
                     )))
                 }
             }
@@ -154,6 +162,8 @@ impl FitArgs {
             cancel,
             progress: !self.no_progress,
             intervals: self.intervals,
+            family: self.model.family,
+            chiang: self.model.chiang()?,
         })
     }
 }
@@ -172,7 +182,7 @@ pub fn fit_command(
         let (ds, report) = load(data_path, load_options)?;
         let load_warnings = report.warnings.clone();
         let data = fit_data(&ds);
-        let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
+        let mut outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
         // The loader's settings are options of this fit too, and its warnings the fit's.
         outcome.json.options.load = Some(format!("{load_options:?}"));
         outcome.json.warnings.splice(0..0, load_warnings);

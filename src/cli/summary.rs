@@ -24,7 +24,7 @@ fn interval(i: Option<&crate::files::Interval>) -> String {
 }
 
 /// The summary of `out`; `dir` is where its files were written, if they were.
-pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
+pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     let j = &out.json;
     let mut s = String::new();
     let l = j.model.effects.lobes;
@@ -41,14 +41,25 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         j.data.channels.len(),
         j.data.file
     );
-    s += &format!(
-        "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
-        j.model.mode,
-        lobes.join("+"),
-        on_off(j.model.effects.glints),
-        on_off(j.model.effects.eccentricity),
-        j.options.effects_choice
-    );
+    match &j.chiang {
+        Some(c) => {
+            s += &format!(
+                "model: chiang, terms {}, {} width nodes\n",
+                c.effects_text(),
+                c.width_nodes
+            )
+        }
+        None => {
+            s += &format!(
+                "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
+                j.model.mode,
+                lobes.join("+"),
+                on_off(j.model.effects.glints),
+                on_off(j.model.effects.eccentricity),
+                j.options.effects_choice
+            )
+        }
+    }
     if j.options.measurement == Measurement::Radiance {
         s += "measurement: radiance, the model times cos theta_i (--measurement radiance)\n";
     }

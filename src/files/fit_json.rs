@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyParams};
 use crate::model::{Measurement, ModelConfig, RootMode};
-use crate::params::ParamFile;
 
 /// How a fit (or one solver run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -342,11 +342,14 @@ pub struct FitJson {
     pub hairfit_version: String,
     pub status: FitStatus,
     pub data: DataInfo,
-    /// The forward model's configuration the fit used (the report evaluates the same).
+    /// The forward model's configuration the fit used (the report evaluates the same). A
+    /// Chiang fit records its lobes here (glints and eccentricity off) and its own
+    /// configuration in `chiang`.
     pub model: ModelConfig,
     pub options: OptionsRecord,
-    /// The fitted parameters, exactly a parameter file.
-    pub params: ParamFile,
+    /// The fitted parameters, exactly a parameter file of the fit's family (a Chiang file
+    /// carries `"model": "chiang"`).
+    pub params: FamilyParams,
     pub parameters: Vec<ParameterEntry>,
     pub scale: Vec<ScaleEntry>,
     #[serde(default)]
@@ -370,9 +373,17 @@ pub struct FitJson {
     /// What to try, each with the evidence from this fit that suggests it.
     #[serde(default)]
     pub suggestions: Vec<Suggestion>,
+    /// A Chiang fit's model configuration; absent for a Marschner fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chiang: Option<ChiangRecord>,
 }
 
 impl FitJson {
+    /// The model family the fit used.
+    pub fn family(&self) -> crate::family::ModelFamily {
+        self.params.family()
+    }
+
     /// Read `fit.json`; a syntax or schema error names line and column.
     pub fn load(path: &Path) -> Result<FitJson> {
         super::read_json(

@@ -19,14 +19,14 @@ use argmin::core::{Executor, State};
 use nalgebra::DVector;
 use rayon::prelude::*;
 
-use super::bounds::{report_factor, typical_range, Bound};
-use super::problem::{Evaluator, FitData, LsqProblem, ModelForward, Space};
+use super::bounds::Bound;
+use super::problem::{Evaluator, FitData, FitParam, Forward, LsqProblem, ParamSet, Space};
 use super::solve::{is_cancelled, Cancellable, LocalRun};
 use super::Loss;
 use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
 use crate::files::{FitJson, FitStatus, Interval, ParamStatus, StageTiming};
-use crate::model::{ParamName, Params};
+use crate::model::ParamName;
 
 /// Δχ² of a 68.27% interval for one parameter.
 pub const CHI2_68: f64 = 1.0;
@@ -120,15 +120,15 @@ pub fn decide(choice: Intervals, n_free: usize, seconds_per_iteration: f64) -> (
 }
 
 /// The fit's optimum, where every profile starts.
-pub struct Optimum<'a> {
-    pub forward: &'a ModelForward,
+pub struct Optimum<'a, F: Forward> {
+    pub forward: &'a F,
     pub data: &'a FitData,
     pub space: Space,
     pub loss: Loss,
     pub loss_scale: f64,
     /// Every parameter at the optimum (natural units).
-    pub params: Params<f64>,
-    pub free: Vec<ParamName>,
+    pub params: ParamSet<F>,
+    pub free: Vec<F::Param>,
     /// Solver coordinates of the optimum (free parameters, then explicit log-scales).
     pub u: Vec<f64>,
     pub cost: f64,
@@ -161,8 +161,8 @@ impl End {
 
 /// One parameter's profile.
 #[derive(Debug, Clone)]
-pub struct Profile {
-    pub name: ParamName,
+pub struct Profile<P = ParamName> {
+    pub name: P,
     /// `(value, Δχ²)` in natural units, ascending in value, the optimum included.
     pub points: Vec<(f64, f64)>,
     /// `[lower, upper]` at Δχ² = 1 and at 3.84.
@@ -182,19 +182,19 @@ struct Pt {
 }
 
 /// One parameter pinned: an evaluator without it, and its solves.
-struct Pinned<'a, 'o> {
-    opt: &'o Optimum<'a>,
-    ev: Evaluator<'a, ModelForward>,
-    p: ParamName,
+struct Pinned<'a, 'o, F: Forward> {
+    opt: &'o Optimum<'a, F>,
+    ev: Evaluator<'a, F>,
+    p: F::Param,
     x0: f64,
     iterations: u64,
     solves: usize,
 }
 
-impl Pinned<'_, '_> {
+impl<F: Forward> Pinned<'_, '_, F> {
     /// Δχ² at `x0 + h` with the other parameters re-minimised from `u_start`.
     fn solve(&mut self, h: f64, u_start: &[f64]) -> Pt {
-        self.ev.base.set(self.p, self.x0 + h);
+        self.p.set(&mut self.ev.base, self.x0 + h);
         let max_iters = self.opt.max_iters.min(SOLVE_MAX_ITERS);
         let (u, cost, iterations) = self.run(u_start, max_iters);
         self.iterations += iterations;
@@ -330,13 +330,13 @@ impl Pinned<'_, '_> {
 
 /// Profile free parameter `j` of `opt`, stepping first by `step` (natural units, e.g. the
 /// linearised SE). `None` when cancelled.
-pub fn profile_parameter(
-    opt: &Optimum<'_>,
+pub fn profile_parameter<F: Forward>(
+    opt: &Optimum<'_, F>,
     j: usize,
     step: Option<f64>,
-) -> Result<Option<Profile>> {
+) -> Result<Option<Profile<F::Param>>> {
     let p = opt.free[j];
-    let free: Vec<ParamName> = opt.free.iter().copied().filter(|&q| q != p).collect();
+    let free: Vec<F::Param> = opt.free.iter().copied().filter(|&q| q != p).collect();
     let (ev, _) = Evaluator::new(
         opt.forward,
         opt.data,
@@ -346,10 +346,10 @@ pub fn profile_parameter(
         opt.params.clone(),
         free,
     )?;
-    let x0 = opt.params.get(p);
+    let x0 = p.get(&opt.params);
     let mut u0 = opt.u.clone();
     u0.remove(j);
-    let (a, b) = typical_range(p);
+    let (a, b) = p.typical_range();
     let width = (b - a).abs().max(1e-12);
     let step = step
         .filter(|s| s.is_finite() && *s > 0.0)
@@ -364,7 +364,7 @@ pub fn profile_parameter(
         solves: 0,
     };
     let far = SEARCH_RANGES * width;
-    let (lo_room, lo_bounded, hi_room, hi_bounded) = match Bound::of(p) {
+    let (lo_room, lo_bounded, hi_room, hi_bounded) = match p.bound() {
         Bound::Free => (far, false, far, false),
         Bound::Lower(lo) => ((x0 - lo).max(0.0), true, far, false),
         Bound::Both(lo, hi) => ((x0 - lo).max(0.0), true, (hi - x0).max(0.0), true),
@@ -399,8 +399,11 @@ pub fn profile_parameter(
 
 /// Profile every free parameter in parallel (`steps[j]`: first step of parameter `j`). `None`
 /// when cancelled: the linearised intervals stand.
-pub fn profile_all(opt: &Optimum<'_>, steps: &[Option<f64>]) -> Result<Option<Vec<Profile>>> {
-    let out: Vec<Result<Option<Profile>>> = (0..opt.free.len())
+pub fn profile_all<F: Forward>(
+    opt: &Optimum<'_, F>,
+    steps: &[Option<f64>],
+) -> Result<Option<Vec<Profile<F::Param>>>> {
+    let out: Vec<Result<Option<Profile<F::Param>>>> = (0..opt.free.len())
         .into_par_iter()
         .map(|j| profile_parameter(opt, j, steps.get(j).copied().flatten()))
         .collect();
@@ -416,10 +419,10 @@ pub fn profile_all(opt: &Optimum<'_>, steps: &[Option<f64>]) -> Result<Option<Ve
 
 /// Write `profiles` into fit.json's parameter entries (reporting units): intervals, profile
 /// points, and the status and warnings of a profile that stays open inside the bounds.
-pub fn apply(json: &mut FitJson, profiles: &[Profile]) {
+pub fn apply<P: FitParam>(json: &mut FitJson, profiles: &[Profile<P>]) {
     for pr in profiles {
         let name = pr.name.json_name();
-        let f = report_factor(pr.name);
+        let f = pr.name.report_factor();
         let Some(entry) = json.parameters.iter_mut().find(|e| e.name == name) else {
             continue;
         };
@@ -489,16 +492,16 @@ pub fn apply(json: &mut FitJson, profiles: &[Profile]) {
 /// The fit's interval stage: decide (`--intervals`), profile every free parameter of `opt`
 /// (`best`: the polish run, whose time per iteration prices the profiles), and write the result
 /// into `out`. Ctrl-C stops it: the linearised intervals stand and the status is `interrupted`.
-pub fn intervals(
-    out: &mut FitOutcome,
-    mut opt: Optimum<'_>,
+pub fn intervals<F: Forward, Q>(
+    out: &mut FitOutcome<Q>,
+    mut opt: Optimum<'_, F>,
     best: &LocalRun,
     opts: &FitOptions,
     started: std::time::Instant,
 ) -> Result<()> {
     let t0 = std::time::Instant::now();
     let nf = opt.free.len();
-    let record = |out: &mut FitOutcome, method: &str, reason: String| {
+    let record = |out: &mut FitOutcome<Q>, method: &str, reason: String| {
         out.json.options.intervals = method.into();
         out.json.options.intervals_reason = reason;
     };
@@ -538,7 +541,7 @@ pub fn intervals(
                 .iter()
                 .find(|e| e.name == p.json_name())
                 .and_then(|e| e.std_error)
-                .map(|se| se / report_factor(p))
+                .map(|se| se / p.report_factor())
         })
         .collect();
     match profile_all(&opt, &steps)? {

@@ -7,7 +7,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bounds::{self, report_factor};
-use super::problem::{self, Evaluator, FitData, ModelForward, ScaleMode};
+use super::problem::{self, Evaluator, FitData, Forward, ScaleMode};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
 use super::{choose_effects, free_parameters, parse_fixes, EffectsChoice, FitOptions, Global};
 use crate::error::Result;
@@ -133,7 +133,7 @@ impl StageLog {
 
 /// Internal solver coordinates of natural point `x` (plus the explicit log-scales from the
 /// projection when the scale is explicit).
-fn to_internal(ev: &Evaluator<'_, ModelForward>, x: &[f64]) -> Vec<f64> {
+fn to_internal<F: Forward>(ev: &Evaluator<'_, F>, x: &[f64]) -> Vec<f64> {
     let mut u = ev.internal(x);
     if ev.explicit_scale {
         let ones = vec![1.0; x.len()];
@@ -145,8 +145,8 @@ fn to_internal(ev: &Evaluator<'_, ModelForward>, x: &[f64]) -> Vec<f64> {
 
 /// Short LM runs from every start on the subsample (parallel); returns the runs and their
 /// order by cost.
-pub fn multistart(
-    ev_sub: &Evaluator<'_, ModelForward>,
+pub fn multistart<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
     starts: &[Vec<f64>],
     opts: &FitOptions,
     bar: &indicatif::ProgressBar,
@@ -156,9 +156,9 @@ pub fn multistart(
 }
 
 /// [`multistart`] recorded as stage `stage`.
-pub fn multistart_as(
+pub fn multistart_as<F: Forward>(
     stage: &str,
-    ev_sub: &Evaluator<'_, ModelForward>,
+    ev_sub: &Evaluator<'_, F>,
     starts: &[Vec<f64>],
     opts: &FitOptions,
     bar: &indicatif::ProgressBar,
@@ -206,8 +206,8 @@ pub fn multistart_as(
 
 /// The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
 /// typical range) are polished once, so the full-data stage is not spent twice on one basin.
-pub fn distinct_candidates(
-    ev_sub: &Evaluator<'_, ModelForward>,
+pub fn distinct_candidates<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
     runs: &[LocalRun],
     order: &[usize],
     ranges: &[(f64, f64)],
@@ -245,8 +245,8 @@ pub fn distinct_candidates(
 }
 
 /// The optional global stage on the subsample; its result is polished first.
-pub fn global_stage(
-    ev_sub: &Evaluator<'_, ModelForward>,
+pub fn global_stage<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
     candidates: &mut Vec<Vec<f64>>,
     ranges: &[(f64, f64)],
     opts: &FitOptions,
@@ -291,8 +291,8 @@ pub fn global_stage(
 }
 
 /// LM polish of every candidate on all data; the best run.
-pub fn polish(
-    ev_full: &Evaluator<'_, ModelForward>,
+pub fn polish<F: Forward>(
+    ev_full: &Evaluator<'_, F>,
     candidates: &[Vec<f64>],
     opts: &FitOptions,
     bar: &indicatif::ProgressBar,
@@ -321,8 +321,8 @@ pub fn polish(
 /// `--loss-scale auto`, refined: the loss scale from the robust fit's own residuals (tuning
 /// constant × 1.4826·MAD), then a polish from `best` with it. Skipped when cancelled or when the
 /// scale moves by less than 1%.
-pub fn rescale_loss(
-    ev_full: &mut Evaluator<'_, ModelForward>,
+pub fn rescale_loss<F: Forward>(
+    ev_full: &mut Evaluator<'_, F>,
     best: LocalRun,
     opts: &FitOptions,
     log: &mut StageLog,

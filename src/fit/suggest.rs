@@ -3,7 +3,7 @@
 //! `--mode exact`; residuals that follow ln cos θ_i → the other `--measurement`; parameters the
 //! data do not determine → `--fix`. A suggestion is made only when its evidence is there.
 
-use super::diagnostics::near_glint;
+use super::problem::Forward;
 use super::verdict::{Evidence, LARGE_RESIDUAL};
 use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
 use crate::fit::Loss;
@@ -23,8 +23,8 @@ const MIN_GLINT_SAMPLES: usize = 5;
 const MIN_TREND_T: f64 = 5.0;
 
 /// Suggestions for a fit with `verdict` and statistics `g`.
-pub fn suggestions(
-    x: &Evidence<'_, '_, '_>,
+pub fn suggestions<F: Forward>(
+    x: &Evidence<'_, '_, '_, F>,
     g: &GoodnessOfFit,
     verdict: Verdict,
 ) -> Vec<Suggestion> {
@@ -40,7 +40,7 @@ pub fn suggestions(
     out
 }
 
-fn robust_loss(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion> {
+fn robust_loss<F: Forward>(x: &Evidence<'_, '_, '_, F>, g: &GoodnessOfFit) -> Option<Suggestion> {
     let noise = g.robust_noise?;
     let share = g.large_residual_share?;
     let n = x.e.raw.len();
@@ -70,12 +70,12 @@ fn robust_loss(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion
     })
 }
 
-fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion> {
+fn exact_mode<F: Forward>(x: &Evidence<'_, '_, '_, F>, g: &GoodnessOfFit) -> Option<Suggestion> {
     if x.config.mode != RootMode::Cubic || !x.config.effects.glints || !x.config.effects.lobes.trt {
         return None;
     }
     let nc = x.data.n_channels().max(1);
-    let near = near_glint(x.data, RootMode::Cubic, x.params.eta, x.params.w_c);
+    let near = x.near_glint.as_ref()?;
     let clip = g.robust_noise.map_or(f64::INFINITY, |s| LARGE_RESIDUAL * s);
     let (mut ss, mut count) = ([0.0; 2], [0usize; 2]);
     for (k, r) in x.e.raw.iter().enumerate().filter(|(_, r)| r.is_finite()) {
@@ -97,7 +97,7 @@ fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion>
 }
 
 /// Least-squares slope of ln(data/fit) against ln cos θ_i, with its standard error.
-fn theta_i_trend(x: &Evidence<'_, '_, '_>) -> Option<(f64, f64)> {
+fn theta_i_trend<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<(f64, f64)> {
     let nc = x.data.n_channels().max(1);
     let points: Vec<(f64, f64)> =
         x.e.model
@@ -134,9 +134,9 @@ fn theta_i_trend(x: &Evidence<'_, '_, '_>) -> Option<(f64, f64)> {
     Some((b, se))
 }
 
-fn measurement(x: &Evidence<'_, '_, '_>) -> Option<Suggestion> {
+fn measurement<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<Suggestion> {
     let (b, se) = theta_i_trend(x)?;
-    let (expected, action, what) = match x.ev.forward.measurement {
+    let (expected, action, what) = match x.ev.forward.measurement() {
         Measurement::S => (1.0, "--measurement radiance", "radiance fitted as S"),
         Measurement::Radiance => (-1.0, "--measurement s", "S fitted as radiance"),
     };
@@ -149,7 +149,7 @@ fn measurement(x: &Evidence<'_, '_, '_>) -> Option<Suggestion> {
     })
 }
 
-fn fix_undetermined(x: &Evidence<'_, '_, '_>) -> Option<Suggestion> {
+fn fix_undetermined<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<Suggestion> {
     let names: Vec<&str> = x
         .parameters
         .iter()

@@ -9,14 +9,14 @@
 use std::collections::HashMap;
 
 use super::gof;
-use super::problem::{Evaluation, Evaluator, FitData, ModelForward};
+use super::problem::{Evaluation, Evaluator, FitData, Forward};
 use super::suggest::suggestions;
 use crate::files::{
-    FitStatus, GofThresholds, GoodnessOfFit, ParamStatus, ParameterEntry, ScaleEntry, Suggestion,
-    TraceStage, Verdict,
+    FitJson, FitStatus, GofThresholds, GoodnessOfFit, ParamStatus, ParameterEntry, ScaleEntry,
+    Suggestion, TraceStage, Verdict,
 };
 use crate::fit::Loss;
-use crate::model::{ModelConfig, Params};
+use crate::model::ModelConfig;
 use crate::report::slices::{find_slices, Sample};
 
 /// A test rejects the model when its p-value is below 1e-3: with the handful of tests applied
@@ -57,12 +57,13 @@ const NAMED_ROWS: usize = 3;
 
 /// What the verdict looks at: the fit's data, its evaluator and final evaluation, and the
 /// entries already assembled for fit.json.
-pub struct Evidence<'a, 'e, 'f> {
+pub struct Evidence<'a, 'e, 'f, F: Forward> {
     pub data: &'a FitData,
-    pub ev: &'e Evaluator<'f, ModelForward>,
+    pub ev: &'e Evaluator<'f, F>,
     pub e: &'a Evaluation,
     pub config: &'a ModelConfig,
-    pub params: &'a Params<f64>,
+    /// Per sample: near a glint the model approximates (`None`: no such glint).
+    pub near_glint: Option<Vec<bool>>,
     pub status: FitStatus,
     pub parameters: &'a [ParameterEntry],
     pub scale: &'a [ScaleEntry],
@@ -72,7 +73,7 @@ pub struct Evidence<'a, 'e, 'f> {
     pub dof: usize,
 }
 
-impl Evidence<'_, '_, '_> {
+impl<F: Forward> Evidence<'_, '_, '_, F> {
     /// Number of fitted quantities: free parameters and per-channel scales.
     pub fn n_fitted(&self) -> usize {
         self.e.raw.len().saturating_sub(self.dof)
@@ -89,7 +90,7 @@ pub struct Judgement {
 }
 
 /// Judge a fit.
-pub fn judge(x: &Evidence<'_, '_, '_>) -> Judgement {
+pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
     let failed = failures(x);
     let g = goodness_of_fit(x);
     let poor = if failed.is_empty() {
@@ -173,7 +174,7 @@ fn undetermined_reason(p: &ParameterEntry, warnings: &[String]) -> String {
 }
 
 /// Why the numbers are not a fit (empty when they are).
-fn failures(x: &Evidence<'_, '_, '_>) -> Vec<String> {
+fn failures<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Vec<String> {
     let mut why = Vec::new();
     if x.status == FitStatus::Failed {
         why.push(
@@ -224,7 +225,7 @@ fn failures(x: &Evidence<'_, '_, '_>) -> Vec<String> {
 
 /// Rows whose residual weight (1/σ, or y/σ in log space) overflows or underflows when squared:
 /// one such row makes every sum of the fit non-finite or blind to it.
-fn weight_failures(x: &Evidence<'_, '_, '_>) -> Option<String> {
+fn weight_failures<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<String> {
     let nc = x.data.n_channels().max(1);
     let w = x.ev.weights();
     let user_zero = |k: usize| x.data.weight.as_ref().is_some_and(|wt| wt[k] <= 0.0);
@@ -272,7 +273,7 @@ fn weight_failures(x: &Evidence<'_, '_, '_>) -> Option<String> {
 
 /// A robust-loss scale so large (or small) that (r/C)² underflows (or overflows) at typical
 /// residuals: every loss is 0 (or infinite) and the solver cannot move.
-fn loss_scale_failure(x: &Evidence<'_, '_, '_>) -> Option<String> {
+fn loss_scale_failure<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<String> {
     if x.ev.loss == Loss::L2 {
         return None;
     }
@@ -292,7 +293,7 @@ fn loss_scale_failure(x: &Evidence<'_, '_, '_>) -> Option<String> {
 }
 
 /// Goodness-of-fit statistics of the final residuals.
-pub fn goodness_of_fit(x: &Evidence<'_, '_, '_>) -> GoodnessOfFit {
+pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> GoodnessOfFit {
     let raw = &x.e.raw;
     let nc = x.data.n_channels().max(1);
     let n_fitted = x.n_fitted();
@@ -514,5 +515,38 @@ fn num(x: f64) -> String {
     } else {
         let digits = (3 - x.abs().log10().floor().max(-1.0) as i32).max(0) as usize;
         format!("{x:.digits$}")
+    }
+}
+
+/// Profiles run after [`judge`]: a parameter whose profile stays open is now `undetermined`
+/// (which downgrades `good`), and profiling stopped by a signal makes the fit `interrupted`.
+pub fn after_profiles(json: &mut FitJson) {
+    if json.status == FitStatus::Interrupted && json.verdict != Verdict::Interrupted {
+        json.verdict = Verdict::Interrupted;
+        json.reasons.insert(
+            0,
+            "stopped by a signal (Ctrl-C or SIGTERM) while profiling: the intervals are the linearised standard errors only".into(),
+        );
+    }
+    let newly: Vec<String> = json
+        .parameters
+        .iter()
+        .filter(|p| p.status == ParamStatus::Undetermined)
+        .filter(|p| {
+            !json
+                .reasons
+                .iter()
+                .any(|r| r.starts_with(&format!("{} is undetermined", p.name)))
+        })
+        .map(|p| undetermined_reason(p, &json.warnings))
+        .collect();
+    if newly.is_empty() {
+        return;
+    }
+    if json.verdict == Verdict::Good {
+        json.verdict = Verdict::Undetermined;
+    }
+    if json.verdict != Verdict::Failed {
+        json.reasons.extend(newly);
     }
 }

@@ -103,13 +103,20 @@ fn summary_section(h: &mut String, fit: &FitJson) {
     row("channels", escape(&fit.data.channels.join(", ")));
     row(
         "model",
-        format!(
-            "{} roots; lobes {}; glints {}; eccentricity {}",
-            fit.model.mode,
-            lobes.join("+"),
-            if e.glints { "on" } else { "off" },
-            if e.eccentricity { "on" } else { "off" }
-        ),
+        match &fit.chiang {
+            Some(c) => format!(
+                "Chiang 2016; terms {}; {} width nodes (the TRT curve includes the p ≥ 3 residual)",
+                c.effects_text(),
+                c.width_nodes
+            ),
+            None => format!(
+                "{} roots; lobes {}; glints {}; eccentricity {}",
+                fit.model.mode,
+                lobes.join("+"),
+                if e.glints { "on" } else { "off" },
+                if e.eccentricity { "on" } else { "off" }
+            ),
+        },
     );
     row(
         "residuals",

@@ -19,9 +19,9 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
+use crate::family::FamilyModel;
 use crate::files::{read_curves_csv, CurveRow, FitJson};
-use crate::model::{scattering_by_lobe, Angles};
-use crate::params::ParameterFile as _;
+use crate::model::Angles;
 
 use crate::plot::{render, YScale};
 use decimate::stride_indices;
@@ -90,18 +90,21 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
 }
 
 /// Report the fit `fit` with curves `rows` into `dir`: the dense curves evaluate the fit's
-/// model configuration and measurement with its fitted parameters.
+/// model family, configuration and measurement with its fitted parameters.
 pub fn write_report_of(
     dir: &Path,
     fit: &FitJson,
     rows: &[CurveRow],
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
-    let params = fit.params.to_params();
-    let config = fit.model;
+    let chiang_model = match &fit.chiang {
+        Some(record) => record.model()?,
+        None => crate::chiang::ChiangModel::default(),
+    };
+    let family_model = FamilyModel::new(&fit.params, fit.model, &chiang_model);
     let measurement = fit.options.measurement;
     let model = move |a: &Angles, out: &mut [[f64; 3]]| {
-        scattering_by_lobe(&params, &config, a, out);
+        family_model.by_lobe(a, out);
         let f = measurement.factor(a);
         out.iter_mut().flatten().for_each(|v| *v *= f);
     };
