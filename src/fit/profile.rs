@@ -87,7 +87,6 @@ impl std::fmt::Display for Intervals {
 }
 
 /// Estimated wall time of profiling `n_free` parameters when one LM iteration on all data takes
-/// `seconds_per_iteration`.
 /// `seconds_per_iteration` (measured with every thread on one run; parameters profiled side by
 /// side share the threads, so there is no speed-up to count).
 pub fn estimate_seconds(n_free: usize, seconds_per_iteration: f64) -> f64 {
