@@ -48,10 +48,11 @@ const SOLVE_CHI2_TOL: f64 = 1e-3;
 /// LM iterations per profile solve at most (warm-started solves need 3–15).
 const SOLVE_MAX_ITERS: u64 = 100;
 /// Estimated cost of a profile, for `--intervals auto`: solves per side and LM iterations per
-/// (warm-started) solve, as measured on `data/azimuthal_1ch_noisy.csv` (77 solves for 6
-/// parameters, 17.6 iterations each: undetermined directions crawl).
-const SOLVES_PER_SIDE: f64 = 7.0;
-const ITERS_PER_SOLVE: f64 = 20.0;
+/// (warm-started) solve. Measured: the demo (8 well-determined parameters) 3 solves per side,
+/// 2 iterations each; `data/azimuthal_1ch_noisy.csv` with cauchy (two undetermined parameters
+/// that crawl) 6.4 and 17.6. In between, leaning to the expensive side.
+const SOLVES_PER_SIDE: f64 = 5.0;
+const ITERS_PER_SOLVE: f64 = 8.0;
 
 /// `--intervals`: profile likelihood, linearised only, or profile when cheap.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
