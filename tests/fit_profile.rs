@@ -8,7 +8,7 @@
 //! probability 99.7%. Parameters of one dataset are correlated, which widens the true spread a
 //! little; the datasets are seeded, so a pass is reproducible.
 //!
-//! Full sets (≥ 50 datasets per rig, ignored in the default suite):
+//! Full sets (60 datasets per rig, ignored in the default suite):
 //! `cargo test --release --test fit_profile -- --ignored --nocapture`
 
 use std::sync::atomic::AtomicBool;
