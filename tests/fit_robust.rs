@@ -53,15 +53,13 @@ fn add_outliers(data: &mut FitData, fraction: f64, seed: u64) -> Vec<usize> {
 }
 
 /// The case: 10% outliers (×5–50), 2% noise, no `sigma` column, `--loss cauchy` with
-/// the default `--loss-scale auto`. Targets: scale within 0.5%, k_G within 2% of the truth
-/// (with 720 samples the scale's SE is ~0.1% and k_G's ~0.5%, so the targets are 4–5 SEs).
+/// the default `--loss-scale auto`. Targets: scale within 0.5%, k_G within 2% of the truth.
+/// Random directions (1500 samples) determine every parameter; on azimuthal scans alone
+/// (θ_h = 0) α_R and β_R are undetermined and k_G trades off with them (−10% there, with any
+/// loss scale), which is a property of the geometry, not of the loss.
 #[test]
 fn cauchy_with_an_auto_scale_recovers_scale_and_k_g_through_ten_percent_outliers() {
-    let mut data = synth(
-        "azimuthal:incidences=15,30,45:steps=240",
-        "relative:0.02",
-        11,
-    );
+    let mut data = synth("sphere:n=1500", "relative:0.02", 11);
     data.sigma = None;
     let outliers = add_outliers(&mut data, 0.10, 12);
     let opts = FitOptions {
@@ -83,7 +81,7 @@ fn cauchy_with_an_auto_scale_recovers_scale_and_k_g_through_ten_percent_outliers
     assert!((scale / SCALE - 1.0).abs() < 0.005, "scale {scale}");
     assert!((k_g / 2.0 - 1.0).abs() < 0.02, "k_g {k_g}");
     // The recorded loss scale is Cauchy's 2.385 × the noise (2% relative = 0.02 in log units);
-    // MAD on 650 inliers is good to ~5%, so within 15%.
+    // MAD on 1350 inliers is good to ~4%, so within 15%.
     let o = &out.json.options;
     assert!(o.loss_scale_auto);
     assert!(

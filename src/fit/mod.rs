@@ -416,7 +416,7 @@ pub fn fit_with<F: Forward>(
     let (mut ev_sub, _) = evaluator(&sub_data, opts.loss, 1.0)?;
 
     let ranges: Vec<(f64, f64)> = run.free.iter().map(|&p| p.typical_range()).collect();
-    let starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
+    let mut starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
     let auto_scale = opts.loss != Loss::L2 && opts.loss_scale == LossScale::Auto;
     let runs_total = opts.starts.max(1) * if auto_scale { 2 } else { 1 } + opts.polish.max(1);
     let bar = stages::progress_bar(opts, runs_total);
@@ -431,6 +431,9 @@ pub fn fit_with<F: Forward>(
             let (runs, order) =
                 stages::multistart_as("loss-scale-l2", &ev_l2, &starts, opts, &bar, &mut log);
             let e = ev_l2.eval_internal(&runs[order[0]].u, false);
+            // Its best point also starts the robust multi-start (outliers bias it, but it lies
+            // in the right basin far more often than a design point).
+            starts.push(ev_l2.natural(&runs[order[0]].u[..run.free.len()]));
             loss::noise_mad(&e.raw).map_or(1.0, |s| opts.loss.tuning() * s)
         }
     };

@@ -7,7 +7,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bounds::{self, report_factor};
-use super::problem::{self, Evaluator, FitData, Forward, ScaleMode};
+use super::problem::{self, Evaluator, FitData, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
 use super::{choose_effects, free_parameters, parse_fixes, EffectsChoice, FitOptions, Global};
 use crate::error::Result;
@@ -131,14 +131,13 @@ impl StageLog {
     }
 }
 
-/// Internal solver coordinates of natural point `x` (plus the explicit log-scales from the
-/// projection when the scale is explicit).
+/// Internal solver coordinates of natural point `x` (plus the explicit log-scales, started at
+/// the median of ln(y/S), when the scale is explicit).
 fn to_internal<F: Forward>(ev: &Evaluator<'_, F>, x: &[f64]) -> Vec<f64> {
     let mut u = ev.internal(x);
     if ev.explicit_scale {
-        let ones = vec![1.0; x.len()];
-        let e = ev.evaluate(x, &ones, ScaleMode::Projected, false);
-        u.extend(e.scale.iter().map(|s| s.max(1e-300).ln()));
+        // The median, not the projected mean: a robust loss's outliers drag the mean.
+        u.extend(ev.median_log_scale(x));
     }
     u
 }
