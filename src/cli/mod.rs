@@ -2,6 +2,7 @@
 //! `main.rs` only composes them and every command spells an option the same way), the fit
 //! command's options and flag-worded checks ([`fit`]), and the summary it prints ([`summary`]).
 
+pub mod export;
 pub mod fit;
 pub mod summary;
 
