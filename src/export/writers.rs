@@ -120,7 +120,8 @@ pub fn pbrt(name: &str, header: &[String], mapping: &Mapping) -> String {
 }
 
 /// Blender (bpy, 4.x/5.x): a script that creates the material with a Principled Hair BSDF,
-/// model Chiang, parametrisation Absorption Coefficient, wired to the material output.
+/// model Chiang, parametrisation Absorption Coefficient, wired to the material output. (Random
+/// Color is unavailable in that parametrisation; Random Roughness 0 keeps β as fitted.)
 pub fn blender(name: &str, header: &[String], mapping: &Mapping) -> String {
     let p = &mapping.params.chiang;
     let [r, g, b] = rgb(&p.sigma_a);
@@ -134,7 +135,6 @@ pub fn blender(name: &str, header: &[String], mapping: &Mapping) -> String {
         ("Coat", "0.0".into()),
         ("IOR", num(p.eta)),
         ("Offset", num(p.alpha)),
-        ("Random Color", "0.0".into()),
         ("Random Roughness", "0.0".into()),
     ];
     let inputs: String = inputs
