@@ -33,7 +33,13 @@ fn blender_runs_the_export_and_renders_it() {
         "{stdout}\n{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    for key in ["Absorption Coefficient", "Roughness", "Radial Roughness", "IOR", "Offset"] {
+    for key in [
+        "Absorption Coefficient",
+        "Roughness",
+        "Radial Roughness",
+        "IOR",
+        "Offset",
+    ] {
         assert!(stdout.contains(&format!("input {key}:")), "{key}: {stdout}");
     }
     let bytes = std::fs::read(png).unwrap();

@@ -6,9 +6,9 @@ mod export_support;
 
 use std::f64::consts::PI;
 
+use export_support::{chiang_fit_dir, marschner_fit_dir, set_a_rgb};
 use hairfit::chiang::ChiangParams;
 use hairfit::export::{export, Renderer};
-use export_support::{chiang_fit_dir, marschner_fit_dir, set_a_rgb};
 
 /// pbrt-v4's `hair` material parameters (materials.cpp: HairMaterial::Create) with the types
 /// pbrt-v4 accepts for them, plus the parameters every material takes.
@@ -40,7 +40,9 @@ fn tokens(text: &str) -> Vec<String> {
                 out.push(rest[..1].to_string());
                 rest = rest[1..].trim_start();
             } else {
-                let end = rest.find(|c: char| c.is_whitespace() || c == ']').unwrap_or(rest.len());
+                let end = rest
+                    .find(|c: char| c.is_whitespace() || c == ']')
+                    .unwrap_or(rest.len());
                 out.push(rest[..end].to_string());
                 rest = rest[end..].trim_start();
             }
@@ -94,13 +96,28 @@ fn pbrt_block_of_a_chiang_fit_is_the_fit_in_pbrt_syntax() {
     let out = export(&dir, Renderer::Pbrt).unwrap();
     assert!(out.mapping.exact);
     assert!(out.mapping.max_log == 0.0, "{}", out.mapping.max_log);
-    let header: Vec<&str> = out.text.lines().take_while(|l| l.starts_with('#')).collect();
-    for needle in ["source fit:", "written by hairfit", "fit quality:", "mapping: exact"] {
-        assert!(header.iter().any(|l| l.contains(needle)), "{needle}: {header:?}");
+    let header: Vec<&str> = out
+        .text
+        .lines()
+        .take_while(|l| l.starts_with('#'))
+        .collect();
+    for needle in [
+        "source fit:",
+        "written by hairfit",
+        "fit quality:",
+        "mapping: exact",
+    ] {
+        assert!(
+            header.iter().any(|l| l.contains(needle)),
+            "{needle}: {header:?}"
+        );
     }
     let (name, params) = parse_named_material(&out.text);
     assert_eq!(name, "hairfit_set_a");
-    assert_eq!(params[0], ("string".into(), "type".into(), vec!["\"hair\"".into()]));
+    assert_eq!(
+        params[0],
+        ("string".into(), "type".into(), vec!["\"hair\"".into()])
+    );
     for (ty, pname, values) in &params[1..] {
         let (_, types) = HAIR_PARAMETERS
             .iter()
@@ -152,7 +169,11 @@ fn blender_variant_mirrors_alpha_and_states_its_error() {
     eprintln!("{q:?}");
     assert!(!m.exact);
     assert!(m.rms_log > 0.0 && m.rms_log < 0.1, "{}", m.rms_log);
-    assert!((q.alpha.to_degrees() + 2.0).abs() < 0.5, "{}", q.alpha.to_degrees());
+    assert!(
+        (q.alpha.to_degrees() + 2.0).abs() < 0.5,
+        "{}",
+        q.alpha.to_degrees()
+    );
     assert!((q.beta_n - p.beta_n).abs() < 0.05 && (q.beta_m - p.beta_m).abs() < 0.05);
     for needle in [
         "import bpy",
@@ -182,7 +203,9 @@ fn materialx_tint_undoes_its_one_over_pi() {
     assert!((m.params.gain / PI - 1.0).abs() < 0.05, "{}", m.params.gain);
     let cuticle = m.params.chiang.alpha / PI + 0.5;
     assert!((cuticle - (0.5 - 2f64.to_radians() / PI)).abs() < 0.5f64.to_radians() / PI);
-    assert!(out.text.contains("<chiang_hair_bsdf name=\"hairfit_grey_bsdf\" type=\"BSDF\">"));
+    assert!(out
+        .text
+        .contains("<chiang_hair_bsdf name=\"hairfit_grey_bsdf\" type=\"BSDF\">"));
 }
 
 /// From a Marschner fit the Chiang model is fitted to the Marschner S; the header says so and
@@ -218,5 +241,8 @@ fn unexportable_fits_are_refused_with_the_reason() {
     std::fs::write(dir.join("params.json"), r#"{"model": "kajiya"}"#).unwrap();
     std::fs::write(dir.join("fit.json"), "{}").unwrap();
     let err = export(&dir, Renderer::Pbrt).unwrap_err().to_string();
-    assert!(err.contains("kajiya") && err.contains("params.json"), "{err}");
+    assert!(
+        err.contains("kajiya") && err.contains("params.json"),
+        "{err}"
+    );
 }

@@ -74,5 +74,8 @@ fn materialx_document_validates_with_the_standard_library() {
     );
     let bad = root.path().join("broken.mtlx");
     std::fs::write(&bad, broken).unwrap();
-    assert!(materialx_validate(&bad).is_err(), "a wrong input type must not validate");
+    assert!(
+        materialx_validate(&bad).is_err(),
+        "a wrong input type must not validate"
+    );
 }

@@ -270,7 +270,10 @@ mod tests {
         variant_scattering_batch(&v, &Formulation::PBRT_V4, &model, &angles, &mut pbrt);
         variant_scattering_batch(&v, &Formulation::MATERIALX, &model, &angles, &mut mx);
         for (a, b) in pbrt.iter().zip(&mx) {
-            assert!((a / std::f64::consts::PI - b).abs() <= 1e-13 * b.abs(), "{a} {b}");
+            assert!(
+                (a / std::f64::consts::PI - b).abs() <= 1e-13 * b.abs(),
+                "{a} {b}"
+            );
         }
     }
 
@@ -308,7 +311,10 @@ mod tests {
                 .enumerate()
                 .fold((0, f64::MIN), |b, (k, x)| if x > b.1 { (k, x) } else { b });
             let theta_h = 0.5 * (grid[k] + theta_r);
-            assert!((theta_h - expect).abs() < 0.05, "{formulation:?}: {theta_h}");
+            assert!(
+                (theta_h - expect).abs() < 0.05,
+                "{formulation:?}: {theta_h}"
+            );
         }
     }
 

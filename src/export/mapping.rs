@@ -14,7 +14,8 @@ use num_dual::{DualDVec64, DualNum, DualSVec64};
 
 use super::source::{SourceFit, SourceModel};
 use crate::chiang::variant::{
-    variant_jacobian, variant_jacobian_static, variant_scattering_batch, Formulation, Tilt, VariantParams,
+    variant_jacobian, variant_jacobian_static, variant_scattering_batch, Formulation, Tilt,
+    VariantParams,
 };
 use crate::chiang::{ChiangEffects, ChiangModel, ChiangParams};
 use crate::error::{Error, Result};
@@ -68,7 +69,12 @@ impl Mapping {
             "renderer model fitted over {} measured + {} sphere directions: rms |d ln S| {:.4} \
              (max {:.3}{measured}; floor {FLOOR_FRACTION:e} of each channel's peak), {} LM \
              iterations from {} starts",
-            self.n_measured, self.n_sphere, self.rms_log, self.max_log, self.iterations, self.starts
+            self.n_measured,
+            self.n_sphere,
+            self.rms_log,
+            self.max_log,
+            self.iterations,
+            self.starts
         )
     }
 }
@@ -134,7 +140,12 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
                 }
             }
             let (_, x) = best.expect("at least one start");
-            (build::<f64>(x.as_slice(), n, formulation.gain), false, iterations, starts.len())
+            (
+                build::<f64>(x.as_slice(), n, formulation.gain),
+                false,
+                iterations,
+                starts.len(),
+            )
         }
     };
     let mut fitted = vec![0.0; target.len()];
@@ -169,7 +180,12 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
 fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
     (0..n)
         .map(|c| {
-            let peak = values.iter().skip(c).step_by(n).copied().fold(0.0, f64::max);
+            let peak = values
+                .iter()
+                .skip(c)
+                .step_by(n)
+                .copied()
+                .fold(0.0, f64::max);
             (FLOOR_FRACTION * peak).max(f64::MIN_POSITIVE)
         })
         .collect()
@@ -297,7 +313,6 @@ impl MappingProblem<'_> {
 /// argmin takes the problem by value; a reference keeps the directions borrowed.
 struct ProblemRef<'a, 'b>(&'a MappingProblem<'b>);
 
-
 impl Operator for ProblemRef<'_, '_> {
     type Param = DVector<f64>;
     type Output = DVector<f64>;
@@ -331,7 +346,9 @@ impl Jacobian for ProblemRef<'_, '_> {
             jac[k][j] / (values[k] + p.floor[k % p.n])
         });
         if m.iter().any(|v| !v.is_finite()) {
-            return Err(argmin::core::Error::msg("non-finite Jacobian in the mapping fit"));
+            return Err(argmin::core::Error::msg(
+                "non-finite Jacobian in the mapping fit",
+            ));
         }
         Ok(m)
     }

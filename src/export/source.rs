@@ -81,8 +81,7 @@ impl SourceFit {
     /// Read `dir/params.json`, `dir/fit.json` and (if present) `dir/curves.csv`.
     pub fn load(dir: &Path) -> Result<SourceFit> {
         let params_path = dir.join("params.json");
-        let text =
-            std::fs::read_to_string(&params_path).map_err(|e| Error::io(&params_path, e))?;
+        let text = std::fs::read_to_string(&params_path).map_err(|e| Error::io(&params_path, e))?;
         let tag = serde_json::from_str::<Value>(&text)
             .ok()
             .and_then(|v| v.get("model").and_then(Value::as_str).map(str::to_owned));
@@ -92,12 +91,17 @@ impl SourceFit {
             "fit.json is written by `hairfit fit` — re-run the fit to regenerate it",
         )?;
         let model = match tag.as_deref() {
-            Some("chiang") => {
-                SourceModel::Chiang(ChiangParamFile::from_json_str(&text, &params_path)?.to_params())
-            }
+            Some("chiang") => SourceModel::Chiang(
+                ChiangParamFile::from_json_str(&text, &params_path)?.to_params(),
+            ),
             None | Some("marschner") => {
                 let mut value: Value = serde_json::from_str(&text).map_err(|e| {
-                    Error::input(&params_path, e.line() as u64, e.column() as u64, e.to_string())
+                    Error::input(
+                        &params_path,
+                        e.line() as u64,
+                        e.column() as u64,
+                        e.to_string(),
+                    )
                 })?;
                 if let Some(map) = value.as_object_mut() {
                     map.remove("model");
@@ -188,7 +192,10 @@ impl SourceFit {
 fn quality_line(fit: &Value) -> String {
     let num = |p: &str| fit.pointer(p).and_then(Value::as_f64);
     let text = |p: &str| fit.pointer(p).and_then(Value::as_str);
-    let mut parts = vec![format!("status {}", text("/status").unwrap_or("unrecorded"))];
+    let mut parts = vec![format!(
+        "status {}",
+        text("/status").unwrap_or("unrecorded")
+    )];
     if let Some(rms) = num("/residuals/rms") {
         parts.push(format!("residual rms {rms:.4}"));
     }

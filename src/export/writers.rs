@@ -33,7 +33,10 @@ pub fn header_lines(
     lines.push(if channels.len() == 1 {
         format!("colour: one channel ({}) written as grey RGB", channels[0])
     } else {
-        format!("colour: channels {} written as R, G, B", channels.join(", "))
+        format!(
+            "colour: channels {} written as R, G, B",
+            channels.join(", ")
+        )
     });
     let note = match renderer {
         Renderer::Pbrt => {
