@@ -21,7 +21,6 @@ INPUTS = {
     "Coat": 0.0,
     "IOR": 1.699343,
     "Offset": 0.116227,
-    "Random Color": 0.0,
     "Random Roughness": 0.0,
 }
 
