@@ -14,6 +14,10 @@ use crate::files::{read_curves_csv, ParameterFile};
 use crate::model::{Angles, ModelConfig, Params};
 use crate::params::ParamFile;
 
+/// At most this many measured directions enter a mapping (a 3-channel, 8-variable Jacobian of
+/// 20 000 directions is ≈ 4 MB); larger fits are thinned evenly and the header says so.
+pub const MAX_MEASURED_DIRECTIONS: usize = 20_000;
+
 /// The fitted model whose `S` a renderer must reproduce.
 #[derive(Debug, Clone)]
 pub enum SourceModel {
@@ -151,7 +155,23 @@ impl SourceFit {
                     }
                 }
             }
-            let from = format!("{} ({} samples)", curves_path.display(), out.len());
+            let total = out.len();
+            // The mapping's Jacobian has a row per direction and channel: thin a huge fit
+            // evenly rather than allocate gigabytes (the sphere is always added in full).
+            if total > MAX_MEASURED_DIRECTIONS {
+                let step = total.div_ceil(MAX_MEASURED_DIRECTIONS);
+                out = out.into_iter().step_by(step).collect();
+            }
+            let from = if out.len() < total {
+                format!(
+                    "{} ({} of {total} samples, every {}th)",
+                    curves_path.display(),
+                    out.len(),
+                    total.div_ceil(MAX_MEASURED_DIRECTIONS)
+                )
+            } else {
+                format!("{} ({total} samples)", curves_path.display())
+            };
             (out, from)
         } else {
             (
