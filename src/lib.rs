@@ -10,6 +10,7 @@
 //! - [`compare`]: `hairfit compare`, both families fitted to the same data, side by side.
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
+//! - [`export`]: `hairfit export`, renderer files (pbrt-v4, Blender, MaterialX) fitted to a fit's S.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
 //! - [`fit`]: least squares with exact Jacobians and uncertainties (`hairfit fit`, `demo`).
 //! - [`cli`]: the command line's option groups, flag-worded checks and the fit summary.
@@ -34,6 +35,7 @@ pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;
+pub mod export;
 pub mod family;
 pub mod files;
 pub mod fit;

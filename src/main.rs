@@ -45,6 +45,8 @@ enum Command {
         #[arg(long)]
         linear: bool,
     },
+    /// Write what a renderer loads (pbrt-v4, Blender, MaterialX) from a fit, its model fitted to the fit's S.
+    Export(hairfit::cli::export::ExportArgs),
     /// Measure what each accuracy knob costs on this machine: cost.csv, cost.json, cost.svg/png.
     Cost {
         /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
@@ -251,6 +253,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 "{}",
                 hairfit::compare::summary_text(&done.comparison, &a.out)
             );
+        }
+        Command::Export(a) => {
+            remove_partial_output_on_interrupt();
+            let (summary, text) = hairfit::cli::export::export_command(&a)?;
+            print!("{}", text.unwrap_or_default());
+            eprintln!("hairfit: {summary}");
         }
         Command::Demo(a) => {
             let cancel = Some(ctrl_c_flag());

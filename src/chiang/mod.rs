@@ -32,6 +32,7 @@ pub mod forward;
 pub mod jacobian;
 pub mod longitudinal;
 pub mod quadrature;
+pub mod variant;
 
 pub use azimuthal::AzimuthalTable;
 pub use evaluator::{scattering, scattering_batch, scattering_from_table};

@@ -3,6 +3,7 @@
 //! command's options and flag-worded checks ([`fit`]), and the summary it prints ([`summary`]).
 
 pub mod compare;
+pub mod export;
 pub mod fit;
 pub mod summary;
 
