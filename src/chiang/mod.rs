@@ -299,6 +299,17 @@ pub const PARAMETERS: [ParamFact; 5] = [
     },
 ];
 
+/// The report's unit label of a Chiang parameter by its JSON name (`sigma_a[1]` included), from
+/// [`PARAMETERS`]: `deg`, `per fiber radius`, or empty.
+pub fn chiang_unit_label(json_name: &str) -> &'static str {
+    let base = json_name.split('[').next().unwrap_or(json_name);
+    match PARAMETERS.iter().find(|f| f.name == base).map(|f| f.unit) {
+        Some("degree") => "deg",
+        Some("1/radius") => "per fiber radius",
+        _ => "",
+    }
+}
+
 /// Chiang parameters, α in RADIANS, generic over the number type.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChiangParams<T> {

@@ -168,8 +168,13 @@ fn table_section(
 fn parameter_table(h: &mut String, fit: &FitJson) {
     let rows = fit.parameters.iter().map(|p| {
         // The parameter table knows each unit (σ_a: per fiber radius).
-        let unit =
-            crate::model::ParamName::from_json_name(&p.name).map_or("", |n| n.spec().unit.label());
+        let unit = match fit.family() {
+            crate::family::ModelFamily::Marschner => {
+                crate::model::ParamName::from_json_name(&p.name)
+                    .map_or("", |n| n.spec().unit.label())
+            }
+            crate::family::ModelFamily::Chiang => crate::chiang::chiang_unit_label(&p.name),
+        };
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
             ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),
