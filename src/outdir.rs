@@ -24,7 +24,13 @@ static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 pub fn remove_in_flight() {
     let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
     for p in list.iter() {
-        let _ = std::fs::remove_dir_all(p);
+        // The run's other threads may still be creating files in it (remove_dir_all then
+        // fails with "directory not empty"): try again a few times.
+        for _ in 0..20 {
+            if std::fs::remove_dir_all(p).is_ok() || !p.exists() {
+                break;
+            }
+        }
     }
 }
 
