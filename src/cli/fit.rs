@@ -61,6 +61,9 @@ pub struct FitArgs {
     /// Never show a progress bar.
     #[arg(long)]
     pub no_progress: bool,
+    /// Exit 2 when the verdict is poor_fit or undetermined (0 without --strict).
+    #[arg(long)]
+    pub strict: bool,
     #[command(flatten)]
     pub model: ModelArgs,
     #[command(flatten)]
