@@ -10,8 +10,8 @@ use clap::{Parser, Subcommand};
 
 use hairfit::cli::exit::exit_code;
 use hairfit::cli::ModelArgs;
-use hairfit::files::Verdict;
 use hairfit::eval::{eval_file, output_columns, EvalRequest};
+use hairfit::files::Verdict;
 use hairfit::params::{ParamFile, ParameterFile as _};
 
 #[derive(Parser)]
@@ -224,7 +224,11 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let cancel = Some(stop.flag.clone());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
-            return Ok(exit_code(outcome.json.verdict, a.fit.strict, stop.received()));
+            return Ok(exit_code(
+                outcome.json.verdict,
+                a.fit.strict,
+                stop.received(),
+            ));
         }
         Command::Batch(a) => return batch(a),
         Command::Demo(a) => {
@@ -233,7 +237,11 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let outcome = hairfit::fit::demo::demo_command(&a.fit.options(cancel)?, &a.out)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
             print!("{}", hairfit::fit::demo::truth_line(&a.out));
-            return Ok(exit_code(outcome.json.verdict, a.fit.strict, stop.received()));
+            return Ok(exit_code(
+                outcome.json.verdict,
+                a.fit.strict,
+                stop.received(),
+            ));
         }
     }
     Ok(0)
@@ -270,20 +278,26 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
     };
     let stop = ctrl_c_flag();
     let mut verdicts = Vec::new();
-    let run = run_batch(&manifest, &a.out, shard, Some(stop.flag.clone()), |item, outcome| {
-        let what = match outcome {
-            ItemOutcome::Fitted { status, report } => {
-                let verdict = merge::fit_verdict(&a.out.join(&item.name));
-                verdicts.extend(verdict);
-                let verdict = verdict.map_or("unknown".into(), |v| v.to_string());
-                format!("{verdict} ({status}); {report}")
-            }
-            ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
-            ItemOutcome::Failed(e) => format!("FAILED: {e}"),
-            ItemOutcome::Interrupted => "interrupted".into(),
-        };
-        eprintln!("hairfit: [{shard}] {}: {what}", item.name);
-    })?;
+    let run = run_batch(
+        &manifest,
+        &a.out,
+        shard,
+        Some(stop.flag.clone()),
+        |item, outcome| {
+            let what = match outcome {
+                ItemOutcome::Fitted { status, report } => {
+                    let verdict = merge::fit_verdict(&a.out.join(&item.name));
+                    verdicts.extend(verdict);
+                    let verdict = verdict.map_or("unknown".into(), |v| v.to_string());
+                    format!("{verdict} ({status}); {report}")
+                }
+                ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
+                ItemOutcome::Failed(e) => format!("FAILED: {e}"),
+                ItemOutcome::Interrupted => "interrupted".into(),
+            };
+            eprintln!("hairfit: [{shard}] {}: {what}", item.name);
+        },
+    )?;
     eprintln!("hairfit: {}", run.summary_line());
     if run.interrupted() || stop.received().is_some() {
         return Ok(exit_code(Verdict::Interrupted, a.strict, stop.received()));

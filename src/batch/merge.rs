@@ -219,11 +219,7 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
     for row in &table.rows {
         let status = &row[2];
         let verdict = &row[3];
-        s += &format!(
-            "<tr class=\"{} v-{}\">",
-            escape(status),
-            escape(verdict)
-        );
+        s += &format!("<tr class=\"{} v-{}\">", escape(status), escape(verdict));
         for &c in &shown {
             let cell = &row[c];
             if c == 0 && status != "missing" {

@@ -7,13 +7,13 @@ use rayon::prelude::*;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::problem::{Forward, ModelForward, ScaleMode, Space, CHUNK};
 use super::gof;
+use super::problem::{Forward, ModelForward, ScaleMode, Space, CHUNK};
 use super::verdict::{Evidence, LARGE_RESIDUAL};
-use crate::report::slices::Slice;
 use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
 use crate::fit::Loss;
 use crate::model::{Measurement, ModelConfig, RootMode};
+use crate::report::slices::Slice;
 
 /// A robust loss is suggested when the large residuals are at most this fraction of the data…
 const MAX_OUTLIER_FRACTION: f64 = 0.25;
@@ -94,7 +94,11 @@ fn spikes(x: &Evidence<'_, '_, '_>, slices: &[Slice]) -> (usize, usize) {
     (flagged.len(), seen.len())
 }
 
-fn robust_loss(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit, slices: &[Slice]) -> Option<Suggestion> {
+fn robust_loss(
+    x: &Evidence<'_, '_, '_>,
+    g: &GoodnessOfFit,
+    slices: &[Slice],
+) -> Option<Suggestion> {
     if x.ev.loss != Loss::L2 {
         return None;
     }
@@ -102,9 +106,8 @@ fn robust_loss(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit, slices: &[Slice]) ->
     let n = x.e.raw.len();
     let fraction = g.large_residuals as f64 / n.max(1) as f64;
     let share = g.large_residual_share.unwrap_or(0.0);
-    let by_residuals = g.large_residuals > 0
-        && fraction <= MAX_OUTLIER_FRACTION
-        && share >= MIN_OUTLIER_SHARE;
+    let by_residuals =
+        g.large_residuals > 0 && fraction <= MAX_OUTLIER_FRACTION && share >= MIN_OUTLIER_SHARE;
     let (spiky, looked) = spikes(x, slices);
     let spike_fraction = spiky as f64 / looked.max(1) as f64;
     let by_spikes = spiky >= MIN_SPIKES && spike_fraction <= MAX_OUTLIER_FRACTION;
@@ -143,7 +146,8 @@ fn robust_loss(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit, slices: &[Slice]) ->
 }
 
 fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion> {
-    if x.config.mode != RootMode::Cubic || !(x.config.effects.lobes.tt || x.config.effects.lobes.trt)
+    if x.config.mode != RootMode::Cubic
+        || !(x.config.effects.lobes.tt || x.config.effects.lobes.trt)
     {
         return None;
     }
@@ -183,9 +187,8 @@ fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion>
     // the part orthogonal to the Jacobian's columns.
     let free: Vec<f64> = x.ev.free.iter().map(|&p| x.params.get(p)).collect();
     let ones = vec![1.0; free.len()];
-    let ej = x
-        .ev
-        .evaluate(&free, &ones, ScaleMode::FixedNatural(&x.e.scale), true);
+    let ej =
+        x.ev.evaluate(&free, &ones, ScaleMode::FixedNatural(&x.e.scale), true);
     let jm = DMatrix::from_row_slice(m, ej.n_cols, ej.jacobian.as_deref()?);
     if jm.iter().any(|v| !v.is_finite()) {
         return None;
@@ -210,7 +213,12 @@ fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion>
             dd += dk * dk;
         }
     }
-    let rr: f64 = x.e.raw.iter().filter(|r| r.is_finite()).map(|r| r * r).sum();
+    let rr: f64 =
+        x.e.raw
+            .iter()
+            .filter(|r| r.is_finite())
+            .map(|r| r * r)
+            .sum();
     // Linearised refit in exact mode: Σr² − Σ(r − d⊥)² = 2 r·d⊥ − |d⊥|², in noise units.
     let gain = (2.0 * rd - dd) / (noise * noise);
     let share = (2.0 * rd - dd) / rr;
@@ -226,20 +234,19 @@ fn exact_mode(x: &Evidence<'_, '_, '_>, g: &GoodnessOfFit) -> Option<Suggestion>
 /// Least-squares slope of ln(data/fit) against ln cos θ_i, with its standard error.
 fn theta_i_trend(x: &Evidence<'_, '_, '_>) -> Option<(f64, f64)> {
     let nc = x.data.n_channels().max(1);
-    let points: Vec<(f64, f64)> = x
-        .e
-        .model
-        .iter()
-        .enumerate()
-        .filter_map(|(k, &m)| {
-            let fit = x.e.scale[k % nc] * m;
-            let y = x.data.values[k];
-            let c = x.data.angles[k / nc].theta_i.cos();
-            (y > 0.0 && fit > 0.0 && c > 0.0)
-                .then(|| (c.ln(), (y / fit).ln()))
-                .filter(|(a, b)| a.is_finite() && b.is_finite())
-        })
-        .collect();
+    let points: Vec<(f64, f64)> =
+        x.e.model
+            .iter()
+            .enumerate()
+            .filter_map(|(k, &m)| {
+                let fit = x.e.scale[k % nc] * m;
+                let y = x.data.values[k];
+                let c = x.data.angles[k / nc].theta_i.cos();
+                (y > 0.0 && fit > 0.0 && c > 0.0)
+                    .then(|| (c.ln(), (y / fit).ln()))
+                    .filter(|(a, b)| a.is_finite() && b.is_finite())
+            })
+            .collect();
     let n = points.len() as f64;
     if n < 3.0 {
         return None;

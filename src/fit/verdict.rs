@@ -138,7 +138,11 @@ pub fn judge(x: &Evidence<'_, '_, '_>) -> Judgement {
             reasons.push(undetermined_reason(p, x.warnings));
         }
     }
-    for p in x.parameters.iter().filter(|p| p.status == ParamStatus::AtBound) {
+    for p in x
+        .parameters
+        .iter()
+        .filter(|p| p.status == ParamStatus::AtBound)
+    {
         reasons.push(format!(
             "{} is stuck at its bound {}: the data push it there and its standard error is one-sided",
             p.name,
@@ -448,18 +452,16 @@ pub fn poor_fit_reasons(g: &GoodnessOfFit, loss: Loss, n: usize) -> Vec<String> 
             ));
         }
     }
-    if let Some(r) = g.runs.filter(|r| {
-        r.p_value < P_VALUE && (r.runs as f64) < MAX_RUNS_RATIO * r.expected
-    }) {
+    if let Some(r) = g
+        .runs
+        .filter(|r| r.p_value < P_VALUE && (r.runs as f64) < MAX_RUNS_RATIO * r.expected)
+    {
         why.push(format!(
             "residual signs along {} scan slices form {} runs where {:.0} are expected for noise (z = {:.1}, p = {:.2e}): the model misses the data systematically along the scans",
             g.slices, r.runs, r.expected, r.z, r.p_value
         ));
     }
-    if let Some(a) = g
-        .lag1
-        .filter(|a| a.p_value < P_VALUE && a.r1 > MIN_LAG1)
-    {
+    if let Some(a) = g.lag1.filter(|a| a.p_value < P_VALUE && a.r1 > MIN_LAG1) {
         why.push(format!(
             "neighbouring residuals along the scans are correlated: lag-1 r = {:.3} over {} pairs (p = {:.2e}; noise gives |r| < {MIN_LAG1})",
             a.r1, a.pairs, a.p_value
@@ -508,7 +510,9 @@ fn good_fit_reasons(g: &GoodnessOfFit) -> Vec<String> {
     if let Some(l) = g.lack_of_fit {
         tests.push(format!(
             "lack of fit against {} replicated directions F = {} (p = {:.3})",
-            g.replicate_groups, num(l.f), l.p_value
+            g.replicate_groups,
+            num(l.f),
+            l.p_value
         ));
     }
     if tests.is_empty() {
