@@ -93,6 +93,27 @@ fn radians_read_as_degrees_are_warned_about() {
         String::from_utf8_lossy(&o.stdout).contains("warning: angles look like radians"),
         "the summary shows it"
     );
+    // `fit --strict` refuses it, naming the option that settles it; without --strict the fit
+    // carries the warning.
+    let out = dir.path().join("fit");
+    let o = hairfit(&[
+        "fit",
+        s(&rad),
+        "--out",
+        s(&out),
+        "--strict",
+        "--starts",
+        "2",
+        "--no-progress",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("look like radians: pass --angles rad")
+            && stderr(&o).contains("--strict"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.join("fit.json").exists(), "nothing is published");
     // Said explicitly, either way, there is nothing to warn about.
     for extra in [&["--angles", "rad"][..], &["--angles", "deg"][..]] {
         let r = load_json(&rad, extra);

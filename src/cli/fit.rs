@@ -75,6 +75,9 @@ pub struct FitArgs {
     /// input data file is never replaced).
     #[arg(long)]
     pub force: bool,
+    /// Exit 2 when the verdict is poor_fit or undetermined (0 without --strict).
+    #[arg(long)]
+    pub strict: bool,
     #[command(flatten)]
     pub model: ModelArgs,
     #[command(flatten)]
@@ -181,6 +184,18 @@ pub fn fit_command(
     publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
         let (ds, report) = load(data_path, load_options)?;
         let load_warnings = report.warnings.clone();
+        // --strict: angles that look like radians are an error, not a warning.
+        if args.strict {
+            if let Some(w) = load_warnings
+                .iter()
+                .find(|w| w.starts_with(crate::data::unit::RADIANS_WARNING))
+            {
+                return Err(Error::Other(format!(
+                    "{}: {w} (--strict makes this an error)",
+                    data_path.display()
+                )));
+            }
+        }
         let data = fit_data(&ds);
         let mut outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
         // The loader's settings are options of this fit too, and its warnings the fit's.

@@ -1,8 +1,10 @@
 //! The command line's side of the library: clap option groups shared by several commands (so
 //! `main.rs` only composes them and every command spells an option the same way), the fit
-//! command's options and flag-worded checks ([`fit`]), and the summary it prints ([`summary`]).
+//! command's options and flag-worded checks ([`fit`]), the summary it prints ([`summary`]), and
+//! its exit codes and signal handling ([`exit`]).
 
 pub mod compare;
+pub mod exit;
 pub mod export;
 pub mod fit;
 pub mod summary;

@@ -1,4 +1,5 @@
-//! The one-screen summary printed by `hairfit fit` / `hairfit demo`.
+//! The one-screen summary printed by `hairfit fit` / `hairfit demo`: the verdict, its reasons
+//! and suggestions first, then the model, parameters, residuals, stages and warnings.
 
 use std::path::Path;
 
@@ -23,6 +24,18 @@ fn interval(i: Option<&crate::files::Interval>) -> String {
     })
 }
 
+/// `verdict: …`, a line per reason and per suggestion (what to try, then why).
+pub fn verdict_lines(j: &crate::files::FitJson) -> String {
+    let mut s = format!("verdict: {}\n", j.verdict);
+    for r in &j.reasons {
+        s += &format!("  - {r}\n");
+    }
+    for t in &j.suggestions {
+        s += &format!("  try: {}\n       because {}\n", t.action, t.evidence);
+    }
+    s
+}
+
 /// The summary of `out`; `dir` is where its files were written, if they were.
 pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     let j = &out.json;
@@ -34,6 +47,7 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
         .map(|(_, n)| *n)
         .collect();
     let on_off = |b: bool| if b { "on" } else { "off" };
+    s += &verdict_lines(j);
     s += &format!(
         "hairfit fit: {} — {} samples × {} channel(s) from {}\n",
         j.status,

@@ -392,7 +392,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         ev,
         e: &e,
         config: &config,
-        near_glint: ev.forward.near_glint(&params, data),
+        params: &params,
         status,
         parameters: &parameters,
         scale: &scale,

@@ -9,7 +9,7 @@
 use std::collections::HashMap;
 
 use super::gof;
-use super::problem::{Evaluation, Evaluator, FitData, Forward};
+use super::problem::{Evaluation, Evaluator, FitData, Forward, ParamSet};
 use super::suggest::suggestions;
 use crate::files::{
     FitJson, FitStatus, GofThresholds, GoodnessOfFit, ParamStatus, ParameterEntry, ScaleEntry,
@@ -17,7 +17,7 @@ use crate::files::{
 };
 use crate::fit::Loss;
 use crate::model::ModelConfig;
-use crate::report::slices::{find_slices, Sample};
+use crate::report::slices::{find_slices, Sample, Slice};
 
 /// A test rejects the model when its p-value is below 1e-3: with the handful of tests applied
 /// to one fit, a model that does describe its data is called poor about once in 300–1000 fits,
@@ -62,8 +62,8 @@ pub struct Evidence<'a, 'e, 'f, F: Forward> {
     pub ev: &'e Evaluator<'f, F>,
     pub e: &'a Evaluation,
     pub config: &'a ModelConfig,
-    /// Per sample: near a glint the model approximates (`None`: no such glint).
-    pub near_glint: Option<Vec<bool>>,
+    /// Every parameter at the optimum (natural units).
+    pub params: &'a ParamSet<F>,
     pub status: FitStatus,
     pub parameters: &'a [ParameterEntry],
     pub scale: &'a [ScaleEntry],
@@ -92,9 +92,10 @@ pub struct Judgement {
 /// Judge a fit.
 pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
     let failed = failures(x);
-    let g = goodness_of_fit(x);
+    let slices = scan_slices(x.data);
+    let g = goodness_of_fit(x, &slices);
     let poor = if failed.is_empty() {
-        poor_fit_reasons(&g)
+        poor_fit_reasons(&g, x.ev.loss, x.e.raw.len())
     } else {
         Vec::new()
     };
@@ -155,7 +156,7 @@ pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
                 .into(),
         );
     }
-    let suggestions = suggestions(x, &g, verdict);
+    let suggestions = suggestions(x, &g, verdict, &slices);
     Judgement {
         verdict,
         reasons,
@@ -292,8 +293,24 @@ fn loss_scale_failure<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<String>
     })
 }
 
+/// The data's scan slices (fixed incidence and one outgoing angle, swept in order), found as the
+/// report finds them.
+pub fn scan_slices(data: &FitData) -> Vec<Slice> {
+    let samples: Vec<Sample> = data
+        .angles
+        .iter()
+        .enumerate()
+        .map(|(i, a)| Sample {
+            id: i as u64,
+            angles: [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees),
+            rows: Vec::new(),
+        })
+        .collect();
+    find_slices(&samples).0
+}
+
 /// Goodness-of-fit statistics of the final residuals.
-pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> GoodnessOfFit {
+pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>, slices: &[Slice]) -> GoodnessOfFit {
     let raw = &x.e.raw;
     let nc = x.data.n_channels().max(1);
     let n_fitted = x.n_fitted();
@@ -327,18 +344,6 @@ pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> GoodnessOfFit
         crate::files::finite((loss_ss / x.dof.max(1) as f64).sqrt()).filter(|_| x.dof > 0);
 
     // Structure along scan slices: each slice × channel in order of its swept angle.
-    let samples: Vec<Sample> = x
-        .data
-        .angles
-        .iter()
-        .enumerate()
-        .map(|(i, a)| Sample {
-            id: i as u64,
-            angles: [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees),
-            rows: Vec::new(),
-        })
-        .collect();
-    let (slices, _) = find_slices(&samples);
     let clip = robust_noise.map_or(f64::INFINITY, |s| LARGE_RESIDUAL * s);
     let sequences: Vec<Vec<f64>> = slices
         .iter()
@@ -365,7 +370,8 @@ pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> GoodnessOfFit
     let mut counts: Vec<usize> = Vec::new();
     let group: Vec<usize> = (0..raw.len())
         .map(|k| {
-            let a = &samples[k / nc].angles;
+            let a = &x.data.angles[k / nc];
+            let a = [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees);
             let id = (key(a[0]), key(a[1]), key(a[2]), key(a[3]), k % nc);
             let next = ids.len();
             let g = *ids.entry(id).or_insert(next);
@@ -410,7 +416,7 @@ pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> GoodnessOfFit
 
 /// Why the model does not describe the data (empty when nothing says so). With σ the χ² test
 /// decides; without it, structure along scans and lack of fit against replicates.
-pub fn poor_fit_reasons(g: &GoodnessOfFit) -> Vec<String> {
+pub fn poor_fit_reasons(g: &GoodnessOfFit, loss: Loss, n: usize) -> Vec<String> {
     let mut why = Vec::new();
     if g.sigma_given {
         if let (Some(chi2), Some(p)) = (g.chi2, g.chi2_p_value) {
@@ -433,6 +439,19 @@ pub fn poor_fit_reasons(g: &GoodnessOfFit) -> Vec<String> {
             ));
         }
         return why;
+    }
+    // Gaussian noise puts a fraction 5.7e-7 of residuals beyond 5 sd; under l2 a handful that
+    // carry most of the sum of squares decide the fit.
+    if let (Some(noise), Some(share)) = (g.robust_noise, g.large_residual_share) {
+        let expected = n as f64 * GAUSSIAN_BEYOND_5SD;
+        let p = poisson_upper_tail(g.large_residuals, expected);
+        if loss == Loss::L2 && p < P_VALUE && share > 0.5 {
+            why.push(format!(
+                "{} of {n} residuals lie beyond {LARGE_RESIDUAL} times the robust noise level {noise:.3e} (Gaussian noise would put {expected:.1e} there, p = {p:.1e}) and carry {:.0}% of the sum of squares: a few samples decide the l2 fit",
+                g.large_residuals,
+                100.0 * share
+            ));
+        }
     }
     if let Some(r) = g
         .runs
@@ -549,4 +568,24 @@ pub fn after_profiles(json: &mut FitJson) {
     if json.verdict != Verdict::Failed {
         json.reasons.extend(newly);
     }
+}
+
+/// P(|z| > 5) for a standard normal.
+const GAUSSIAN_BEYOND_5SD: f64 = 5.733e-7;
+
+/// P(K ≥ k) for K ~ Poisson(λ) (1 for k = 0), summed directly: k is a count of samples.
+fn poisson_upper_tail(k: usize, lambda: f64) -> f64 {
+    if k == 0 {
+        return 1.0;
+    }
+    // 1 − Σ_{j<k} e^{−λ} λ^j / j!, terms built in log space so λ up to ~1e3 is safe.
+    let mut below = 0.0;
+    let mut log_term = -lambda;
+    for j in 0..k {
+        if j > 0 {
+            log_term += lambda.ln() - (j as f64).ln();
+        }
+        below += log_term.exp();
+    }
+    (1.0 - below).max(0.0)
 }

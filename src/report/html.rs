@@ -17,7 +17,10 @@ th{background:#f0f2f5}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .note{background:#eef3fb;border-left:4px solid #5b7fc0;padding:6px 12px;margin:4px 0}\
 figure{margin:12px 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}\
 figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;overflow:auto;font-size:.85em}\
-.grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}";
+.grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}\
+.verdict{border:2px solid;border-radius:6px;padding:8px 16px;margin:12px 0}.verdict h2{border:0;margin:4px 0}\
+.v-good{border-color:#2a8a2a;background:#eef8ee}.v-poor_fit,.v-undetermined{border-color:#e0a000;background:#fff6e0}\
+.v-failed,.v-interrupted{border-color:#a11;background:#fbeaea}";
 
 /// The page for `fit` and the figures in `summary`.
 pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOptions) -> String {
@@ -31,6 +34,7 @@ pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOption
         escape(&fit.hairfit_version),
         if options.linear { "linear" } else { "logarithmic" }
     );
+    verdict_box(&mut h, fit);
     summary_section(&mut h, fit);
     if !fit.warnings.is_empty() || !summary.notes.is_empty() {
         h.push_str("<h2>Warnings and notes</h2>\n");
@@ -67,6 +71,35 @@ pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOption
     ));
     h.push_str("</pre>\n</body>\n</html>\n");
     h
+}
+
+/// The verdict, its reasons and suggestions, in a box at the top of the page.
+fn verdict_box(h: &mut String, fit: &FitJson) {
+    let v = fit.verdict.as_str();
+    let _ = writeln!(
+        h,
+        "<div class=\"verdict v-{v}\" id=\"verdict\">\n<h2>Verdict: {v}</h2>"
+    );
+    if !fit.reasons.is_empty() {
+        h.push_str("<ul>\n");
+        for r in &fit.reasons {
+            let _ = writeln!(h, "<li>{}</li>", escape(r));
+        }
+        h.push_str("</ul>\n");
+    }
+    if !fit.suggestions.is_empty() {
+        h.push_str("<p><b>What to try</b></p>\n<ul>\n");
+        for t in &fit.suggestions {
+            let _ = writeln!(
+                h,
+                "<li><code>{}</code> — {}</li>",
+                escape(&t.action),
+                escape(&t.evidence)
+            );
+        }
+        h.push_str("</ul>\n");
+    }
+    h.push_str("</div>\n");
 }
 
 /// Optional number for a table cell.

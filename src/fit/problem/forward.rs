@@ -77,10 +77,11 @@ pub trait Forward: Sync {
     }
     /// What the data's values are (S, or radiance S·cos θ_i).
     fn measurement(&self) -> Measurement;
-    /// Per sample: whether it lies near a glint the family models with an approximation (the
-    /// verdict's `--mode exact` evidence); `None` when the family has no such glint.
-    fn near_glint(&self, _p: &ParamSet<Self>, _data: &super::FitData) -> Option<Vec<bool>> {
-        None
+    /// Values (as [`Forward::values`]) of the family's exact form when this forward model is an
+    /// approximation of it (Marschner's cubic root map → the exact one): the verdict's evidence
+    /// for `--mode exact`. `false` (nothing written) when there is no such alternative.
+    fn exact_values(&self, _p: &ParamSet<Self>, _angles: &[Angles], _out: &mut [f64]) -> bool {
+        false
     }
 }
 
@@ -129,11 +130,19 @@ impl Forward for ModelForward {
     fn measurement(&self) -> Measurement {
         self.measurement
     }
-    fn near_glint(&self, p: &Params<f64>, data: &super::FitData) -> Option<Vec<bool>> {
-        let glints = self.config.effects.glints && self.config.effects.lobes.trt;
-        glints.then(|| {
-            crate::fit::diagnostics::near_glint(data, crate::model::RootMode::Cubic, p.eta, p.w_c)
-        })
+    fn exact_values(&self, p: &Params<f64>, angles: &[Angles], out: &mut [f64]) -> bool {
+        if self.config.mode == crate::model::RootMode::Exact {
+            return false;
+        }
+        let exact = ModelForward {
+            config: ModelConfig {
+                mode: crate::model::RootMode::Exact,
+                ..self.config
+            },
+            measurement: self.measurement,
+        };
+        exact.values(p, angles, out);
+        true
     }
     fn by_lobe(&self, p: &Params<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
         scattering_by_lobe(p, &self.config, angles, out);
