@@ -84,7 +84,7 @@ fn offsets_go_both_ways_and_mixed_uses_every_kind() {
         let r = mixed.values[i] / y[i];
         if (r + 1.0).abs() < 1e-12 {
             sign += 1;
-        } else if r < 0.01 + 1e-12 && r >= 0.0 {
+        } else if (0.0..0.01 + 1e-12).contains(&r) {
             dropout += 1;
         } else if (OUTLIER_FACTOR.0 - 1e-12..OUTLIER_FACTOR.1 + 1e-12).contains(&r) {
             spike += 1;
