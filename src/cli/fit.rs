@@ -181,7 +181,9 @@ pub fn fit_command(
     cancel: Option<Arc<AtomicBool>>,
 ) -> Result<PublishedFit> {
     let opts = args.options(cancel)?;
-    publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
+    // Shown from the end of the fit until its files and report are published.
+    let mut writing = None;
+    let published = publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
         let (ds, report) = load(data_path, load_options)?;
         let load_warnings = report.warnings.clone();
         // --strict: angles that look like radians are an error, not a warning.
@@ -201,8 +203,16 @@ pub fn fit_command(
         // The loader's settings are options of this fit too, and its warnings the fit's.
         outcome.json.options.load = Some(format!("{load_options:?}"));
         outcome.json.warnings.splice(0..0, load_warnings);
+        writing = Some(super::summary::writing_spinner(
+            opts.progress,
+            outcome.curves.len(),
+        ));
         Ok(outcome)
-    })
+    });
+    if let Some(bar) = writing {
+        bar.finish_and_clear();
+    }
+    published
 }
 
 /// Everything `hairfit fit` takes: the data file, the loader's options, the fit's options and

@@ -1,5 +1,6 @@
 //! The one-screen summary printed by `hairfit fit` / `hairfit demo`: the verdict, its reasons
-//! and suggestions first, then the model, parameters, residuals, stages and warnings.
+//! and suggestions first, then the model, parameters, residuals, stages and warnings; and the
+//! progress line on stderr while the fit's files and report are written.
 
 use std::path::Path;
 
@@ -150,4 +151,40 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     }
     s.push('\n');
     s
+}
+
+/// A spinner on stderr while the fit's files and report are written (at 1M × 3 that takes ~10 s
+/// and showed nothing): hidden when `enabled` is false (`--no-progress`) and, by indicatif,
+/// whenever stderr is not a terminal, so piped output and tests never see it.
+/// `rows`: curves.csv's rows.
+pub fn writing_spinner(enabled: bool, rows: usize) -> indicatif::ProgressBar {
+    if !enabled {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner();
+    if bar.is_hidden() {
+        return bar;
+    }
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.set_message(format!(
+        "writing fit.json, curves.csv ({rows} rows) and the report"
+    ));
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+#[cfg(test)]
+mod progress_tests {
+    use std::io::IsTerminal;
+
+    #[test]
+    fn the_writing_spinner_shows_only_on_a_terminal_and_never_with_no_progress() {
+        assert!(super::writing_spinner(false, 10).is_hidden());
+        let bar = super::writing_spinner(true, 10);
+        assert_eq!(bar.is_hidden(), !std::io::stderr().is_terminal());
+        bar.finish_and_clear();
+    }
 }

@@ -20,6 +20,7 @@ pub mod gof;
 pub mod loss;
 pub mod problem;
 pub mod profile;
+pub mod scan_design;
 pub mod solve;
 pub mod stages;
 pub mod suggest;
@@ -486,7 +487,7 @@ pub fn fit_with<F: Forward>(
         cancel: opts.cancel.clone(),
     };
     profile::intervals(&mut out, optimum, &best, opts, run.started)?;
-    verdict::after_profiles(&mut out.json);
+    verdict::after_profiles(&mut out.json, data);
     Ok(out)
 }
 

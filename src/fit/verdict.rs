@@ -548,7 +548,8 @@ fn num(x: f64) -> String {
 
 /// Profiles run after [`judge`]: a parameter whose profile stays open is now `undetermined`
 /// (which downgrades `good`), and profiling stopped by a signal makes the fit `interrupted`.
-pub fn after_profiles(json: &mut FitJson) {
+/// Then the data's design adds its caveats ([`super::scan_design`]).
+pub fn after_profiles(json: &mut FitJson, data: &FitData) {
     if json.status == FitStatus::Interrupted && json.verdict != Verdict::Interrupted {
         json.verdict = Verdict::Interrupted;
         json.reasons.insert(
@@ -568,15 +569,15 @@ pub fn after_profiles(json: &mut FitJson) {
         })
         .map(|p| undetermined_reason(p, &json.warnings))
         .collect();
-    if newly.is_empty() {
-        return;
+    if !newly.is_empty() {
+        if json.verdict == Verdict::Good {
+            json.verdict = Verdict::Undetermined;
+        }
+        if json.verdict != Verdict::Failed {
+            json.reasons.extend(newly);
+        }
     }
-    if json.verdict == Verdict::Good {
-        json.verdict = Verdict::Undetermined;
-    }
-    if json.verdict != Verdict::Failed {
-        json.reasons.extend(newly);
-    }
+    super::scan_design::apply(json, data);
 }
 
 /// P(|z| > 5) for a standard normal.

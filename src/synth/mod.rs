@@ -23,7 +23,7 @@ pub use crate::files::{ScaleEntry, Truth};
 use crate::model::{Angles, Measurement, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
 
-pub use self::noise::{Noise, Noisy, OUTLIER_FACTOR};
+pub use self::noise::{Noise, Noisy, OutlierKind, OUTLIER_FACTOR};
 pub use self::rig::{Rig, MAX_THETA_DEG};
 
 /// Generator description recorded in every truth file.
@@ -271,6 +271,15 @@ pub struct SynthArgs {
     /// Noise: `none`, or terms joined by `+`: relative:R, photon:N, floor:F, outliers:P.
     #[arg(long, default_value = "none")]
     pub noise: String,
+    /// What an outlier (`outliers:P` in --noise) does to its sample: `spike` (× 3–10), `dropout`
+    /// (a near-zero reading, × 0–0.01), `sign` (negated), `offset` (± 1–10 × the channel's
+    /// median value) or `mixed` (each outlier one of the four) [default: spike].
+    #[arg(long)]
+    pub outlier_kind: Option<noise::OutlierKind>,
+    /// The outliers' magnitude range `LO..HI` for --outlier-kind (e.g. `5..50` for spikes ×5–50;
+    /// for `mixed` it sets the spikes') [default: the kind's range above].
+    #[arg(long, value_parser = noise::parse_outlier_range)]
+    pub outlier_range: Option<(f64, f64)>,
     /// Seed of every random draw (same seed, same bytes).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -331,7 +340,8 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     }
     refuse_overwriting_input(&args.params, &args.output)?;
     let rig = Rig::parse(&args.rig)?;
-    let noise = Noise::parse(&args.noise)?;
+    let noise =
+        Noise::parse(&args.noise)?.with_outlier_options(args.outlier_kind, args.outlier_range)?;
     args.model.check_family_options()?;
     let config = args.model.config()?;
     let chiang = args.model.chiang()?;
