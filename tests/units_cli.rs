@@ -2,8 +2,11 @@
 //! data row (CSV, scan and `eval` alike), contradicting unit lines refused, and the warning when
 //! a file read as degrees looks like radians.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::{hairfit, s, stderr, write};
+use std::path::Path;
 
 const PARAMS: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
   "w_c_deg": 15, "eccentricity": 0.9}"#;
@@ -15,27 +18,6 @@ const ROWS_DEG: [[f64; 4]; 4] = [
     [15.0, 0.0, -10.0, 60.0],
     [45.0, 0.0, -40.0, 10.0],
 ];
-
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// The rows as text, in degrees or (as `{:?}` of to_radians) radians.
 fn rows(radians: bool, with_radiance: bool) -> String {
