@@ -3,44 +3,15 @@
 //! keep the two families' files apart.
 
 mod chiang_common;
+#[path = "support/cli.rs"]
+mod cli;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use cli::{failed, hairfit, hairfit_ok, s as p, stdout, write};
+use std::path::Path;
 
 use chiang_common::{model, s, set_a, set_b};
 use hairfit::family::FamilyParams;
 use hairfit::files::{FitJson, ParameterFile as _, Truth};
-
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn ok(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "hairfit failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn err(out: &Output) -> String {
-    assert!(!out.status.success(), "hairfit should have failed");
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
 
 /// (θ_i, φ_i, θ_r, φ_r) in degrees; A: S(i,r), S(r,i); B: S(i,r), S(r,i) (CHIANG.md).
 const TABLE: [([f64; 4], [f64; 4]); 4] = [
@@ -86,7 +57,7 @@ fn eval_matches_the_known_values_in_both_directions() {
     let mut failures = Vec::new();
     for (set, text, lib) in [(0, SET_A, set_a()), (1, SET_B, set_b())] {
         let params = write(dir.path(), &format!("set{set}.json"), text);
-        let out = ok(&hairfit(&[
+        let out = stdout(&hairfit_ok(&[
             "eval",
             "--model",
             "chiang",
@@ -137,7 +108,7 @@ fn the_model_tag_must_agree_with_the_option() {
         "c.json",
         r#"{"model": "chiang", "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2}"#,
     );
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "eval",
         "--params",
         p(&chiang),
@@ -150,7 +121,7 @@ fn the_model_tag_must_agree_with_the_option() {
         "m.json",
         r#"{"model": "marschner", "sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15}"#,
     );
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "eval",
         "--model",
         "chiang",
@@ -161,20 +132,14 @@ fn the_model_tag_must_agree_with_the_option() {
     ]));
     assert!(e.contains("m.json") && e.contains("--model"), "{e}");
     // The Marschner tag is accepted by the Marschner model and dropped.
-    ok(&hairfit(&[
-        "eval",
-        "--params",
-        p(&marschner),
-        "--input",
-        p(&input),
-    ]));
+    hairfit_ok(&["eval", "--params", p(&marschner), "--input", p(&input)]);
     // Unknown keys are an error naming the key.
     let extra = write(
         dir.path(),
         "x.json",
         r#"{"sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2, "k_g": 1}"#,
     );
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "eval",
         "--model",
         "chiang",
@@ -190,7 +155,7 @@ fn the_model_tag_must_agree_with_the_option() {
         "h.json",
         r#"{"eta": 1e200, "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2}"#,
     );
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "eval",
         "--model",
         "chiang",
@@ -201,7 +166,7 @@ fn the_model_tag_must_agree_with_the_option() {
     ]));
     assert!(e.contains("eta") && e.contains("h.json"), "{e}");
     // Options of the other family are refused, not ignored.
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "eval",
         "--model",
         "chiang",
@@ -213,7 +178,7 @@ fn the_model_tag_must_agree_with_the_option() {
         p(&input),
     ]));
     assert!(e.contains("--lobes"), "{e}");
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "eval",
         "--width-nodes",
         "64",
@@ -237,7 +202,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
         r#"{"eta": 1.55, "sigma_a": [0.3, 0.5, 0.9], "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2.5}"#,
     );
     let data = dir.path().join("d.csv");
-    ok(&hairfit(&[
+    hairfit_ok(&[
         "synth",
         "--model",
         "chiang",
@@ -251,12 +216,12 @@ fn synth_then_fit_recovers_noise_free_truth() {
         "2,1.5,1",
         "--output",
         p(&data),
-    ]));
+    ]);
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
     assert!(matches!(t.params, FamilyParams::Chiang(_)));
     assert_eq!(t.chiang.unwrap().width_nodes, 256);
     let out = dir.path().join("fit");
-    let summary = ok(&hairfit(&[
+    let summary = stdout(&hairfit_ok(&[
         "fit",
         p(&data),
         "--model",
@@ -299,7 +264,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
     assert!(curves.iter().all(|r| r.residual.abs() < 1e-9));
     // Determinism: the same fit again writes the same fit.json, byte for byte.
     let again = dir.path().join("again");
-    ok(&hairfit(&[
+    hairfit_ok(&[
         "fit",
         p(&data),
         "--model",
@@ -311,11 +276,11 @@ fn synth_then_fit_recovers_noise_free_truth() {
         "--no-progress",
         "--out",
         p(&again),
-    ]));
+    ]);
     let text = |d: &Path| std::fs::read_to_string(d.join("fit.json")).unwrap();
     assert_eq!(text(&out), text(&again));
     // The Chiang fit reads with --fix by CHIANG.md's names; Marschner names are refused.
-    let e = err(&hairfit(&[
+    let e = failed(&hairfit(&[
         "fit",
         p(&data),
         "--model",
@@ -332,7 +297,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
 fn demo_runs_the_chiang_family() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    let text = ok(&hairfit(&[
+    let text = stdout(&hairfit_ok(&[
         "demo",
         "--model",
         "chiang",

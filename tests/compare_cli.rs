@@ -1,37 +1,19 @@
 //! `hairfit compare` end to end: on data made by one family, the comparison prefers it, names
 //! where the other misses, and writes both fit directories, compare.json and index.html.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::{hairfit_ok, s as p, stdout, write};
 use std::path::Path;
-use std::process::{Command, Output};
 
 use hairfit::compare::Comparison;
 
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn ok(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "hairfit failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
-
 /// Synthesize with `model` and `params`, 2% relative noise, and compare.
 fn compare_on(dir: &Path, model: &str, params: &str) -> (Comparison, String) {
-    let truth = dir.join(format!("{model}.json"));
-    std::fs::write(&truth, params).unwrap();
+    let truth = write(dir, &format!("{model}.json"), params);
     let data = dir.join(format!("{model}.csv"));
-    ok(&hairfit(&[
+    hairfit_ok(&[
         "synth",
         "--model",
         model,
@@ -45,9 +27,9 @@ fn compare_on(dir: &Path, model: &str, params: &str) -> (Comparison, String) {
         "3",
         "--output",
         p(&data),
-    ]));
+    ]);
     let out = dir.join(format!("cmp_{model}"));
-    let text = ok(&hairfit(&[
+    let text = stdout(&hairfit_ok(&[
         "compare",
         p(&data),
         "--starts",

@@ -1,6 +1,10 @@
 //! The loader on well-formed files of each format: exact accounting of every row, each
 //! rejection reason, fixed-angle scan mapping, and write→load round trips.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::write;
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
@@ -14,12 +18,6 @@ fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data/loader")
         .join(name)
-}
-
-fn write(dir: &Path, name: &str, content: &str) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, content).unwrap();
-    p
 }
 
 fn scan_options(columns: &str, fixed: &str, maps: &[&str]) -> LoadOptions {

@@ -1,18 +1,15 @@
 //! Malformed and hostile input: every case either fails with an error naming file, line and
 //! column, or loads with a correct report — never a panic. Ends with a byte fuzzer.
 
-use std::path::{Path, PathBuf};
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::write;
 
 use hairfit::data::{load, Dataset, Format, LoadOptions, LoadReport, RejectReason::*};
 use proptest::prelude::*;
 
 const HEADER: &str = "theta_i,phi_i,theta_r,phi_r,radiance\n";
-
-fn write(dir: &Path, name: &str, content: &[u8]) -> PathBuf {
-    let p = dir.join(name);
-    std::fs::write(&p, content).unwrap();
-    p
-}
 
 /// Load `content` saved as `name`, expecting an error at `line:column`; returns the message.
 fn expect_error(name: &str, content: &[u8], line: u64, column: u64) -> String {

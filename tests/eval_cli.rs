@@ -136,10 +136,9 @@ fn effect_switches_change_the_values() {
     assert_ne!(column(&["--no-eccentricity"]), all);
 }
 
-fn assert_fails_with(args: &[&str], needles: &[&str]) {
-    let out = hairfit(args);
-    assert!(!out.status.success(), "expected failure for {args:?}");
-    let err = String::from_utf8_lossy(&out.stderr);
+/// `hairfit ARGS` fails (an error, or clap's usage exit 2) with a message containing every needle.
+fn fails_with(args: &[&str], needles: &[&str]) {
+    let err = cli::failed(&hairfit(args));
     for n in needles {
         assert!(err.contains(n), "stderr {err:?} lacks {n:?}");
     }
@@ -179,7 +178,7 @@ fn bad_angles_name_file_line_and_column_and_leave_no_output() {
     ];
     for (name, text, needles) in cases {
         let input = write(dir.path(), name, text);
-        assert_fails_with(
+        fails_with(
             &[
                 "eval",
                 "--params",
@@ -217,13 +216,13 @@ fn bad_parameter_files_are_clear_errors() {
     ];
     for (name, text, needles) in cases {
         let params = write(dir.path(), name, text);
-        assert_fails_with(
+        fails_with(
             &["eval", "--params", s(&params), "--input", s(&input)],
             &needles,
         );
     }
     let params = write(dir.path(), "p.json", PARAMS_1);
-    assert_fails_with(
+    fails_with(
         &[
             "eval",
             "--params",
@@ -235,7 +234,7 @@ fn bad_parameter_files_are_clear_errors() {
         ],
         &["XX"],
     );
-    assert_fails_with(
+    fails_with(
         &[
             "eval",
             "--params",

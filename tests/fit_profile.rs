@@ -11,6 +11,9 @@
 //! Full sets (60 datasets per rig, ignored in the default suite):
 //! `cargo test --release --test fit_profile -- --ignored --nocapture`
 
+mod fit_support;
+mod model_common;
+
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -18,25 +21,14 @@ use hairfit::files::{FitStatus, ParamStatus};
 use hairfit::fit::bounds::report_factor;
 use hairfit::fit::profile::{self, End, Optimum, Profile};
 use hairfit::fit::{
-    fit, fit_data, EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss,
-    ModelForward, Space,
+    fit, EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, ModelForward,
+    Space,
 };
-use hairfit::model::{Measurement, ModelConfig, ParamName, Params};
-use hairfit::synth::{synthesize, Noise, Rig};
+use hairfit::model::{Measurement, ParamName, Params};
 
 /// MODEL.md's example hair, one channel.
 fn truth() -> Params<f64> {
-    Params {
-        eta: 1.55,
-        sigma_a: vec![0.4],
-        alpha_r: (-7.0f64).to_radians(),
-        beta_r: 8.0f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15.0f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
-    }
+    model_common::table_params()
 }
 
 /// Three azimuthal scans: every free parameter is determined.
@@ -50,17 +42,7 @@ fn dataset(rig: &str, seed: u64) -> FitData {
 }
 
 fn dataset_at(rig: &str, noise: &str, seed: u64) -> FitData {
-    let (ds, _) = synthesize(
-        &truth(),
-        &ModelConfig::default(),
-        &Rig::parse(rig).unwrap(),
-        &Noise::parse(noise).unwrap(),
-        &[0.8],
-        Measurement::S,
-        seed,
-    )
-    .unwrap();
-    fit_data(&ds)
+    fit_support::synthesized(&truth(), rig, noise, 0.8, seed)
 }
 
 fn options(intervals: Intervals) -> FitOptions {

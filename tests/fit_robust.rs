@@ -1,41 +1,23 @@
 //! Robust losses with a data-driven scale (`--loss-scale auto`) and the unbiased per-channel
 //! scale of a log-space fit, on data synthesized through the library.
 
+mod fit_support;
+mod model_common;
+
 use hairfit::files::DOWN_WEIGHT;
 use hairfit::fit::design::SplitMix64;
-use hairfit::fit::{fit, fit_data, EffectsChoice, FitData, FitOptions, Intervals, Loss, LossScale};
-use hairfit::model::{Measurement, ModelConfig, Params};
-use hairfit::synth::{synthesize, Noise, Rig};
+use hairfit::fit::{fit, EffectsChoice, FitData, FitOptions, Intervals, Loss, LossScale};
+use hairfit::model::Params;
 
 /// MODEL.md's example hair, one channel.
 fn truth() -> Params<f64> {
-    Params {
-        eta: 1.55,
-        sigma_a: vec![0.4],
-        alpha_r: (-7.0f64).to_radians(),
-        beta_r: 8.0f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15.0f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
-    }
+    model_common::table_params()
 }
 
 const SCALE: f64 = 0.8;
 
 fn synth(rig: &str, noise: &str, seed: u64) -> FitData {
-    let (ds, _) = synthesize(
-        &truth(),
-        &ModelConfig::default(),
-        &Rig::parse(rig).unwrap(),
-        &Noise::parse(noise).unwrap(),
-        &[SCALE],
-        Measurement::S,
-        seed,
-    )
-    .unwrap();
-    fit_data(&ds)
+    fit_support::synthesized(&truth(), rig, noise, SCALE, seed)
 }
 
 /// Multiply a seeded `fraction` of samples by factors uniform in [5, 50]; their indices.

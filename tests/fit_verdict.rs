@@ -8,6 +8,7 @@ mod hard_common;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use hard_common::cli::{s, shipped};
 use hard_common::{run_hairfit, Finished};
 
 const LIMIT: Duration = Duration::from_secs(300);
@@ -19,12 +20,12 @@ fn hairfit(args: &[&str]) -> Finished {
 /// `hairfit synth` 2% relative noise (with its sigma column), seed `seed`, into `dir/name.csv`.
 fn synth(dir: &Path, name: &str, seed: u64, extra: &[&str]) -> PathBuf {
     let out = dir.join(format!("{name}.csv"));
-    let params = concat!(env!("CARGO_MANIFEST_DIR"), "/data/true_1ch.json");
+    let params = shipped("true_1ch.json");
     let seed = seed.to_string();
     let mut args = vec![
         "synth",
         "--params",
-        params,
+        s(&params),
         "--rig",
         "azimuthal:incidences=15,30,45:steps=120",
         "--noise",
@@ -32,7 +33,7 @@ fn synth(dir: &Path, name: &str, seed: u64, extra: &[&str]) -> PathBuf {
         "--seed",
         &seed,
         "--output",
-        out.to_str().unwrap(),
+        s(&out),
     ];
     args.extend(extra);
     let f = hairfit(&args);
@@ -66,13 +67,7 @@ fn edit_rows(src: &Path, dst: &Path, mut edit: impl FnMut(usize, &mut Vec<String
 /// Fit `data` into `dir/name` with `extra` options; the exit and fit.json.
 fn fit(dir: &Path, name: &str, data: &Path, extra: &[&str]) -> (Finished, serde_json::Value) {
     let out = dir.join(name);
-    let mut args = vec![
-        "fit",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--no-progress",
-    ];
+    let mut args = vec!["fit", s(data), "--out", s(&out), "--no-progress"];
     args.extend(extra);
     let f = hairfit(&args);
     let text = std::fs::read_to_string(out.join("fit.json"))
@@ -147,10 +142,7 @@ fn fits_that_did_nothing_fail_with_exit_1() {
 #[test]
 fn the_shipped_noisy_file_is_a_poor_fit_and_cauchy_repairs_it() {
     let dir = tempfile::tempdir().unwrap();
-    let data = Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/data/azimuthal_1ch_noisy.csv"
-    ));
+    let data = &shipped("azimuthal_1ch_noisy.csv");
     let (f, j) = fit(dir.path(), "l2", data, &[]);
     assert_eq!(f.status.code(), Some(0), "poor_fit exits 0: {}", f.stderr);
     assert_eq!(verdict(&j), "poor_fit");

@@ -11,14 +11,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use hard_common::cli::shipped;
 use hard_common::*;
 
-fn shipped(name: &str) -> String {
-    format!("{}/data/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn fit_args<'a>(data: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
-    let mut a = vec!["fit", data, "--out", out, "--no-progress"];
+fn fit_args<'a>(data: &'a Path, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut a = vec!["fit", cli::s(data), "--out", out, "--no-progress"];
     a.extend(extra);
     a
 }
@@ -173,13 +170,13 @@ fn the_current_directory_and_foreign_directories_are_refused_without_force() {
     // `--out .`: refused even with --force (the run would replace the user's working directory).
     std::fs::write(tmp.path().join("index.html"), "mine").unwrap();
     for force in [false, true] {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_hairfit"));
-        cmd.current_dir(tmp.path()).args(fit_args(&one, ".", &[]));
+        let mut cmd = cli::hairfit_command(&fit_args(&one, ".", &[]));
+        cmd.current_dir(tmp.path());
         if force {
             cmd.arg("--force");
         }
-        let o = cmd.output().unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
+        let o = cli::run_within(cmd, cli::DEFAULT_LIMIT).0;
+        let err = cli::stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{err}");
         assert!(err.contains("current directory"), "{err}");
     }
@@ -225,7 +222,7 @@ fn the_input_is_never_replaced_even_with_force() {
     let before = std::fs::read(&input).unwrap();
     for extra in [&[][..], &["--force"][..]] {
         let f = run_hairfit(
-            &fit_args(input.to_str().unwrap(), out.to_str().unwrap(), extra),
+            &fit_args(&input, out.to_str().unwrap(), extra),
             &[],
             Duration::from_secs(60),
         );
@@ -317,8 +314,8 @@ fn batch_items_are_published_as_sets() {
         &manifest,
         format!(
             "name,data\nrgb,{}\none,{}\n",
-            shipped("azimuthal_rgb.csv"),
-            shipped("sphere_1ch.csv")
+            shipped("azimuthal_rgb.csv").display(),
+            shipped("sphere_1ch.csv").display()
         ),
     )
     .unwrap();

@@ -4,28 +4,22 @@
 #[path = "support/cli.rs"]
 mod cli;
 
-use std::process::Command;
-
-fn hairfit() -> Command {
-    cli::hairfit_command(&[])
-}
+use cli::{failed, hairfit, hairfit_ok, s, stderr, write};
 
 #[test]
 fn report_of_a_demo_fit_writes_index_html() {
     let dir = tempfile::tempdir().unwrap();
     let fit_dir = dir.path().join("demo");
-    let out = hairfit()
-        .args(["demo", "--starts", "2", "--no-progress", "--out"])
-        .arg(&fit_dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = hairfit().arg("report").arg(&fit_dir).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    hairfit_ok(&[
+        "demo",
+        "--starts",
+        "2",
+        "--no-progress",
+        "--out",
+        s(&fit_dir),
+    ]);
+    let out = hairfit(&["report", s(&fit_dir)]);
+    let stderr = stderr(&out);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("index.html"), "{stderr}");
     // The fit's own model settings reproduce its fit column: no mismatch note.
@@ -39,32 +33,22 @@ fn report_of_a_demo_fit_writes_index_html() {
     ] {
         assert!(fit_dir.join(f).is_file(), "{f} missing");
     }
-    let out = hairfit()
-        .arg("report")
-        .arg("--linear")
-        .arg(&fit_dir)
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    hairfit_ok(&["report", "--linear", s(&fit_dir)]);
 }
 
 #[test]
 fn a_missing_or_malformed_fit_json_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
-    let out = hairfit().arg("report").arg(dir.path()).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    let stderr = failed(&hairfit(&["report", s(dir.path())]));
     assert!(stderr.contains("fit.json"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 
-    std::fs::write(
-        dir.path().join("fit.json"),
+    write(
+        dir.path(),
+        "fit.json",
         "{\n  \"hairfit_version\": \"0.1.0\",\n  \"status\": \"sideways\"\n}\n",
-    )
-    .unwrap();
-    let out = hairfit().arg("report").arg(dir.path()).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    );
+    let stderr = failed(&hairfit(&["report", s(dir.path())]));
     // The bad status value is on line 3.
     assert!(stderr.contains("fit.json:3:"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");

@@ -173,8 +173,8 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
         },
         model: ModelConfig::default(),
         options: OptionsRecord {
-            space: "log".into(),
-            loss: "huber".into(),
+            space: hairfit::fit::Space::Log,
+            loss: hairfit::fit::Loss::Huber,
             seed: 7,
             ..OptionsRecord::default()
         },

@@ -2,8 +2,11 @@
 //! data row (CSV, scan and `eval` alike), contradicting unit lines refused, and the warning when
 //! a file read as degrees looks like radians.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::{hairfit, s, stderr, write};
+use std::path::Path;
 
 const PARAMS: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
   "w_c_deg": 15, "eccentricity": 0.9}"#;
@@ -15,27 +18,6 @@ const ROWS_DEG: [[f64; 4]; 4] = [
     [15.0, 0.0, -10.0, 60.0],
     [45.0, 0.0, -40.0, 10.0],
 ];
-
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// The rows as text, in degrees or (as `{:?}` of to_radians) radians.
 fn rows(radians: bool, with_radiance: bool) -> String {
@@ -76,7 +58,7 @@ fn radians_read_as_degrees_are_warned_about() {
     let rad = write(
         dir.path(),
         "rad.csv",
-        &format!("{HEADER}{}", rows(true, true)),
+        format!("{HEADER}{}", rows(true, true)),
     );
     let report = load_json(&rad, &[]);
     let warnings = report["warnings"].as_array().unwrap();
@@ -127,7 +109,7 @@ fn radians_read_as_degrees_are_warned_about() {
     let deg = write(
         dir.path(),
         "deg.csv",
-        &format!("{HEADER}{}", rows(false, true)),
+        format!("{HEADER}{}", rows(false, true)),
     );
     assert_eq!(
         load_json(&deg, &[])["warnings"]
@@ -143,7 +125,7 @@ fn the_unit_line_is_case_insensitive_and_valid_until_the_first_data_row() {
     let reference = write(
         dir.path(),
         "ref.csv",
-        &format!("{HEADER}{}", rows(true, true)),
+        format!("{HEADER}{}", rows(true, true)),
     );
     let expect = load_json(&reference, &["--angles", "rad"]);
     assert_eq!(expect["accepted"], 4);
@@ -182,7 +164,7 @@ fn the_unit_line_is_case_insensitive_and_valid_until_the_first_data_row() {
     let two = write(
         dir.path(),
         "two.csv",
-        &format!("# angles: deg\n{HEADER}# angles: rad\n{}", rows(true, true)),
+        format!("# angles: deg\n{HEADER}# angles: rad\n{}", rows(true, true)),
     );
     let o = hairfit(&["load", s(&two)]);
     let err = stderr(&o);
@@ -192,7 +174,7 @@ fn the_unit_line_is_case_insensitive_and_valid_until_the_first_data_row() {
     let same = write(
         dir.path(),
         "same.csv",
-        &format!("# angles: rad\n{HEADER}# Angles: rad\n{}", rows(true, true)),
+        format!("# angles: rad\n{HEADER}# Angles: rad\n{}", rows(true, true)),
     );
     assert_eq!(load_json(&same, &[])["accepted"], 4);
 }
@@ -205,7 +187,7 @@ fn a_scan_honours_its_unit_line() {
         .iter()
         .map(|a| format!("{:?},{:?},2\n", a[2].to_radians(), a[3].to_radians()))
         .collect();
-    let p = write(dir.path(), "scan.txt", &format!("# ANGLES: rad\n{body}"));
+    let p = write(dir.path(), "scan.txt", format!("# ANGLES: rad\n{body}"));
     let opts = [
         "--columns",
         "theta_r,phi_r,radiance",
@@ -235,17 +217,17 @@ fn eval_honours_the_unit_line_and_takes_angles() {
     let deg = write(
         dir.path(),
         "deg.csv",
-        &format!("{header}{}", rows(false, false)),
+        format!("{header}{}", rows(false, false)),
     );
     let rad_line = write(
         dir.path(),
         "rad_line.csv",
-        &format!("# Angles: rad\n{header}{}", rows(true, false)),
+        format!("# Angles: rad\n{header}{}", rows(true, false)),
     );
     let rad_bare = write(
         dir.path(),
         "rad_bare.csv",
-        &format!("{header}{}", rows(true, false)),
+        format!("{header}{}", rows(true, false)),
     );
     // The S column of eval's output.
     let values = |input: &Path, extra: &[&str]| -> Vec<f64> {

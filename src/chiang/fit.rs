@@ -6,10 +6,11 @@ use std::time::Instant;
 
 use super::forward::ChiangForward;
 use super::{ChiangEffects, ChiangParamFile, ChiangParamName, ChiangParams, PARAMETERS};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
-use crate::files::{Floored, LoadReport, OptionsRecord};
-use crate::fit::problem::{FitData, FitParam};
+use crate::files::{Floored, LoadReport};
+use crate::fit::fixes::FreeSet;
+use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
 use crate::model::angles::wrap;
 use crate::model::{Effects, Lobes, ModelConfig};
@@ -41,58 +42,12 @@ pub fn reference_params(nc: usize) -> ChiangParams<f64> {
 /// Parse `--fix NAME=VALUE` with CHIANG.md's names (file units; `sigma_a=v` fixes every
 /// channel) into natural-unit values inside the fit bounds.
 pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ChiangParamName, f64)>> {
-    let mut out: Vec<(ChiangParamName, f64)> = Vec::new();
-    let all = all_parameters(nc);
-    for item in items {
-        let (name, value) = item.split_once('=').ok_or_else(|| {
-            Error::Other(format!(
-                "--fix `{item}`: write NAME=VALUE, e.g. --fix beta_n=0.3 or --fix alpha_deg=-2"
-            ))
-        })?;
-        let name = name.trim();
-        let v: f64 = value.trim().parse().map_err(|_| {
-            Error::Other(format!(
-                "--fix `{item}`: `{}` is not a number",
-                value.trim()
-            ))
-        })?;
-        let names: Vec<ChiangParamName> = if name == "sigma_a" {
-            (0..nc).map(ChiangParamName::SigmaA).collect()
-        } else {
-            match all.iter().find(|p| p.json_name() == name) {
-                Some(&p) => vec![p],
-                None => {
-                    let known: Vec<String> = all.iter().map(|p| p.json_name()).collect();
-                    return Err(Error::Other(format!(
-                        "--fix `{item}`: unknown Chiang parameter `{name}`; use one of sigma_a, {}",
-                        known.join(", ")
-                    )));
-                }
-            }
-        };
-        for p in names {
-            let x = v / p.report_factor();
-            let f = p.fact();
-            if !v.is_finite() || p.bound().clamp(x) != x {
-                return Err(Error::Parameter {
-                    name: p.json_name(),
-                    value: v,
-                    message: format!(
-                        "--fix value is outside the fit's range [{}, {}]",
-                        f.fit_lo, f.fit_hi
-                    ),
-                });
-            }
-            if out.iter().any(|(q, _)| *q == p) {
-                return Err(Error::Other(format!(
-                    "--fix `{item}`: {} is already fixed by an earlier --fix; give each parameter once",
-                    p.json_name()
-                )));
-            }
-            out.push((p, x));
-        }
-    }
-    Ok(out)
+    crate::fit::fixes::parse_fixes(
+        items,
+        &all_parameters(nc),
+        "Chiang parameter",
+        "beta_n=0.3 or --fix alpha_deg=-2",
+    )
 }
 
 /// The Marschner-shaped record of a Chiang fit's lobes (fit.json `model`): its lobes on, no
@@ -163,26 +118,16 @@ pub fn fit_chiang(
         model: opts.chiang.clone(),
         measurement: opts.measurement,
     };
-    let fixes = parse_fixes(&opts.fix, nc)?;
-    let mut base = reference_params(nc);
-    for &(p, x) in &fixes {
-        p.set(&mut base, x);
-    }
-    let is_fixed = |p: &ChiangParamName| fixes.iter().any(|(f, _)| f == p);
     let wanted = |p: &ChiangParamName| !p.fact().on_request || opts.free_eta;
-    let free: Vec<ChiangParamName> = effects
-        .parameters(nc)
-        .into_iter()
-        .filter(|p| wanted(p) && !is_fixed(p))
-        .collect();
-    for p in ChiangEffects::default().parameters(nc) {
-        if wanted(&p) && !effects.parameters(nc).contains(&p) && !is_fixed(&p) {
-            warnings.push(format!(
-                "{}: not fitted (the terms in play do not depend on it)",
-                p.json_name()
-            ));
-        }
-    }
+    let wanted_of = |e: &ChiangEffects| e.parameters(nc).into_iter().filter(wanted).collect();
+    let set = FreeSet::new(
+        parse_fixes(&opts.fix, nc)?,
+        reference_params(nc),
+        wanted_of(&effects),
+        wanted_of(&ChiangEffects::default()),
+        "the terms in play do not depend on it",
+        &mut warnings,
+    );
     let terms: Vec<&str> = [
         (effects.r, "R"),
         (effects.tt, "TT"),
@@ -201,22 +146,10 @@ pub fn fit_chiang(
     let options = |sub: usize, explicit: bool, floored: Floored| {
         let choice = crate::fit::stages::ModelChoice {
             config: lobes_config(&effects),
-            effects_choice: "explicit",
+            effects_choice: crate::files::EffectsSource::Explicit,
             reasons: reasons.clone(),
         };
-        let set = crate::fit::stages::FreeSet {
-            fixes: Vec::new(),
-            base: crate::fit::bounds::reference_params(nc),
-            free: Vec::new(),
-        };
-        OptionsRecord {
-            fixed: fixes
-                .iter()
-                .map(|(p, x)| (p.json_name(), x * p.report_factor()))
-                .collect(),
-            free_parameters: free.iter().map(|p| p.json_name()).collect(),
-            ..crate::fit::stages::options_record(opts, &choice, &set, sub, explicit, floored)
-        }
+        crate::fit::stages::options_record(opts, &choice, &set, sub, explicit, floored)
     };
     let why = |p: ChiangParamName, params: &ChiangParams<f64>, partners: &[String]| {
         why_undetermined(p, data, params, partners)
@@ -228,8 +161,8 @@ pub fn fit_chiang(
             load_report,
             opts,
             forward: &forward,
-            base,
-            free: free.clone(),
+            base: set.base.clone(),
+            free: set.free.clone(),
             options: &options,
             config: lobes_config(&effects),
             chiang: Some(ChiangRecord {

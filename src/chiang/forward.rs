@@ -55,27 +55,6 @@ pub struct ChiangForward {
     pub measurement: Measurement,
 }
 
-impl ChiangForward {
-    /// Multiply each sample's values (and derivative rows) by the measurement factor.
-    fn apply_measurement(&self, angles: &[Angles], nc: usize, out: &mut [f64], grad: &mut [f64]) {
-        if self.measurement == Measurement::S {
-            return;
-        }
-        let per_sample = if out.is_empty() {
-            0
-        } else {
-            grad.len() / angles.len().max(1)
-        };
-        for (k, a) in angles.iter().enumerate() {
-            let f = self.measurement.factor(a);
-            out[k * nc..(k + 1) * nc].iter_mut().for_each(|v| *v *= f);
-            grad[k * per_sample..(k + 1) * per_sample]
-                .iter_mut()
-                .for_each(|v| *v *= f);
-        }
-    }
-}
-
 impl Forward for ChiangForward {
     fn measurement(&self) -> Measurement {
         self.measurement
@@ -85,7 +64,8 @@ impl Forward for ChiangForward {
     fn values(&self, p: &ChiangParams<f64>, angles: &[Angles], out: &mut [f64]) {
         scattering_batch(p, &self.model, angles, out);
         let nc = p.sigma_a.len();
-        self.apply_measurement(angles, nc, out, &mut []);
+        self.measurement
+            .apply(angles, &mut out[..angles.len() * nc]);
     }
 
     fn gradients(
@@ -114,13 +94,15 @@ impl Forward for ChiangForward {
         // Stack duals: η + 3 σ_a + β_m, β_n, α = 7 for RGB; headroom for more channels.
         dispatch!(1 2 3 4 5 6 7 8 9 10);
         let nc = p.sigma_a.len();
-        self.apply_measurement(angles, nc, out, grad);
+        self.measurement
+            .apply(angles, &mut out[..angles.len() * nc]);
+        self.measurement.apply(angles, grad);
     }
 
     fn by_lobe(&self, p: &ChiangParams<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
         crate::family::chiang_by_lobe(p, &self.model, angles, out);
-        let f = self.measurement.factor(angles);
-        out.iter_mut().flatten().for_each(|v| *v *= f);
+        self.measurement
+            .apply(std::slice::from_ref(angles), out.as_flattened_mut());
         true
     }
 }

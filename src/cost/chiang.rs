@@ -3,7 +3,7 @@
 //! direction, on random directions and on a rig; and the Marschner model's time on the same
 //! directions as the yardstick ("evaluations per second per core" = 1 / time_s).
 
-use super::model::{relative_error, representative_angles};
+use super::model::{accuracy_row, representative_angles};
 use super::{time_per_call, CostRow, COST_SEED};
 use crate::chiang::{scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
 use crate::model::{Angles, ModelConfig};
@@ -109,25 +109,17 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
                             uncached(&p, &model, angles)
                         }
                     });
-                    let (max, rms, at) = relative_error(&s, &reference);
-                    let a = &angles[at / nc];
-                    rows.push(CostRow {
-                        section: label.into(),
-                        knob: "width nodes".into(),
-                        setting: format!("{nodes} nodes, {dirs_label}, {how}"),
-                        time_s: t / angles.len() as f64,
-                        error_max: max,
-                        error_rms: rms,
-                        worst_at: format!(
-                            "theta_i {:.1}, phi_i {:.1}, theta_r {:.1}, phi_r {:.1} deg, channel {}",
-                            a.theta_i.to_degrees(),
-                            a.phi_i.to_degrees(),
-                            a.theta_r.to_degrees(),
-                            a.phi_r.to_degrees(),
-                            at % nc
+                    rows.push(accuracy_row(
+                        (
+                            label,
+                            "width nodes",
+                            format!("{nodes} nodes, {dirs_label}, {how}"),
                         ),
-                        pareto: false,
-                    });
+                        t / angles.len() as f64,
+                        &s,
+                        &reference,
+                        angles,
+                    ));
                 }
             }
         }

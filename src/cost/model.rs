@@ -74,13 +74,43 @@ pub fn relative_error(s: &[f64], reference: &[f64]) -> (f64, f64, usize) {
     (max, (sum / s.len().max(1) as f64).sqrt(), at)
 }
 
+/// A ledger row of `(section, knob, setting)` costing `time_s`: values `s` (every channel per
+/// direction of `angles`) against `reference`, with where the error is worst.
+pub(super) fn accuracy_row(
+    (section, knob, setting): (&str, &str, String),
+    time_s: f64,
+    s: &[f64],
+    reference: &[f64],
+    angles: &[Angles],
+) -> CostRow {
+    let nc = s.len() / angles.len().max(1);
+    let (max, rms, at) = relative_error(s, reference);
+    let a = &angles[at / nc.max(1)];
+    CostRow {
+        section: section.into(),
+        knob: knob.into(),
+        setting,
+        time_s,
+        error_max: max,
+        error_rms: rms,
+        worst_at: format!(
+            "theta_i {:.1}, phi_i {:.1}, theta_r {:.1}, phi_r {:.1} deg, channel {}",
+            a.theta_i.to_degrees(),
+            a.phi_i.to_degrees(),
+            a.theta_r.to_degrees(),
+            a.phi_r.to_degrees(),
+            at % nc.max(1)
+        ),
+        pareto: false,
+    }
+}
+
 /// Model section: every root mode × effect set against exact all-effects.
 pub(super) fn model_rows(quick: bool) -> Vec<CostRow> {
     let n = if quick { 2000 } else { 20_000 };
     let min_s = if quick { 0.05 } else { 0.5 };
     let angles = representative_angles(n, COST_SEED);
     let p = demo_truth();
-    let nc = p.sigma_a.len();
     let reference = evaluate_all(
         &p,
         &ModelConfig {
@@ -95,25 +125,13 @@ pub(super) fn model_rows(quick: bool) -> Vec<CostRow> {
             let config = ModelConfig { mode, effects };
             let mut s = Vec::new();
             let per_set = time_per_call(min_s, || s = evaluate_all(&p, &config, &angles));
-            let (max, rms, at) = relative_error(&s, &reference);
-            let a = &angles[at / nc];
-            rows.push(CostRow {
-                section: "model".into(),
-                knob: "roots+effects".into(),
-                setting: format!("{mode} {name}"),
-                time_s: per_set / n as f64,
-                error_max: max,
-                error_rms: rms,
-                worst_at: format!(
-                    "theta_i {:.1}, phi_i {:.1}, theta_r {:.1}, phi_r {:.1} deg, channel {}",
-                    a.theta_i.to_degrees(),
-                    a.phi_i.to_degrees(),
-                    a.theta_r.to_degrees(),
-                    a.phi_r.to_degrees(),
-                    at % nc
-                ),
-                pareto: false,
-            });
+            rows.push(accuracy_row(
+                ("model", "roots+effects", format!("{mode} {name}")),
+                per_set / n as f64,
+                &s,
+                &reference,
+                &angles,
+            ));
         }
     }
     rows

@@ -1,5 +1,7 @@
 //! `fit.json`: what a fit found and how ([`FitJson`]). Field names and order are the file's
-//! contract; the fit writes and the report reads this one type.
+//! contract; the fit writes and the report reads this one type. (About 430 lines of types plus
+//! the tests that pin the file's spellings and key order: over 500 with them, kept together so
+//! a change to a field meets its test.)
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -10,6 +12,7 @@ use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
+use crate::fit::{Global, Loss, Space};
 use crate::model::{Measurement, ModelConfig, RootMode};
 
 /// How a fit (or one solver run) ended.
@@ -292,14 +295,50 @@ pub struct Floored {
     pub floor: Vec<f64>,
 }
 
+/// `fit.json` → `options.effects_choice`: how the lobes/effects were chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EffectsSource {
+    /// From the data's geometry (`--effects auto`).
+    #[default]
+    Auto,
+    /// Every lobe and effect (`--effects all`).
+    All,
+    /// As given (`--lobes/--no-glints/--no-eccentricity`, or the Chiang terms).
+    Explicit,
+}
+
+impl std::fmt::Display for EffectsSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            EffectsSource::Auto => "auto",
+            EffectsSource::All => "all",
+            EffectsSource::Explicit => "explicit",
+        })
+    }
+}
+
+/// `fit.json` → `options.scale`: how the per-channel scales were fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ScaleMethod {
+    /// Solved in closed form at every step (least squares).
+    #[default]
+    #[serde(rename = "variable projection")]
+    VariableProjection,
+    /// Fitted as parameters beside the model's (robust losses have no closed form).
+    #[serde(rename = "explicit (robust loss)")]
+    Explicit,
+}
+
 /// `fit.json` → `options`: every setting the fit used. Fields are in alphabetical order, the
-/// order the file has always had (it was a sorted JSON map). `space`, `loss` and `global` hold
-/// the fit's own spellings (`fit::Space`, `fit::Loss`, `fit::Global`).
+/// order the file has always had (it was a sorted JSON map). Enumerated settings are typed and
+/// keep the spellings the file has always had (`fit::Space`, `fit::Loss`, `fit::Global` are the
+/// fit's own option types).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OptionsRecord {
     /// `auto`, `all` or `explicit`: how the effects were chosen.
-    pub effects_choice: String,
+    pub effects_choice: EffectsSource,
     /// Why each lobe/effect is on or off.
     pub effects_reasons: Vec<String>,
     /// `--fix`: JSON name → value in reporting units (degrees for `*_deg`).
@@ -307,7 +346,7 @@ pub struct OptionsRecord {
     pub free_parameters: Vec<String>,
     /// Parameters freed that are fixed by default (`--free eta`).
     pub freed: Vec<String>,
-    pub global: String,
+    pub global: Global,
     /// How the parameter intervals were computed: `profile` or `linear` (`--intervals`).
     pub intervals: String,
     /// Why (`--intervals auto` records its estimate of the profiling cost).
@@ -316,7 +355,7 @@ pub struct OptionsRecord {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load: Option<String>,
     pub log_floored: Floored,
-    pub loss: String,
+    pub loss: Loss,
     /// The robust-loss scale used (normalised residual units).
     pub loss_scale: f64,
     /// True when `loss_scale` was estimated from the residuals (`--loss-scale auto`).
@@ -327,9 +366,9 @@ pub struct OptionsRecord {
     pub polish: usize,
     pub polish_iters: u64,
     /// `variable projection` or `explicit (robust loss)`.
-    pub scale: String,
+    pub scale: ScaleMethod,
     pub seed: u64,
-    pub space: String,
+    pub space: Space,
     pub start_iters: u64,
     pub starts: usize,
     /// Samples the multi-start used.
@@ -431,6 +470,54 @@ mod tests {
         sorted.sort();
         assert_eq!(written, sorted);
         assert_eq!(written.len(), 23);
+    }
+
+    /// Every fit.json shipped under `fits/` reads into the typed options and writes them back
+    /// with the file's own spellings (the typed enums changed no value on disk).
+    #[test]
+    fn shipped_fit_json_options_read_back_and_keep_their_spelling() {
+        let fits = Path::new(env!("CARGO_MANIFEST_DIR")).join("fits");
+        let mut read = 0;
+        for entry in std::fs::read_dir(&fits).unwrap() {
+            let path = entry.unwrap().path().join("fit.json");
+            if !path.is_file() {
+                continue;
+            }
+            let fit = FitJson::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let text = std::fs::read_to_string(&path).unwrap();
+            let on_disk: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let written = serde_json::to_value(&fit.options).unwrap();
+            for key in ["effects_choice", "global", "loss", "scale", "space", "mode"] {
+                assert_eq!(
+                    written[key],
+                    on_disk["options"][key],
+                    "{}: options.{key}",
+                    path.display()
+                );
+            }
+            read += 1;
+        }
+        assert!(read > 0, "no fit.json under {}", fits.display());
+    }
+
+    /// Unknown spellings are errors naming the field, not silently defaulted.
+    #[test]
+    fn an_unknown_option_spelling_is_an_error() {
+        let err = serde_json::from_str::<OptionsRecord>(r#"{"loss": "tukey"}"#).unwrap_err();
+        assert!(err.to_string().contains("tukey"), "{err}");
+        let ok: OptionsRecord =
+            serde_json::from_str(r#"{"loss": "soft-l1", "space": "linear", "global": "nelder-mead", "scale": "explicit (robust loss)", "effects_choice": "all"}"#)
+                .unwrap();
+        assert_eq!(
+            (ok.loss, ok.space, ok.global, ok.scale, ok.effects_choice),
+            (
+                Loss::SoftL1,
+                Space::Linear,
+                Global::NelderMead,
+                ScaleMethod::Explicit,
+                EffectsSource::All
+            )
+        );
     }
 
     /// A fit.json written before the load report was typed (the demo's five fields) still reads.

@@ -22,9 +22,9 @@ pub use crate::params::ParamFile;
 
 pub use curves::{read_curves_csv, write_curves_csv, CurveRow, CURVES_HEADER, DOWN_WEIGHT};
 pub use fit_json::{
-    ChannelResiduals, Correlation, DataInfo, DownWeighted, FitJson, FitStatus, Floored,
-    GofThresholds, GoodnessOfFit, Interval, OptionsRecord, ParamStatus, ParameterEntry,
-    ResidualSummary, ScaleEntry, Suggestion, TraceStage, Verdict,
+    ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource, FitJson, FitStatus,
+    Floored, GofThresholds, GoodnessOfFit, Interval, OptionsRecord, ParamStatus, ParameterEntry,
+    ResidualSummary, ScaleEntry, ScaleMethod, Suggestion, TraceStage, Verdict,
 };
 pub use load_report::{LineTally, LoadReport, RejectReason, FIRST_LINES};
 pub use timing::{StageTiming, Timing};

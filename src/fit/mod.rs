@@ -16,6 +16,7 @@ pub mod bounds;
 pub mod demo;
 pub mod design;
 pub mod diagnostics;
+pub mod fixes;
 pub mod gof;
 pub mod loss;
 pub mod problem;
@@ -31,7 +32,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
@@ -48,7 +49,6 @@ use crate::family::{FamilyParams, ModelFamily};
 use crate::files::{CurveRow, FitJson, Floored, LoadReport, OptionsRecord, Timing};
 use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
 use crate::params::ParamFile;
-use bounds::{report_factor, Bound};
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -66,7 +66,7 @@ pub enum EffectsChoice {
 }
 
 /// Optional global stage between the multi-start and the polish.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum Global {
     #[default]
@@ -193,66 +193,12 @@ pub use crate::model::parameters::fitted_parameters as free_parameters;
 
 /// Parse `--fix NAME=VALUE` items into natural-unit values (`sigma_a=v` fixes every channel).
 pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>> {
-    let mut out = Vec::new();
-    for item in items {
-        let (name, value) = item.split_once('=').ok_or_else(|| {
-            Error::Other(format!(
-                "--fix `{item}`: write NAME=VALUE, e.g. --fix eccentricity=1 or --fix alpha_r_deg=-7"
-            ))
-        })?;
-        let name = name.trim();
-        let v: f64 = value.trim().parse().map_err(|_| {
-            Error::Other(format!(
-                "--fix `{item}`: `{}` is not a number",
-                value.trim()
-            ))
-        })?;
-        let names: Vec<ParamName> = if name == "sigma_a" {
-            (0..nc).map(ParamName::SigmaA).collect()
-        } else {
-            match ParamName::from_json_name(name).filter(|p| all_parameters(nc).contains(p)) {
-                Some(p) => vec![p],
-                None => {
-                    let known: Vec<String> =
-                        all_parameters(nc).iter().map(|p| p.json_name()).collect();
-                    return Err(Error::Other(format!(
-                        "--fix `{item}`: unknown parameter `{name}`; use one of sigma_a, {}",
-                        known.join(", ")
-                    )));
-                }
-            }
-        };
-        for p in names {
-            let x = v / report_factor(p);
-            let b = Bound::of(p);
-            if !v.is_finite() || b.clamp(x) != x {
-                return Err(Error::Parameter {
-                    name: p.json_name(),
-                    value: v,
-                    message: format!("--fix value is outside the valid range {}", bound_text(p)),
-                });
-            }
-            if let Some((_, earlier)) = out.iter().find(|(q, _)| *q == p) {
-                return Err(Error::Other(format!(
-                    "--fix `{item}`: {} is already fixed (to {}) by an earlier --fix; give each parameter once",
-                    p.json_name(),
-                    earlier * report_factor(p)
-                )));
-            }
-            out.push((p, x));
-        }
-    }
-    Ok(out)
-}
-
-/// The valid range of `p` in reporting units, for messages.
-fn bound_text(p: ParamName) -> String {
-    let f = report_factor(p);
-    match Bound::of(p) {
-        Bound::Free => "(-inf, inf)".into(),
-        Bound::Lower(lo) => format!("[{}, inf)", lo * f),
-        Bound::Both(lo, hi) => format!("[{}, {}]", lo * f, hi * f),
-    }
+    fixes::parse_fixes(
+        items,
+        &all_parameters(nc),
+        "parameter",
+        "eccentricity=1 or --fix alpha_r_deg=-7",
+    )
 }
 
 /// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,

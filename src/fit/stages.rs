@@ -6,19 +6,21 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::bounds::{self, report_factor};
-use super::problem::{self, Evaluator, FitData, Forward};
+use super::bounds;
+pub use super::fixes::FreeSet;
+use super::problem::{self, Evaluator, FitData, FitParam, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
 use super::{choose_effects, free_parameters, parse_fixes, EffectsChoice, FitOptions, Global};
 use crate::error::Result;
-use crate::files::{FitStatus, Floored, OptionsRecord, StageTiming, TraceStage};
-use crate::model::{Effects, ModelConfig, ParamName, Params};
+use crate::files::{
+    EffectsSource, FitStatus, Floored, OptionsRecord, ScaleMethod, StageTiming, TraceStage,
+};
+use crate::model::{Effects, ModelConfig, ParamName};
 
 /// The model the fit uses and why.
 pub struct ModelChoice {
     pub config: ModelConfig,
-    /// `auto`, `all` or `explicit`.
-    pub effects_choice: &'static str,
+    pub effects_choice: EffectsSource,
     pub reasons: Vec<String>,
 }
 
@@ -27,12 +29,16 @@ pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
     let (effects, effects_choice, reasons) = match opts.effects {
         EffectsChoice::Auto => {
             let c = choose_effects(data, opts.mode);
-            (c.effects, "auto", c.reasons)
+            (c.effects, EffectsSource::Auto, c.reasons)
         }
-        EffectsChoice::All => (Effects::default(), "all", vec!["--effects all".into()]),
+        EffectsChoice::All => (
+            Effects::default(),
+            EffectsSource::All,
+            vec!["--effects all".into()],
+        ),
         EffectsChoice::Explicit(e) => (
             e,
-            "explicit",
+            EffectsSource::Explicit,
             vec!["--lobes/--no-glints/--no-eccentricity".into()],
         ),
     };
@@ -46,41 +52,21 @@ pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
     }
 }
 
-/// The parameters the fit varies and the values of the others.
-pub struct FreeSet {
-    /// `--fix` values in natural units.
-    pub fixes: Vec<(ParamName, f64)>,
-    /// Reference values with the fixes applied.
-    pub base: Params<f64>,
-    pub free: Vec<ParamName>,
-}
-
 /// Free parameters and the base (fixed) values; warns about parameters the effects ignore.
 pub fn free_set(
     effects: &Effects,
     nc: usize,
     opts: &FitOptions,
     warnings: &mut Vec<String>,
-) -> Result<FreeSet> {
-    let fixes = parse_fixes(&opts.fix, nc)?;
-    let mut base = bounds::reference_params(nc);
-    for &(p, x) in &fixes {
-        base.set(p, x);
-    }
-    let is_fixed = |p: &ParamName| fixes.iter().any(|(f, _)| f == p);
-    let free: Vec<ParamName> = free_parameters(effects, nc, opts.free_eta)
-        .into_iter()
-        .filter(|p| !is_fixed(p))
-        .collect();
-    for p in free_parameters(&Effects::default(), nc, opts.free_eta) {
-        if !effects.parameters(nc).contains(&p) && !is_fixed(&p) {
-            warnings.push(format!(
-                "{}: not fitted (the effects in play do not depend on it; see options.effects_reasons)",
-                p.json_name()
-            ));
-        }
-    }
-    Ok(FreeSet { fixes, base, free })
+) -> Result<FreeSet<ParamName>> {
+    Ok(FreeSet::new(
+        parse_fixes(&opts.fix, nc)?,
+        bounds::reference_params(nc),
+        free_parameters(effects, nc, opts.free_eta),
+        free_parameters(&Effects::default(), nc, opts.free_eta),
+        "the effects in play do not depend on it; see options.effects_reasons",
+        warnings,
+    ))
 }
 
 /// Warn about values a log-space fit takes as linear residuals.
@@ -374,21 +360,21 @@ pub fn final_status(
 }
 
 /// fit.json's record of every option the fit used.
-pub fn options_record(
+pub fn options_record<P: FitParam>(
     opts: &FitOptions,
     choice: &ModelChoice,
-    set: &FreeSet,
+    set: &FreeSet<P>,
     subsample: usize,
     explicit_scale: bool,
     floored: Floored,
 ) -> OptionsRecord {
     OptionsRecord {
-        effects_choice: choice.effects_choice.into(),
+        effects_choice: choice.effects_choice,
         effects_reasons: choice.reasons.clone(),
         fixed: set
             .fixes
             .iter()
-            .map(|(p, x)| (p.json_name(), x * report_factor(*p)))
+            .map(|(p, x)| (p.json_name(), x * p.report_factor()))
             .collect(),
         free_parameters: set.free.iter().map(|p| p.json_name()).collect(),
         freed: if opts.free_eta {
@@ -396,12 +382,12 @@ pub fn options_record(
         } else {
             vec![]
         },
-        global: opts.global.to_string(),
+        global: opts.global,
         intervals: opts.intervals.to_string(),
         intervals_reason: String::new(),
         load: None,
         log_floored: floored,
-        loss: opts.loss.to_string(),
+        loss: opts.loss,
         loss_scale: match opts.loss_scale {
             super::LossScale::Fixed(c) => c,
             super::LossScale::Auto => 1.0,
@@ -412,13 +398,12 @@ pub fn options_record(
         polish: opts.polish,
         polish_iters: opts.polish_iters,
         scale: if explicit_scale {
-            "explicit (robust loss)"
+            ScaleMethod::Explicit
         } else {
-            "variable projection"
-        }
-        .into(),
+            ScaleMethod::VariableProjection
+        },
         seed: opts.seed,
-        space: opts.space.to_string(),
+        space: opts.space,
         start_iters: opts.start_iters,
         starts: opts.starts,
         subsample,

@@ -30,6 +30,24 @@ impl Measurement {
             Measurement::Radiance => angles.theta_i.cos(),
         }
     }
+
+    /// Multiply each sample's block of `out` — `out.len() / angles.len()` numbers: its
+    /// channels' values, per-lobe values or derivative rows — by the factor at its angles. The
+    /// factor depends on θ_i only, so values and their derivatives scale alike.
+    pub fn apply<T: Clone + std::ops::Mul<f64, Output = T>>(
+        self,
+        angles: &[Angles],
+        out: &mut [T],
+    ) {
+        if self == Measurement::S || angles.is_empty() {
+            return;
+        }
+        let per_sample = out.len() / angles.len();
+        for (a, block) in angles.iter().zip(out.chunks_mut(per_sample.max(1))) {
+            let f = self.factor(a);
+            block.iter_mut().for_each(|v| *v = v.clone() * f);
+        }
+    }
 }
 
 impl FromStr for Measurement {
@@ -68,6 +86,21 @@ mod tests {
             assert_eq!(serde_json::from_str::<Measurement>(&json).unwrap(), m);
         }
         assert!("cos".parse::<Measurement>().is_err());
+    }
+
+    #[test]
+    fn apply_scales_each_samples_block_by_its_factor() {
+        let angles = [
+            Angles::from_degrees(0.0, 0.0, 10.0, 20.0),
+            Angles::from_degrees(60.0, 0.0, 10.0, 20.0),
+        ];
+        let mut v = [1.0, 2.0, 1.0, 2.0];
+        Measurement::S.apply(&angles, &mut v);
+        assert_eq!(v, [1.0, 2.0, 1.0, 2.0]);
+        Measurement::Radiance.apply(&angles, &mut v);
+        let c = Measurement::Radiance.factor(&angles[1]);
+        assert_eq!(v, [1.0, 2.0, c, 2.0 * c]);
+        Measurement::Radiance.apply(&angles, &mut [0.0f64; 0]);
     }
 
     #[test]

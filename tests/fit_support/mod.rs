@@ -1,5 +1,6 @@
 //! Shared helpers of the fit tests: seeded parameter sets over MODEL.md's typical ranges, rig
-//! geometries, and noise-free / noisy synthetic data from the model itself.
+//! geometries, noise-free / noisy synthetic data from the model itself, and data synthesized
+//! through `hairfit::synth` from rig and noise specs (as `hairfit synth` would).
 #![allow(dead_code)]
 
 use hairfit::fit::demo::synthesize;
@@ -120,4 +121,21 @@ pub fn wide_params(seed: u64, nc: usize) -> Params<f64> {
         delta_eta_prime: 0.3,
         delta_h_m: 0.5,
     }
+}
+
+/// `truth` synthesized through `hairfit::synth` on `rig` (a `--rig` spec) with `noise` (a
+/// `--noise` spec) and one channel scale `scale`, loaded as fit data.
+pub fn synthesized(truth: &Params<f64>, rig: &str, noise: &str, scale: f64, seed: u64) -> FitData {
+    use hairfit::synth::{Noise, Rig};
+    let (ds, _) = hairfit::synth::synthesize(
+        truth,
+        &ModelConfig::default(),
+        &Rig::parse(rig).unwrap(),
+        &Noise::parse(noise).unwrap(),
+        &[scale],
+        hairfit::model::Measurement::S,
+        seed,
+    )
+    .unwrap();
+    hairfit::fit::fit_data(&ds)
 }

@@ -1,18 +1,22 @@
-//! Shared helpers of the hard-fit and reliability tests: running the binary with a deadline,
-//! writing data CSVs, and checking a fit's output directory (finite text, bounds, no temp files).
+//! Shared helpers of the hard-fit and reliability tests: running the binary with a deadline (the
+//! shared `support/cli.rs`, as `hard_common::cli`), writing data CSVs, and checking a fit's output
+//! directory (finite text, bounds, no temp files).
 
 #![allow(dead_code)]
 
 use hairfit::params::ParameterFile as _;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Child, Command, ExitStatus, Output};
+use std::time::Duration;
 
 use hairfit::fit::all_parameters;
 use hairfit::fit::bounds::{report_factor, Bound};
 use hairfit::fit::problem::FitData;
 
-/// How a child process ended.
+#[path = "../support/cli.rs"]
+pub mod cli;
+
+/// How a child process ended, its output as text.
 pub struct Finished {
     pub status: ExitStatus,
     pub stdout: String,
@@ -20,51 +24,36 @@ pub struct Finished {
     pub wall: Duration,
 }
 
-/// Wait for `child` at most `limit`; a child still running then is killed and the test fails
-/// (a hang is a bug, not a slow pass).
-pub fn wait_with_deadline(mut child: Child, limit: Duration, what: &str) -> Finished {
-    let t0 = Instant::now();
-    loop {
-        match child.try_wait().expect("try_wait") {
-            Some(status) => {
-                let out = child.wait_with_output().expect("collect output");
-                return Finished {
-                    status,
-                    stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
-                    stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
-                    wall: t0.elapsed(),
-                };
-            }
-            None if t0.elapsed() > limit => {
-                let _ = child.kill();
-                let _ = child.wait();
-                panic!("{what}: still running after {limit:?} (hang?)");
-            }
-            None => std::thread::sleep(Duration::from_millis(20)),
+impl From<(Output, Duration)> for Finished {
+    fn from((out, wall): (Output, Duration)) -> Self {
+        Finished {
+            status: out.status,
+            stdout: cli::stdout(&out),
+            stderr: cli::stderr(&out),
+            wall,
         }
     }
 }
 
-/// `hairfit ARGS…` with piped output, environment `env` added.
+/// Wait for `child` at most `limit` ([`cli::wait_within`]).
+pub fn wait_with_deadline(child: Child, limit: Duration, what: &str) -> Finished {
+    cli::wait_within(child, limit, what).into()
+}
+
+/// `hairfit ARGS…` started with piped output, environment `env` added.
 pub fn spawn_hairfit(args: &[&str], env: &[(&str, &str)]) -> Child {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_hairfit"));
-    cmd.args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    cmd.spawn().expect("the hairfit binary starts")
+    cli::spawn(command(args, env))
 }
 
 /// Run `hairfit ARGS…` to completion within `limit`.
 pub fn run_hairfit(args: &[&str], env: &[(&str, &str)], limit: Duration) -> Finished {
-    wait_with_deadline(
-        spawn_hairfit(args, env),
-        limit,
-        &format!("hairfit {}", args.join(" ")),
-    )
+    cli::run_within(command(args, env), limit).into()
+}
+
+fn command(args: &[&str], env: &[(&str, &str)]) -> Command {
+    let mut cmd = cli::hairfit_command(args);
+    cmd.envs(env.iter().copied());
+    cmd
 }
 
 /// Write `data`'s angles and values as a loader CSV through hairfit's own writer (unweighted:

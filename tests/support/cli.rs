@@ -6,7 +6,7 @@
 #![allow(dead_code)] // each test crate uses a different subset
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 /// Longest any single command may run in the default suite before its test fails (generous:
@@ -30,17 +30,24 @@ pub fn hairfit_command(args: &[&str]) -> Command {
     c
 }
 
-/// Run `command`; kill it and fail the test after `limit`. Returns the output and the time.
-pub fn run_within(mut command: Command, limit: Duration) -> (Output, Duration) {
-    let start = Instant::now();
-    let mut child = command
+/// Start `command` with piped output and no input, for tests that act on the running process
+/// (signals, locks); finish it with [`wait_within`].
+pub fn spawn(mut command: Command) -> Child {
+    command
+        .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("the hairfit binary starts");
+        .expect("the hairfit binary starts")
+}
+
+/// Wait for `child` at most `limit`; one still running then is killed and the test fails naming
+/// `what` (a hang is a bug, not a slow pass). Returns the output and the time waited.
+pub fn wait_within(mut child: Child, limit: Duration, what: &str) -> (Output, Duration) {
+    let start = Instant::now();
     // Drain the pipes on threads so a chatty child cannot block on a full pipe.
-    let mut stdout = child.stdout.take().unwrap();
-    let mut stderr = child.stderr.take().unwrap();
+    let mut stdout = child.stdout.take().expect("stdout is piped");
+    let mut stderr = child.stderr.take().expect("stderr is piped");
     let out_thread = std::thread::spawn(move || {
         let mut v = Vec::new();
         std::io::Read::read_to_end(&mut stdout, &mut v).ok();
@@ -58,7 +65,7 @@ pub fn run_within(mut command: Command, limit: Duration) -> (Output, Duration) {
         if start.elapsed() > limit {
             child.kill().ok();
             child.wait().ok();
-            panic!("{command:?} still running after {limit:?}");
+            panic!("{what}: still running after {limit:?} (hang?)");
         }
         std::thread::sleep(Duration::from_millis(10));
     };
@@ -69,6 +76,12 @@ pub fn run_within(mut command: Command, limit: Duration) -> (Output, Duration) {
         stderr: err_thread.join().unwrap(),
     };
     (output, elapsed)
+}
+
+/// Run `command`; kill it and fail the test after `limit`. Returns the output and the time.
+pub fn run_within(command: Command, limit: Duration) -> (Output, Duration) {
+    let what = format!("{command:?}");
+    wait_within(spawn(command), limit, &what)
 }
 
 /// Run hairfit with `args`; kill it and fail after `limit`.
@@ -113,6 +126,17 @@ pub fn assert_fails_with(out: &Output, needles: &[&str]) {
     for n in needles {
         assert!(err.contains(n), "stderr lacks `{n}`: {err}");
     }
+}
+
+/// The stderr of `out`, after failing the test unless it exited non-zero (for errors whose exit
+/// code the test does not pin).
+pub fn failed(out: &Output) -> String {
+    assert!(
+        !out.status.success(),
+        "hairfit should have failed; stdout: {}",
+        stdout(out)
+    );
+    stderr(out)
 }
 
 /// Write `content` to `dir/name` and return the path.

@@ -2,7 +2,7 @@
 //! (log-space values that are not significantly positive become linear residuals), and the
 //! mapping between solver parameters and natural parameter values.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::forward::{FitParam, Forward, ParamSet};
 use super::residual::{Evaluation, ScaleMode};
@@ -12,7 +12,7 @@ use crate::fit::loss::Loss;
 use crate::model::Angles;
 
 /// Residual space.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Space {
     /// `w (y − s·S)`.

@@ -100,12 +100,9 @@ impl ModelForward {
         let nc = p.sigma_a.len();
         for (a, o) in angles.iter().zip(out.chunks_mut(nc)) {
             scattering(p, &self.config, a, o);
-            // The factor depends on θ_i only, so values and derivatives scale alike.
-            if self.measurement != Measurement::S {
-                let f = self.measurement.factor(a);
-                o.iter_mut().for_each(|v| *v = v.clone() * f);
-            }
         }
+        self.measurement
+            .apply(angles, &mut out[..angles.len() * nc]);
     }
 }
 
@@ -146,8 +143,8 @@ impl Forward for ModelForward {
     }
     fn by_lobe(&self, p: &Params<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
         scattering_by_lobe(p, &self.config, angles, out);
-        let f = self.measurement.factor(angles);
-        out.iter_mut().flatten().for_each(|v| *v *= f);
+        self.measurement
+            .apply(std::slice::from_ref(angles), out.as_flattened_mut());
         true
     }
 }

@@ -1,0 +1,182 @@
+//! `--fix NAME=VALUE` and the free set for either model family: names, reporting units and
+//! bounds come from the family's parameter table through [`FitParam`], so both families parse,
+//! check and report fixes one way.
+
+use crate::error::{Error, Result};
+use crate::fit::bounds::Bound;
+use crate::fit::problem::FitParam;
+
+/// Parse `--fix NAME=VALUE` items (reporting units; `sigma_a=v` fixes every channel) into
+/// natural-unit values inside the fit bounds. `all` is the family's parameters, `what` names
+/// them in errors (`parameter`, `Chiang parameter`), `example` is a valid item for the hint.
+pub fn parse_fixes<P: FitParam>(
+    items: &[String],
+    all: &[P],
+    what: &str,
+    example: &str,
+) -> Result<Vec<(P, f64)>> {
+    let mut out: Vec<(P, f64)> = Vec::new();
+    for item in items {
+        let (name, value) = item.split_once('=').ok_or_else(|| {
+            Error::Other(format!(
+                "--fix `{item}`: write NAME=VALUE, e.g. --fix {example}"
+            ))
+        })?;
+        let name = name.trim();
+        let v: f64 = value.trim().parse().map_err(|_| {
+            Error::Other(format!(
+                "--fix `{item}`: `{}` is not a number",
+                value.trim()
+            ))
+        })?;
+        let names: Vec<P> = if name == "sigma_a" {
+            // Per-channel absorption is `sigma_a[c]` in both families.
+            all.iter()
+                .copied()
+                .filter(|p| p.json_name().starts_with("sigma_a["))
+                .collect()
+        } else {
+            match all.iter().find(|p| p.json_name() == name) {
+                Some(&p) => vec![p],
+                None => {
+                    let known: Vec<String> = all.iter().map(|p| p.json_name()).collect();
+                    return Err(Error::Other(format!(
+                        "--fix `{item}`: unknown {what} `{name}`; use one of sigma_a, {}",
+                        known.join(", ")
+                    )));
+                }
+            }
+        };
+        for p in names {
+            let x = v / p.report_factor();
+            if !v.is_finite() || p.bound().clamp(x) != x {
+                return Err(Error::Parameter {
+                    name: p.json_name(),
+                    value: v,
+                    message: format!("--fix value is outside the valid range {}", bound_text(p)),
+                });
+            }
+            if let Some((_, earlier)) = out.iter().find(|(q, _)| *q == p) {
+                return Err(Error::Other(format!(
+                    "--fix `{item}`: {} is already fixed (to {}) by an earlier --fix; give each parameter once",
+                    p.json_name(),
+                    earlier * p.report_factor()
+                )));
+            }
+            out.push((p, x));
+        }
+    }
+    Ok(out)
+}
+
+/// The valid range of `p` in reporting units, for messages.
+fn bound_text<P: FitParam>(p: P) -> String {
+    let f = p.report_factor();
+    match p.bound() {
+        Bound::Free => "(-inf, inf)".into(),
+        Bound::Lower(lo) => format!("[{}, inf)", lo * f),
+        Bound::Both(lo, hi) => format!("[{}, {}]", lo * f, hi * f),
+    }
+}
+
+/// The parameters a fit varies and the values of the others.
+pub struct FreeSet<P: FitParam> {
+    /// `--fix` values in natural units.
+    pub fixes: Vec<(P, f64)>,
+    /// Reference values with the fixes applied.
+    pub base: P::Set,
+    pub free: Vec<P>,
+}
+
+impl<P: FitParam> FreeSet<P> {
+    /// `reference` with `fixes` applied; free: the `candidates` (what the effects in play use)
+    /// not fixed. Each parameter of `every` (what all effects would use) that is neither a
+    /// candidate nor fixed gets a warning `NAME: not fitted (why)`.
+    pub fn new(
+        fixes: Vec<(P, f64)>,
+        mut reference: P::Set,
+        candidates: Vec<P>,
+        every: Vec<P>,
+        why: &str,
+        warnings: &mut Vec<String>,
+    ) -> Self {
+        for &(p, x) in &fixes {
+            p.set(&mut reference, x);
+        }
+        let is_fixed = |p: &P| fixes.iter().any(|(f, _)| f == p);
+        for p in &every {
+            if !candidates.contains(p) && !is_fixed(p) {
+                warnings.push(format!("{}: not fitted ({why})", p.json_name()));
+            }
+        }
+        let free = candidates.into_iter().filter(|p| !is_fixed(p)).collect();
+        FreeSet {
+            fixes,
+            base: reference,
+            free,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::chiang::ChiangParamName;
+    use crate::model::ParamName;
+
+    fn items(v: &[&str]) -> Vec<String> {
+        v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn sigma_a_fixes_every_channel_and_degrees_convert() {
+        let all = crate::fit::all_parameters(3);
+        let fixes = parse_fixes(
+            &items(&["sigma_a=0.5", "alpha_r_deg=-7"]),
+            &all,
+            "parameter",
+            "",
+        )
+        .unwrap();
+        let names: Vec<String> = fixes.iter().map(|(p, _)| p.json_name()).collect();
+        assert_eq!(
+            names,
+            ["sigma_a[0]", "sigma_a[1]", "sigma_a[2]", "alpha_r_deg"]
+        );
+        assert_eq!(fixes[3].0, ParamName::AlphaR);
+        assert!((fixes[3].1 - (-7f64).to_radians()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn errors_name_the_item_and_the_family() {
+        let all = crate::chiang::fit::all_parameters(1);
+        let e = |v: &[&str]| {
+            parse_fixes::<ChiangParamName>(&items(v), &all, "Chiang parameter", "beta_n=0.3")
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(e(&["beta_n"]).contains("e.g. --fix beta_n=0.3"));
+        assert!(e(&["k_g=2"]).contains("unknown Chiang parameter `k_g`"));
+        assert!(e(&["beta_n=x"]).contains("`x` is not a number"));
+        assert!(e(&["beta_n=0.3", "beta_n=0.4"]).contains("already fixed (to 0.3)"));
+        assert!(e(&["beta_n=1e9"]).contains("outside the valid range"));
+    }
+
+    #[test]
+    fn the_free_set_drops_fixed_and_warns_about_unused_parameters() {
+        let all = crate::fit::all_parameters(1);
+        let fixes = parse_fixes(&items(&["k_g=2"]), &all, "parameter", "").unwrap();
+        let mut warnings = Vec::new();
+        let set = FreeSet::new(
+            fixes,
+            crate::fit::bounds::reference_params(1),
+            vec![ParamName::SigmaA(0), ParamName::KG],
+            vec![ParamName::SigmaA(0), ParamName::KG, ParamName::WC],
+            "why",
+            &mut warnings,
+        );
+        assert_eq!(set.free, [ParamName::SigmaA(0)]);
+        assert_eq!(set.base.k_g, 2.0);
+        assert_eq!(warnings, ["w_c_deg: not fitted (why)"]);
+    }
+}
