@@ -129,7 +129,22 @@ pub fn local_solver() -> crate::lm::LevenbergMarquardt {
         .unwrap_or_default()
 }
 
-/// Run the local solver from `u0` for at most `max_iters` iterations.
+/// Records the parameters after every iteration, so a run stopped by an error mid-iteration
+/// (a cancelled linearisation) still hands back where it was.
+struct ParamTrace(Arc<Mutex<Option<Vec<f64>>>>);
+
+impl Observe<LsqState> for ParamTrace {
+    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+        let best = state.get_best_param().or(state.get_param());
+        if let (Ok(mut slot), Some(p)) = (self.0.lock(), best) {
+            *slot = Some(p.as_slice().to_vec());
+        }
+        Ok(())
+    }
+}
+
+/// Run the local solver from `u0` for at most `max_iters` iterations. A raised `cancel` stops it
+/// within one chunk of samples, with the best point reached so far.
 pub fn run_local<F: Forward>(
     ev: &Evaluator<'_, F>,
     u0: &[f64],
@@ -137,8 +152,10 @@ pub fn run_local<F: Forward>(
     cancel: &Option<Arc<AtomicBool>>,
 ) -> LocalRun {
     let t0 = Instant::now();
-    let start_cost = ev.eval_internal(u0, false).cost();
+    let full_cost = |u: &[f64]| ev.cost_internal(u, None).unwrap_or(f64::INFINITY);
+    let start_cost = full_cost(u0);
     let history = Arc::new(Mutex::new(Vec::new()));
+    let last = Arc::new(Mutex::new(None));
     let solver = Cancellable {
         inner: local_solver(),
         flag: cancel.clone(),
@@ -147,9 +164,14 @@ pub fn run_local<F: Forward>(
             .saturating_sub(ev.n_params() + ev.n_channels),
         costs: Vec::new(),
     };
-    let result = Executor::new(LsqProblem { ev }, solver)
+    let problem = LsqProblem {
+        ev,
+        cancel: cancel.clone(),
+    };
+    let result = Executor::new(problem, solver)
         .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
         .add_observer(CostTrace(history.clone()), ObserverMode::Always)
+        .add_observer(ParamTrace(last.clone()), ObserverMode::Always)
         .run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
     let (u, iterations, status) = match result {
@@ -169,9 +191,15 @@ pub fn run_local<F: Forward>(
             };
             (u, st.get_iter(), status)
         }
+        // Cancelled inside a linearisation: the last iterate observed.
+        Err(_) if is_cancelled(cancel) => {
+            let u = last.lock().ok().and_then(|l| l.clone());
+            let u = u.unwrap_or_else(|| u0.to_vec());
+            (u, history.len() as u64, RunStatus::Interrupted)
+        }
         Err(_) => (u0.to_vec(), 0, RunStatus::Failed),
     };
-    let cost = ev.eval_internal(&u, false).cost();
+    let cost = full_cost(&u);
     // Never hand back a point worse than the start (a failed run keeps the start).
     let (u, cost) = if cost.is_finite() && cost <= start_cost || !start_cost.is_finite() {
         (u, cost)
