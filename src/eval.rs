@@ -4,7 +4,6 @@
 //! stays bounded whatever the row count. Output files are written atomically: an error on any row
 //! leaves no output file behind.
 
-use std::fmt::Write as _;
 use std::io::{Read, Write};
 use std::path::Path;
 
@@ -190,17 +189,20 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
                 request,
             ));
         }
-        let mut buffer = String::with_capacity(32);
+        // Input fields pass through as bytes; values are appended with ryu's shortest round-trip
+        // digits (no String per value, no record copy).
+        let mut digits = ryu::Buffer::new();
         for (record, vals) in records.iter().zip(values.chunks(n_channels)) {
-            let mut out = record.clone();
-            for v in vals {
-                buffer.clear();
-                // `{:?}` is the shortest text that round-trips an f64, with an exponent when needed.
-                write!(buffer, "{v:?}").expect("writing to a String cannot fail");
-                out.push_field(buffer.as_bytes());
+            for field in record.iter() {
+                writer.write_field(field).map_err(|e| write_error(&e))?;
+            }
+            for &v in vals {
+                writer
+                    .write_field(digits.format_finite(v))
+                    .map_err(|e| write_error(&e))?;
             }
             writer
-                .write_byte_record(&out)
+                .write_record(None::<&[u8]>)
                 .map_err(|e| write_error(&e))?;
         }
         rows += records.len() as u64;

@@ -102,6 +102,16 @@ fn interrupt_after(data: &Path, out: &Path, delay: Duration) -> (Finished, Durat
     (f, t.elapsed())
 }
 
+/// One-minute load average per core (at least 1): how many runnable threads share each core.
+fn oversubscription() -> f64 {
+    let load: f64 = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0.0);
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    (load / cores).max(1.0)
+}
+
 #[test]
 fn sigint_writes_a_complete_interrupted_fit_and_never_a_partial_file() {
     let dir = tempfile::tempdir().unwrap();
@@ -140,10 +150,13 @@ fn sigint_writes_a_complete_interrupted_fit_and_never_a_partial_file() {
     // Stopping is prompt: the running LM iterations finish, one polish initialisation, the
     // covariance and ~300k curve rows. Measured 1.9 s alone, 3.8 s beside the other tests of this
     // file on the shared 2-core machine (7.4–10.9 s before queued multi-start runs were skipped
-    // after the signal); 8 s leaves 2× for load from other processes.
+    // after the signal); 8 s leaves 2× for load from other processes. The passes over the data
+    // check the flag per chunk, so the bound scales with how oversubscribed the machine is (a
+    // load of 12 on 2 cores gives the fit a sixth of its CPU): wall time, not work, is measured.
+    let allowed = Duration::from_secs_f64(8.0 * oversubscription());
     assert!(
-        stop < Duration::from_secs(8),
-        "took {stop:?} to stop after SIGINT"
+        stop < allowed,
+        "took {stop:?} to stop after SIGINT (allowed {allowed:?})"
     );
     let first = std::fs::read_to_string(out.join("fit.json")).unwrap();
 

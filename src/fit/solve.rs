@@ -143,6 +143,20 @@ impl Observe<LsqState> for ParamTrace {
     }
 }
 
+/// Shows a long run's iteration and cost as the progress bar's message.
+struct IterationMessage(indicatif::ProgressBar);
+
+impl Observe<LsqState> for IterationMessage {
+    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+        self.0.set_message(format!(
+            "polish: iteration {}, cost {:.6e}",
+            state.get_iter(),
+            state.get_best_cost()
+        ));
+        Ok(())
+    }
+}
+
 /// Run the local solver from `u0` for at most `max_iters` iterations. A raised `cancel` stops it
 /// within one chunk of samples, with the best point reached so far.
 pub fn run_local<F: Forward>(
@@ -150,6 +164,18 @@ pub fn run_local<F: Forward>(
     u0: &[f64],
     max_iters: u64,
     cancel: &Option<Arc<AtomicBool>>,
+) -> LocalRun {
+    run_local_with_progress(ev, u0, max_iters, cancel, None)
+}
+
+/// [`run_local`], showing each iteration and its cost on `progress` (the polish on all data can
+/// take minutes on millions of samples).
+pub fn run_local_with_progress<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    u0: &[f64],
+    max_iters: u64,
+    cancel: &Option<Arc<AtomicBool>>,
+    progress: Option<&indicatif::ProgressBar>,
 ) -> LocalRun {
     let t0 = Instant::now();
     let full_cost = |u: &[f64]| ev.cost_internal(u, None).unwrap_or(f64::INFINITY);
@@ -168,11 +194,14 @@ pub fn run_local<F: Forward>(
         ev,
         cancel: cancel.clone(),
     };
-    let result = Executor::new(problem, solver)
+    let mut executor = Executor::new(problem, solver)
         .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
         .add_observer(CostTrace(history.clone()), ObserverMode::Always)
-        .add_observer(ParamTrace(last.clone()), ObserverMode::Always)
-        .run();
+        .add_observer(ParamTrace(last.clone()), ObserverMode::Always);
+    if let Some(bar) = progress {
+        executor = executor.add_observer(IterationMessage(bar.clone()), ObserverMode::Always);
+    }
+    let result = executor.run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
     let (u, iterations, status) = match result {
         Ok(res) => {

@@ -292,7 +292,8 @@ pub fn polish(
         if is_cancelled(&opts.cancel) && best.is_some() {
             break;
         }
-        let r = run_local(ev_full, u0, opts.polish_iters, &opts.cancel);
+        let r =
+            solve::run_local_with_progress(ev_full, u0, opts.polish_iters, &opts.cancel, Some(bar));
         iterations += r.iterations;
         bar.inc(1);
         if best.as_ref().is_none_or(|b| r.cost < b.cost) {
@@ -384,7 +385,7 @@ pub fn progress_bar(opts: &FitOptions, len: usize) -> indicatif::ProgressBar {
     }
     let bar = indicatif::ProgressBar::new(len as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("fit {bar:30} {pos}/{len} runs {elapsed}")
+        indicatif::ProgressStyle::with_template("fit {bar:30} {pos}/{len} runs {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar

@@ -120,35 +120,43 @@ fn triangle(a: DMatrix<f64>) -> DMatrix<f64> {
 }
 
 impl<F: Forward> Evaluator<'_, F> {
+    /// Model values of every row (sample-major), in chunks; `None` when cancelled.
+    fn model_values(&self, p: &Params<f64>, cancel: Option<&AtomicBool>) -> Option<Vec<f64>> {
+        let nc = self.n_channels;
+        let mut model = vec![0.0; self.angles.len() * nc];
+        let done: Vec<bool> = model
+            .par_chunks_mut(CHUNK * nc)
+            .zip(self.angles.par_chunks(CHUNK))
+            .map(|(m, a)| {
+                if cancelled(cancel) {
+                    return false;
+                }
+                self.forward.values(p, a, m);
+                true
+            })
+            .collect();
+        done.iter().all(|&d| d).then_some(model)
+    }
+
     /// Per-channel scale in the fit space (`s` linear, `ln s` log) for `mode`; the projected one
-    /// by the same sums, in the same order, as [`Evaluator::evaluate`]. `None` when cancelled.
-    fn scale_q(
-        &self,
-        p: &Params<f64>,
-        mode: ScaleMode<'_>,
-        cancel: Option<&AtomicBool>,
-    ) -> Option<Vec<f64>> {
+    /// from the model values `model`, by the same sums in the same order as
+    /// [`Evaluator::evaluate`].
+    fn scale_q(&self, model: &[f64], mode: ScaleMode<'_>) -> Vec<f64> {
         let nc = self.n_channels;
         match mode {
-            ScaleMode::ExplicitLog(ls) => Some(match self.space {
+            ScaleMode::ExplicitLog(ls) => match self.space {
                 Space::Linear => ls.iter().map(|v| v.exp()).collect(),
                 Space::Log => ls.to_vec(),
-            }),
-            ScaleMode::FixedNatural(s) => Some(match self.space {
+            },
+            ScaleMode::FixedNatural(s) => match self.space {
                 Space::Linear => s.to_vec(),
                 Space::Log => s.iter().map(|v| v.max(MODEL_FLOOR).ln()).collect(),
-            }),
+            },
             ScaleMode::Projected => {
-                let partial: Vec<Option<Vec<f64>>> = self
-                    .angles
-                    .par_chunks(CHUNK)
+                let partial: Vec<Vec<f64>> = model
+                    .par_chunks(CHUNK * nc)
                     .enumerate()
-                    .map(|(ci, a)| {
-                        if cancelled(cancel) {
-                            return None;
-                        }
-                        let mut m = vec![0.0; a.len() * nc];
-                        self.forward.values(p, a, &mut m);
+                    .map(|(ci, m)| {
                         let mut acc = vec![0.0; nc * 2];
                         let lo = ci * CHUNK * nc;
                         for (i, &mk) in m.iter().enumerate() {
@@ -170,27 +178,25 @@ impl<F: Forward> Evaluator<'_, F> {
                                 }
                             }
                         }
-                        Some(acc)
+                        acc
                     })
                     .collect();
                 let mut tot = vec![0.0; nc * 2];
                 for part in partial {
-                    for (t, v) in tot.iter_mut().zip(part?) {
+                    for (t, v) in tot.iter_mut().zip(part) {
                         *t += v;
                     }
                 }
-                Some(
-                    (0..nc)
-                        .map(|c| {
-                            let (a0, a1) = (tot[2 * c], tot[2 * c + 1]);
-                            match self.space {
-                                Space::Linear if a1 != 0.0 => a0 / a1,
-                                Space::Log if a0 != 0.0 => a1 / a0,
-                                _ => 0.0,
-                            }
-                        })
-                        .collect(),
-                )
+                (0..nc)
+                    .map(|c| {
+                        let (a0, a1) = (tot[2 * c], tot[2 * c + 1]);
+                        match self.space {
+                            Space::Linear if a1 != 0.0 => a0 / a1,
+                            Space::Log if a0 != 0.0 => a1 / a0,
+                            _ => 0.0,
+                        }
+                    })
+                    .collect()
             }
         }
     }
@@ -223,37 +229,26 @@ impl<F: Forward> Evaluator<'_, F> {
         } else {
             ScaleMode::Projected
         };
-        let sq = self.scale_q(&p, mode, cancel)?;
+        let model = self.model_values(&p, cancel)?;
+        let sq = self.scale_q(&model, mode);
         let s = self.natural_scale(&sq);
         let nc = self.n_channels;
-        let partial: Vec<Option<f64>> = self
-            .angles
-            .par_chunks(CHUNK)
+        let partial: Vec<f64> = model
+            .par_chunks(CHUNK * nc)
             .enumerate()
-            .map(|(ci, a)| {
-                if cancelled(cancel) {
-                    return None;
-                }
-                let mut m = vec![0.0; a.len() * nc];
-                self.forward.values(&p, a, &mut m);
+            .map(|(ci, m)| {
                 let lo = ci * CHUNK * nc;
-                Some(
-                    m.iter()
-                        .enumerate()
-                        .map(|(i, &mk)| {
-                            let c = (lo + i) % nc;
-                            let r = self.row_residual(lo + i, mk, sq[c], s[c]).0;
-                            r * r
-                        })
-                        .sum::<f64>(),
-                )
+                m.iter()
+                    .enumerate()
+                    .map(|(i, &mk)| {
+                        let c = (lo + i) % nc;
+                        let r = self.row_residual(lo + i, mk, sq[c], s[c]).0;
+                        r * r
+                    })
+                    .sum::<f64>()
             })
             .collect();
-        let mut total = 0.0;
-        for part in partial {
-            total += part?;
-        }
-        Some(0.5 * total)
+        Some(0.5 * partial.iter().sum::<f64>())
     }
 
     fn natural_scale(&self, sq: &[f64]) -> Vec<f64> {
@@ -325,7 +320,10 @@ impl<F: Forward> Evaluator<'_, F> {
         let nc = self.n_channels;
         let nf = self.free.len();
         let p = self.params_at(x);
-        let sq = self.scale_q(&p, mode, cancel)?;
+        let sq = match mode {
+            ScaleMode::Projected => self.scale_q(&self.model_values(&p, cancel)?, mode),
+            _ => self.scale_q(&[], mode),
+        };
         let s = self.natural_scale(&sq);
         let projected = matches!(mode, ScaleMode::Projected);
         let nl = layout.n_local();
