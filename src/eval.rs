@@ -144,16 +144,20 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
 
     let n_channels = request.params.sigma_a.len().max(1);
     let chunk_rows = (CHUNK_VALUES / n_channels).clamp(1, CHUNK_ROWS);
-    let mut records: Vec<csv::ByteRecord> = Vec::with_capacity(chunk_rows);
+    // Records are reused chunk after chunk: a fresh record per row cost a malloc/free pair per
+    // row, ~17% of eval's time.
+    let mut pool: Vec<csv::ByteRecord> = Vec::with_capacity(chunk_rows);
     let mut angles: Vec<Angles> = Vec::with_capacity(chunk_rows);
     let mut values: Vec<f64> = Vec::with_capacity(chunk_rows * n_channels);
     let mut rows = 0u64;
-    let mut spare = csv::ByteRecord::new();
     loop {
-        records.clear();
         angles.clear();
-        while records.len() < chunk_rows {
-            match reader.read_byte_record(&mut spare) {
+        let mut filled = 0;
+        while filled < chunk_rows {
+            if filled == pool.len() {
+                pool.push(csv::ByteRecord::new());
+            }
+            match reader.read_byte_record(&mut pool[filled]) {
                 Ok(true) => {}
                 Ok(false) => break,
                 Err(e) => {
@@ -165,12 +169,13 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
             angles.push(parse_angles(
                 source,
                 line,
-                &spare,
+                &pool[filled],
                 &angle_index,
                 &header_names,
             )?);
-            records.push(std::mem::take(&mut spare));
+            filled += 1;
         }
+        let records = &pool[..filled];
         if records.is_empty() {
             break;
         }
@@ -183,7 +188,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         if let Some(j) = values.iter().position(|v| !v.is_finite()) {
             return Err(non_finite_error(
                 source,
-                &records,
+                records,
                 j / n_channels,
                 values[j],
                 request,
