@@ -70,6 +70,88 @@ where
     Ok(())
 }
 
+/// Files written under temporary names beside their targets, then published together by
+/// [`StagedFiles::publish`]: every target is replaced, or (on an error) none is. For files that
+/// must agree, e.g. a synthesized CSV and its truth sidecar.
+#[derive(Default)]
+pub struct StagedFiles {
+    /// (temporary path, target), in publishing order.
+    pairs: Vec<(PathBuf, PathBuf)>,
+    _in_flight: Vec<InFlight>,
+}
+
+/// A fresh `.hairfit-NAME-PID-N.tmp` path beside `target` (`what` tells its role apart).
+fn temporary_beside(target: &Path, what: &str) -> PathBuf {
+    static COUNT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    target.with_file_name(format!(
+        ".hairfit-{name}-{}-{n}{what}.tmp",
+        std::process::id()
+    ))
+}
+
+impl StagedFiles {
+    pub fn new() -> StagedFiles {
+        StagedFiles::default()
+    }
+
+    /// Where to write `target` (with any writer, atomic or not) before [`StagedFiles::publish`].
+    pub fn stage(&mut self, target: &Path) -> PathBuf {
+        let tmp = temporary_beside(target, "");
+        self._in_flight.push(InFlight::new(&tmp));
+        self.pairs.push((tmp.clone(), target.to_path_buf()));
+        tmp
+    }
+
+    /// Rename every staged file onto its target. If one rename fails, the targets already
+    /// replaced get their old content back (kept as hard links until the end) and the error is
+    /// returned.
+    pub fn publish(mut self) -> Result<()> {
+        let mut backups: Vec<Option<PathBuf>> = Vec::new();
+        for (_, target) in &self.pairs {
+            let backup = temporary_beside(target, ".old");
+            let kept = std::fs::hard_link(target, &backup).is_ok();
+            if kept {
+                self._in_flight.push(InFlight::new(&backup));
+            }
+            backups.push(kept.then_some(backup));
+        }
+        let mut result = Ok(());
+        for (i, (tmp, target)) in self.pairs.iter().enumerate() {
+            if let Err(e) = std::fs::rename(tmp, target) {
+                for (j, (_, done)) in self.pairs.iter().enumerate().take(i) {
+                    match &backups[j] {
+                        Some(b) => {
+                            let _ = std::fs::rename(b, done);
+                        }
+                        None => {
+                            let _ = std::fs::remove_file(done);
+                        }
+                    }
+                }
+                result = Err(Error::io(target, e));
+                break;
+            }
+        }
+        for b in backups.iter().flatten() {
+            let _ = std::fs::remove_file(b);
+        }
+        result
+    }
+}
+
+impl Drop for StagedFiles {
+    fn drop(&mut self) {
+        for (tmp, _) in &self.pairs {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -85,6 +167,30 @@ mod tests {
         assert!(err.is_err());
         assert!(!target.exists());
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn staged_files_publish_all_or_none() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.csv"), dir.path().join("a.truth.json"));
+        std::fs::write(&a, "old a").unwrap();
+        // The second target is a directory: its rename fails, so the first is restored.
+        std::fs::create_dir(&b).unwrap();
+        let mut staged = StagedFiles::new();
+        std::fs::write(staged.stage(&a), "new a").unwrap();
+        std::fs::write(staged.stage(&b), "new b").unwrap();
+        assert!(staged.publish().is_err());
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
+        // Nothing else left: the old file, the directory in the way, no temporaries.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+        std::fs::remove_dir(&b).unwrap();
+        let mut staged = StagedFiles::new();
+        std::fs::write(staged.stage(&a), "new a").unwrap();
+        std::fs::write(staged.stage(&b), "new b").unwrap();
+        staged.publish().unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     #[test]

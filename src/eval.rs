@@ -11,8 +11,10 @@ use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::data::lines::{csv_error, LineCounter, TextGuard};
+use crate::data::AngleUnit;
 use crate::error::{Error, Result};
-use crate::model::{scattering, Angles, ModelConfig, Params};
+use crate::family::{FamilyModel, FamilyParams};
+use crate::model::Angles;
 
 /// Rows evaluated per parallel chunk: large enough to amortise the rayon fork, small enough that
 /// memory does not grow with the file.
@@ -22,15 +24,23 @@ const CHUNK_ROWS: usize = 16_384;
 /// stays bounded by the channel count too (16k rows × 1M channels asked for 131 GB).
 const CHUNK_VALUES: usize = 1 << 20;
 
+/// Rows per parallel work item of a chunk (a batch shares work per exit direction).
+const EVAL_BATCH: usize = 256;
+
 pub use crate::data::ANGLE_COLUMNS;
 
 /// What `hairfit eval` needs besides the files.
 #[derive(Debug, Clone)]
 pub struct EvalRequest {
-    pub params: Params<f64>,
+    /// The model family with its parameters and configuration.
+    pub model: FamilyModel,
     /// Column names for the appended values: `["s"]` or `["s_0", …]`.
     pub output_columns: Vec<String>,
-    pub config: ModelConfig,
+    /// The parameters as read, for error messages.
+    pub params: FamilyParams,
+    /// `--angles`: the input's angle unit; the file's `# angles:` line decides when absent
+    /// (degrees when neither says).
+    pub angles: Option<AngleUnit>,
 }
 
 /// Summary of an evaluation run.
@@ -62,6 +72,16 @@ pub fn eval_file(
         )));
     }
     let file = TextGuard::new(file);
+    // The unit line is read before the stream, so `eval_stream` sees the settled unit.
+    let directive = crate::data::unit::file_directive(input, 1)?;
+    let request = &EvalRequest {
+        angles: Some(crate::data::unit::resolve(
+            request.angles,
+            directive,
+            input,
+        )?),
+        ..request.clone()
+    };
     match output {
         Some(out) => {
             let mut summary = EvalSummary { rows: 0 };
@@ -142,7 +162,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         .write_record(&out_header)
         .map_err(|e| write_error(&e))?;
 
-    let n_channels = request.params.sigma_a.len().max(1);
+    let n_channels = request.model.n_channels().max(1);
     let chunk_rows = (CHUNK_VALUES / n_channels).clamp(1, CHUNK_ROWS);
     // Records are reused chunk after chunk: a fresh record per row cost a malloc/free pair per
     // row, ~17% of eval's time.
@@ -172,6 +192,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
                 &pool[filled],
                 &angle_index,
                 &header_names,
+                request.angles.unwrap_or(AngleUnit::Deg),
             )?);
             filled += 1;
         }
@@ -181,10 +202,11 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
         }
         values.clear();
         values.resize(records.len() * n_channels, 0.0);
+        // Chunks of rows share the Chiang width integral per exit direction.
         values
-            .par_chunks_mut(n_channels)
-            .zip(angles.par_iter())
-            .for_each(|(out, a)| scattering(&request.params, &request.config, a, out));
+            .par_chunks_mut(n_channels * EVAL_BATCH)
+            .zip(angles.par_chunks(EVAL_BATCH))
+            .for_each(|(out, a)| request.model.eval_batch(a, out));
         if let Some(j) = values.iter().position(|v| !v.is_finite()) {
             return Err(non_finite_error(
                 source,
@@ -242,14 +264,19 @@ fn locate_angle_columns(source: &Path, header_line: u64, headers: &[String]) -> 
     }
 }
 
-/// Parse one row's angles (degrees) with errors naming line and column.
+/// Parse one row's angles (in `unit`) with errors naming line and column.
 fn parse_angles(
     source: &Path,
     line: u64,
     record: &csv::ByteRecord,
     index: &[usize; 4],
     headers: &[String],
+    unit: AngleUnit,
 ) -> Result<Angles> {
+    let (theta_limit, unit_name) = match unit {
+        AngleUnit::Deg => (90.0, "degrees"),
+        AngleUnit::Rad => (std::f64::consts::FRAC_PI_2, "radians"),
+    };
     let mut deg = [0.0f64; 4];
     for (k, &col) in index.iter().enumerate() {
         let field = record.get(col).unwrap_or_default();
@@ -262,7 +289,7 @@ fn parse_angles(
                 line,
                 col as u64 + 1,
                 format!(
-                    "`{}` is not a number (column `{}`, degrees)",
+                    "`{}` is not a number (column `{}`, {unit_name})",
                     text.trim(),
                     headers[col]
                 ),
@@ -281,20 +308,28 @@ fn parse_angles(
             ));
         }
         let is_theta = k % 2 == 0;
-        if is_theta && value.abs() >= 90.0 {
+        if is_theta && value.abs() >= theta_limit {
             return Err(Error::input(
                 source,
                 line,
                 col as u64 + 1,
                 format!(
-                    "{} = {value}° lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90°",
+                    "{} = {value} {unit_name} lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90° (π/2)",
                     headers[col]
                 ),
             ));
         }
         deg[k] = value;
     }
-    Ok(Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]))
+    Ok(match unit {
+        AngleUnit::Deg => Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]),
+        AngleUnit::Rad => Angles {
+            theta_i: deg[0],
+            phi_i: deg[1],
+            theta_r: deg[2],
+            phi_r: deg[3],
+        },
+    })
 }
 
 /// A non-finite S is an error naming the row and the parameters, never a `NaN` in the output.
@@ -314,8 +349,7 @@ fn non_finite_error(
          parameters the model can evaluate",
         source.display(),
         fields.join(","),
-        serde_json::to_string(&crate::params::ParamFile::from_params(&request.params))
-            .unwrap_or_default()
+        request.params.json_line()
     ))
 }
 

@@ -6,8 +6,11 @@
 //!   the number type so that forward-mode AD gives exact Jacobians.
 //! - [`chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a whole-fibre S),
 //!   generic over the number type like [`model`].
+//! - [`family`]: the model families (`--model marschner|chiang`), a parameter file of either.
+//! - [`compare`]: `hairfit compare`, both families fitted to the same data, side by side.
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
+//! - [`export`]: `hairfit export`, renderer files (pbrt-v4, Blender, MaterialX) fitted to a fit's S.
 //! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
 //! - [`fit`]: least squares with exact Jacobians and uncertainties (`hairfit fit`, `demo`).
 //! - [`cli`]: the command line's option groups, flag-worded checks and the fit summary.
@@ -27,10 +30,13 @@ pub mod atomic;
 pub mod batch;
 pub mod chiang;
 pub mod cli;
+pub mod compare;
 pub mod cost;
 pub mod data;
 pub mod error;
 pub mod eval;
+pub mod export;
+pub mod family;
 pub mod files;
 pub mod fit;
 pub mod lm;

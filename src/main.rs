@@ -8,9 +8,11 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+use hairfit::cli::exit::exit_code;
 use hairfit::cli::ModelArgs;
 use hairfit::eval::{eval_file, output_columns, EvalRequest};
-use hairfit::params::{ParamFile, ParameterFile as _};
+use hairfit::family::{FamilyModel, FamilyParams};
+use hairfit::files::Verdict;
 
 #[derive(Parser)]
 #[command(
@@ -25,15 +27,17 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r in degrees).
+    /// Evaluate S at every row of an angles CSV (theta_i,phi_i,theta_r,phi_r; degrees unless --angles rad or `# angles: rad`).
     Eval(EvalArgs),
     /// Load a data file and report what happened to every row (accepted or why rejected).
     Load(LoadArgs),
     /// Fit the model to a data file; writes fit.json, params.json and curves.csv into --out.
+    #[command(after_help = hairfit::cli::exit::EXIT_CODES_HELP)]
     Fit(hairfit::cli::fit::FitCommandArgs),
     /// Fit every item of a manifest (or one shard of it) into --out/NAME; --merge summarises.
     Batch(BatchArgs),
     /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
+    #[command(after_help = hairfit::cli::exit::EXIT_CODES_HELP)]
     Demo(DemoArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
     Synth(hairfit::synth::SynthArgs),
@@ -45,15 +49,26 @@ enum Command {
         #[arg(long)]
         linear: bool,
     },
+    /// Write what a renderer loads (pbrt-v4, Blender, MaterialX) from a fit, its model fitted to the fit's S.
+    Export(hairfit::cli::export::ExportArgs),
     /// Measure what each accuracy knob costs on this machine: cost.csv, cost.json, cost.svg/png.
     Cost {
         /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
         #[arg(long)]
         quick: bool,
+        /// Replace an output directory that holds files other than a hairfit result.
+        #[arg(long)]
+        force: bool,
         /// Output directory.
         #[arg(long, default_value = "fits/cost")]
         out: PathBuf,
+        /// `chiang`: the Chiang model's ledger (width nodes, cache) against the Marschner model's time.
+        #[arg(long = "model", value_enum, default_value_t = hairfit::family::ModelFamily::Marschner)]
+        family: hairfit::family::ModelFamily,
     },
+    /// Fit both model families to the same data and compare them: DIR/{marschner,chiang}/,
+    /// DIR/compare.json, DIR/index.html.
+    Compare(hairfit::cli::compare::CompareArgs),
 }
 
 #[derive(clap::Args)]
@@ -64,7 +79,8 @@ objects with the same keys. Data paths are relative to the manifest. Item NAME i
 as `hairfit fit DATA --out DIR/NAME` would. Items already finished with the same options are skipped.
 
 \
-Exit codes: 0 all items ran; 1 an item failed (the others still ran) or, with --merge, an item is missing; 130 interrupted."
+Exit codes: 0 all items ran; 1 an item failed or its verdict is `failed` (the others still ran) or, with --merge, an item \
+is missing; 2 with --strict when an item's verdict is poor_fit or undetermined; 130 after SIGINT, 143 after SIGTERM."
 )]
 struct BatchArgs {
     /// Manifest (CSV `name,data,OPTION…`, or .json).
@@ -80,6 +96,9 @@ struct BatchArgs {
     /// Do not fit: write DIR/summary.csv and DIR/index.html from the items' fit.json files.
     #[arg(long)]
     merge: bool,
+    /// Exit 2 when an item's verdict is poor_fit or undetermined.
+    #[arg(long)]
+    strict: bool,
 }
 
 #[derive(clap::Args)]
@@ -93,7 +112,7 @@ struct DemoArgs {
 
 #[derive(clap::Args)]
 struct EvalArgs {
-    /// Parameter file (JSON, MODEL.md's names).
+    /// Parameter file (JSON, MODEL.md's names; CHIANG.md's with --model chiang).
     #[arg(long)]
     params: PathBuf,
     /// Angles CSV with a header; other columns are carried through.
@@ -104,6 +123,9 @@ struct EvalArgs {
     output: Option<PathBuf>,
     #[command(flatten)]
     model: ModelArgs,
+    /// Unit of the input's angles [default: deg, or what a `# angles: rad` line says].
+    #[arg(long, value_enum)]
+    angles: Option<hairfit::data::AngleUnit>,
 }
 
 #[derive(clap::Args)]
@@ -120,7 +142,7 @@ struct LoadArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => ExitCode::from(code),
         Err(err) => {
             eprintln!("hairfit: error: {}", error_text(&err));
             ExitCode::FAILURE
@@ -145,16 +167,19 @@ fn error_text(err: &anyhow::Error) -> String {
     text
 }
 
-fn run(cli: Cli) -> anyhow::Result<()> {
+/// Run the command; its exit code (a fit's follows its verdict, [`hairfit::cli::exit`]).
+fn run(cli: Cli) -> anyhow::Result<u8> {
     match cli.command {
         Command::Eval(args) => {
             remove_partial_output_on_interrupt();
-            let file =
-                ParamFile::load(&args.params).map_err(|e| name_parameter_file(e, &args.params))?;
+            args.model.check_family_options()?;
+            let file = FamilyParams::load(&args.params, args.model.family)
+                .map_err(|e| name_parameter_file(e, &args.params))?;
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
-                params: file.to_params(),
-                config: args.model.config()?,
+                model: FamilyModel::new(&file, args.model.config()?, &args.model.chiang()?),
+                params: file,
+                angles: args.angles,
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
             if let Some(out) = args.output {
@@ -201,9 +226,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 dir.join("index.html").display()
             );
         }
-        Command::Cost { quick, out } => {
+        Command::Cost {
+            quick,
+            force,
+            out,
+            family,
+        } => {
             remove_partial_output_on_interrupt();
-            let ledger = hairfit::cost::run_cost(&out, &hairfit::cost::CostOptions { quick })?;
+            let options = hairfit::cost::CostOptions {
+                quick,
+                force,
+                family,
+            };
+            let ledger = hairfit::cost::run_cost(&out, &options)?;
             print!("{}", hairfit::cost::summary_text(&ledger));
             eprintln!(
                 "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
@@ -211,23 +246,56 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             );
         }
         Command::Fit(a) => {
-            let cancel = Some(ctrl_c_flag());
+            let stop = ctrl_c_flag();
+            let cancel = Some(stop.flag.clone());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
+            outcome.report_result(&a.out)?;
+            return Ok(exit_code(
+                outcome.outcome.json.verdict,
+                a.fit.strict,
+                stop.received(),
+            ));
         }
         Command::Batch(a) => return batch(a),
+        Command::Compare(a) => {
+            let stop = ctrl_c_flag();
+            let cancel = Some(stop.flag.clone());
+            let done = hairfit::cli::compare::compare_command(&a, cancel)?;
+            for line in &done.report_lines {
+                print!("{line}");
+            }
+            print!(
+                "{}",
+                hairfit::compare::summary_text(&done.comparison, &a.out)
+            );
+        }
+        Command::Export(a) => {
+            remove_partial_output_on_interrupt();
+            let (summary, text) = hairfit::cli::export::export_command(&a)?;
+            print!("{}", text.unwrap_or_default());
+            eprintln!("hairfit: {summary}");
+        }
         Command::Demo(a) => {
-            let cancel = Some(ctrl_c_flag());
-            let outcome = hairfit::fit::demo::demo_command(&a.fit.options(cancel)?, &a.out)?;
+            let stop = ctrl_c_flag();
+            let cancel = Some(stop.flag.clone());
+            let opts = a.fit.options(cancel)?;
+            let outcome = hairfit::fit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             print!("{}", fit_summary_and_report(&outcome, &a.out));
-            print!("{}", hairfit::fit::demo::truth_line(&a.out));
+            print!("{}", hairfit::fit::demo::truth_line(&a.out, opts.family));
+            outcome.report_result(&a.out)?;
+            return Ok(exit_code(
+                outcome.outcome.json.verdict,
+                a.fit.strict,
+                stop.received(),
+            ));
         }
     }
-    Ok(())
+    Ok(0)
 }
 
 /// `hairfit batch`: run a shard of a manifest, or merge the results.
-fn batch(a: BatchArgs) -> anyhow::Result<()> {
+fn batch(a: BatchArgs) -> anyhow::Result<u8> {
     use hairfit::batch::{merge, run_batch, ItemOutcome, Manifest, Shard};
     let manifest = Manifest::load(&a.manifest)?;
     if a.merge {
@@ -249,66 +317,65 @@ fn batch(a: BatchArgs) -> anyhow::Result<()> {
                 m.missing.join(", ")
             );
         }
-        return Ok(());
+        return Ok(0);
     }
     let shard = match &a.shard {
         Some(s) => Shard::parse(s)?,
         None => Shard::ALL,
     };
-    let cancel = ctrl_c_flag();
-    let run = run_batch(&manifest, &a.out, shard, Some(cancel), |item, outcome| {
-        let what = match outcome {
-            ItemOutcome::Fitted { status, report } => format!("{status}; {report}"),
-            ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
-            ItemOutcome::Failed(e) => format!("FAILED: {e}"),
-            ItemOutcome::Interrupted => "interrupted".into(),
-        };
-        eprintln!("hairfit: [{shard}] {}: {what}", item.name);
-    })?;
+    let stop = ctrl_c_flag();
+    let mut verdicts = Vec::new();
+    let run = run_batch(
+        &manifest,
+        &a.out,
+        shard,
+        Some(stop.flag.clone()),
+        |item, outcome| {
+            let what = match outcome {
+                ItemOutcome::Fitted { status, report } => {
+                    let verdict = merge::fit_verdict(&a.out.join(&item.name));
+                    verdicts.extend(verdict);
+                    let verdict = verdict.map_or("unknown".into(), |v| v.to_string());
+                    format!("{verdict} ({status}); {report}")
+                }
+                ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
+                ItemOutcome::Failed(e) => format!("FAILED: {e}"),
+                ItemOutcome::Interrupted => "interrupted".into(),
+            };
+            eprintln!("hairfit: [{shard}] {}: {what}", item.name);
+        },
+    )?;
     eprintln!("hairfit: {}", run.summary_line());
-    if run.interrupted() {
-        std::process::exit(130);
+    if run.interrupted() || stop.received().is_some() {
+        return Ok(exit_code(Verdict::Interrupted, a.strict, stop.received()));
     }
-    let failed = run.count(|o| matches!(o, ItemOutcome::Failed(_)));
+    let failed = run.count(|o| matches!(o, ItemOutcome::Failed(_)))
+        + verdicts.iter().filter(|v| **v == Verdict::Failed).count();
     if failed > 0 {
         anyhow::bail!("{failed} items failed (listed above); the others are written");
     }
-    Ok(())
+    Ok(verdicts
+        .iter()
+        .map(|&v| exit_code(v, a.strict, None))
+        .max()
+        .unwrap_or(0))
 }
 
-/// The fit's summary, then its plotted report, drawn from the fit's result in memory.
-fn fit_summary_and_report(outcome: &hairfit::fit::FitOutcome, dir: &std::path::Path) -> String {
-    hairfit::cli::summary::summary(outcome, Some(dir))
-        + &hairfit::report::report_line(dir, &outcome.json, &outcome.curves)
+/// The fit's summary, then where its plotted report is.
+fn fit_summary_and_report(run: &hairfit::outdir::PublishedFit, dir: &std::path::Path) -> String {
+    hairfit::cli::summary::summary(&run.outcome, Some(dir)) + &run.report_line(dir)
 }
 
-/// A flag set by Ctrl-C: the fit stops at the next iteration and writes the best so far; a
-/// second Ctrl-C exits at once.
-fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
-    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let f = flag.clone();
-    // A second signal means stop now (the first lets the fit write its best so far, which on
-    // large data can take a while): remove partial files and exit as the signal would.
-    if let Err(e) = ctrlc::set_handler(move || {
-        if f.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            hairfit::atomic::remove_in_flight();
-            std::process::exit(130);
-        }
-    }) {
-        eprintln!("hairfit: warning: Ctrl-C will not stop the fit cleanly: {e}");
-    }
-    flag
+/// The stop request set by Ctrl-C/SIGTERM: the fit stops at the next iteration and writes the
+/// best so far; a second signal exits at once (after `hairfit::atomic::remove_in_flight()`).
+fn ctrl_c_flag() -> hairfit::cli::exit::StopSignal {
+    hairfit::cli::exit::stop_on_signal()
 }
 
 /// Ctrl-C/SIGTERM in a command with no best-so-far to keep: remove the partial output's
-/// temporary file, then exit as the signal would have (130).
+/// temporary file, then exit as the signal would have (130, 143).
 fn remove_partial_output_on_interrupt() {
-    if let Err(e) = ctrlc::set_handler(|| {
-        hairfit::atomic::remove_in_flight();
-        std::process::exit(130);
-    }) {
-        eprintln!("hairfit: warning: Ctrl-C may leave a temporary file: {e}");
-    }
+    hairfit::cli::exit::exit_on_signal();
 }
 
 /// Domain errors come from the values, not a position in the file: say which file they are in.

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use crate::error::{Error, Result};
+use crate::fit::FitOutcome;
 
 /// The file that marks a directory as a hairfit output set (its content names the command).
 pub const MARKER: &str = ".hairfit";
@@ -23,7 +24,13 @@ static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 pub fn remove_in_flight() {
     let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
     for p in list.iter() {
-        let _ = std::fs::remove_dir_all(p);
+        // The run's other threads may still be creating files in it (remove_dir_all then
+        // fails with "directory not empty"): try again a few times.
+        for _ in 0..20 {
+            if std::fs::remove_dir_all(p).is_ok() || !p.exists() {
+                break;
+            }
+        }
     }
 }
 
@@ -177,6 +184,27 @@ impl OutputSet {
         Ok(())
     }
 
+    /// Carry every file of the current set into the new one except those `redrawn` names (the
+    /// run makes them anew, or they are stale): e.g. `hairfit report` keeps the fit's files and
+    /// redraws the figures.
+    pub fn keep_all_but(&self, redrawn: impl Fn(&str) -> bool) -> Result<()> {
+        let entries = match std::fs::read_dir(&self.dir) {
+            Ok(e) => e,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            Err(e) => return Err(Error::io(&self.dir, e)),
+        };
+        let mut names = Vec::new();
+        for entry in entries {
+            let entry = entry.map_err(|e| Error::io(&self.dir, e))?;
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name != MARKER && !redrawn(&name) && entry.path().is_file() {
+                names.push(name);
+            }
+        }
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        self.keep(&names)
+    }
+
     /// Swap the staged set in place of the old one, then remove the old one.
     pub fn publish(mut self) -> Result<()> {
         let old = swap_in(&self.staging, &self.dir)?;
@@ -196,6 +224,76 @@ impl Drop for OutputSet {
             forget_in_flight(&self.staging);
         }
     }
+}
+
+/// The files a report draws (figures and the page): redrawn by every report, never carried over.
+pub fn is_report_file(name: &str) -> bool {
+    name == "index.html" || name.ends_with(".svg") || name.ends_with(".png")
+}
+
+/// A fit published into its output directory: the outcome, and whether its plotted report
+/// could be drawn (the fit's files are published either way).
+#[derive(Debug)]
+pub struct PublishedFit<P = crate::family::FamilyParams> {
+    pub outcome: FitOutcome<P>,
+    /// Why the report could not be drawn, if it could not.
+    pub report_error: Option<String>,
+}
+
+impl<P> PublishedFit<P> {
+    /// The summary's last line: where the report is (nothing when it failed: see
+    /// [`PublishedFit::report_result`]).
+    pub fn report_line(&self, dir: &Path) -> String {
+        match self.report_error {
+            None => format!("report: {}\n", dir.join("index.html").display()),
+            Some(_) => String::new(),
+        }
+    }
+
+    /// An error when the report could not be drawn: the command then exits non-zero, though
+    /// the fit's own files are written.
+    pub fn report_result(&self, dir: &Path) -> Result<()> {
+        match &self.report_error {
+            None => Ok(()),
+            Some(e) => Err(Error::Other(format!(
+                "the fit's files are written to {}, but its plotted report could not be drawn: {e}",
+                dir.display()
+            ))),
+        }
+    }
+}
+
+/// Run `produce` (which may write extra files, e.g. the demo's data, into the staging directory
+/// it is given) under the lock of `out`, write the fit's files and its report beside them, and
+/// publish the whole set. `inputs` are the files the run reads (see [`OutputSet::begin`]).
+pub fn publish_fit<P>(
+    out: &Path,
+    command: &str,
+    force: bool,
+    inputs: &[&Path],
+    produce: impl FnOnce(&Path) -> Result<FitOutcome<P>>,
+) -> Result<PublishedFit<P>> {
+    let set = OutputSet::begin(out, command, force, inputs)?;
+    let outcome = produce(set.staging())?;
+    crate::fit::write_outputs(set.staging(), &outcome)?;
+    let drawn = crate::report::write_report_of(
+        set.staging(),
+        &outcome.json,
+        &outcome.curves,
+        &crate::report::ReportOptions::default(),
+    );
+    // Messages name the directory the user asked for, not the staging one.
+    let report_error = drawn.err().map(|e| {
+        e.to_string().replace(
+            &set.staging().display().to_string(),
+            &out.display().to_string(),
+        )
+    });
+    set.publish()?;
+    Ok(PublishedFit {
+        outcome,
+        report_error,
+    })
 }
 
 /// Take `parent/.NAME.hairfit-lock` without waiting; when another run holds it, say which.

@@ -2,33 +2,26 @@
 //! the per-item results of one process running the whole manifest and of `hairfit fit` itself;
 //! finished items are skipped on a re-run; bad manifests and missing items say so and exit 1.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::shipped;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_hairfit"));
+/// The binary on one rayon thread (shards run side by side).
+fn bin(args: &[&str]) -> Command {
+    let mut c = cli::hairfit_command(args);
     c.env("RAYON_NUM_THREADS", "1");
     c
 }
 
 fn run(args: &[&str]) -> Output {
-    bin().args(args).output().expect("hairfit runs")
+    cli::run_within(bin(args), cli::DEFAULT_LIMIT).0
 }
 
 fn ok(args: &[&str]) -> Output {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "hairfit {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn shipped(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
-        .join(name)
+    cli::succeeded(run(args), args)
 }
 
 /// A manifest of three quick fits: one data file beside the manifest (relative path), two
@@ -73,8 +66,7 @@ fn concurrent_shards_equal_one_process_and_the_fit_command() {
     let children: Vec<_> = ["0/2", "1/2"]
         .iter()
         .map(|k| {
-            bin()
-                .args(["batch", m, "--out", sharded_s, "--shard", k])
+            bin(&["batch", m, "--out", sharded_s, "--shard", k])
                 .stderr(std::process::Stdio::piped())
                 .spawn()
                 .unwrap()

@@ -50,7 +50,7 @@ fn rejects_unknown_keys_wrong_model_and_bad_domains() {
         (
             r#""eta": 1.0, "sigma_a": 0.4, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2"#,
             "eta",
-            "(1, inf)",
+            "(1, 10]",
         ),
         (
             r#""sigma_a": -0.1, "beta_m": 0.3, "beta_n": 0.3, "alpha_deg": 2"#,

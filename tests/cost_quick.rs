@@ -13,9 +13,17 @@ fn find<'a>(rows: &'a [CostRow], section: &str, setting: &str) -> &'a CostRow {
 #[test]
 fn quick_ledger_runs_and_its_numbers_make_sense() {
     let dir = tempfile::tempdir().unwrap();
-    let ledger = run_cost(dir.path(), &CostOptions { quick: true }).unwrap();
+    let out = dir.path().join("cost");
+    let ledger = run_cost(
+        &out,
+        &CostOptions {
+            quick: true,
+            ..CostOptions::default()
+        },
+    )
+    .unwrap();
     for f in ["cost.csv", "cost.json", "cost.svg", "cost.png"] {
-        assert!(dir.path().join(f).is_file(), "{f} missing");
+        assert!(out.join(f).is_file(), "{f} missing");
     }
     let rows = &ledger.rows;
     // 2 root modes × 5 effect sets, AD + FD, and the fit variants.
@@ -47,9 +55,9 @@ fn quick_ledger_runs_and_its_numbers_make_sense() {
     }
 
     // The CSV has one row per ledger row and the SVG is well-formed.
-    let mut csv = csv::Reader::from_path(dir.path().join("cost.csv")).unwrap();
+    let mut csv = csv::Reader::from_path(out.join("cost.csv")).unwrap();
     assert_eq!(csv.records().count(), rows.len());
-    let svg = std::fs::read_to_string(dir.path().join("cost.svg")).unwrap();
+    let svg = std::fs::read_to_string(out.join("cost.svg")).unwrap();
     roxmltree::Document::parse(&svg).unwrap();
     assert!(svg.contains("Pareto"));
 }

@@ -79,10 +79,7 @@ fn messy_csv_counts_every_reason_exactly() {
         text.contains("14 rows read, 4 accepted, 10 rejected"),
         "{text}"
     );
-    assert!(
-        text.contains("line 15 repeats the angles of line 3"),
-        "{text}"
-    );
+    assert!(text.contains("line 15 repeats line 3"), "{text}");
 }
 
 #[test]
@@ -285,15 +282,21 @@ fn shipped_scan_example_loads_as_documented() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scan_example.txt");
     let mut options = scan_options(
         "phi_r,theta_r,radiance",
-        "theta_i=-20,phi_i=0",
+        "theta_i=20,phi_i=0",
         &["theta_r=90-x"],
     );
     options.missing = "?".into();
     let (ds, r) = load(&path, &options).unwrap();
     assert_accounts(&r, &ds);
-    assert_eq!((r.rows_read, r.accepted), (90, 86));
-    assert_eq!(r.rejected[&MissingValue].first_lines, [6, 60, 61, 82]);
-    assert_eq!(r.negative_kept.first_lines, [73]);
+    assert_eq!((r.rows_read, r.accepted), (169, 167));
+    assert_eq!(r.rejected[&MissingValue].first_lines, [152, 165]);
+    assert_eq!((r.negative_kept.count, r.replicates.count), (0, 0));
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    // The polar column mapped through 90 − x: θ_r spans −72° … 72°.
+    let theta_r: Vec<f64> = (0..ds.len()).map(|i| ds.angles_deg(i)[2]).collect();
+    let max = theta_r.iter().cloned().fold(f64::MIN, f64::max);
+    let min = theta_r.iter().cloned().fold(f64::MAX, f64::min);
+    assert_eq!((min, max), (-72.0, 72.0));
 }
 
 #[test]
@@ -533,7 +536,8 @@ fn format_is_detected_from_extension_and_overridable() {
 }
 
 #[test]
-fn duplicates_match_signed_zeros_and_keep_channels_aligned() {
+fn duplicates_match_signed_zeros_and_wrapped_azimuths_and_keep_channels_aligned() {
+    // Only identical lines are duplicates; the same direction with other values is a replicate.
     let dir = tempfile::tempdir().unwrap();
     let p = write(
         dir.path(),
@@ -541,19 +545,57 @@ fn duplicates_match_signed_zeros_and_keep_channels_aligned() {
         "theta_i,phi_i,theta_r,phi_r,radiance_r,radiance_g,sigma_r,sigma_g\n\
          0,0,10,20,1,2,0.1,0.2\n\
          1,0,10,20,3,4,0.3,0.4\n\
-         -0,0,10,20,5,6,0.5,0.6\n\
-         0,-0,10,20,7,8,0.7,0.8\n\
+         -0,0,10,20,1,2,0.1,0.2\n\
+         0,-0,10,20,1,2,0.1,0.2\n\
          2,0,10,20,9,10,0.9,1.0\n\
-         1,0,10,20,11,12,1.1,1.2\n",
+         1,360,10,20,3,4,0.3,0.4\n\
+         1,0,10,-340,5,6,0.5,0.6\n\
+         1,0,10,20,3,4,0.3,0.5\n",
     );
     let (ds, r) = load(&p, &LoadOptions::default()).unwrap();
     assert_accounts(&r, &ds);
     assert_eq!(r.rejected[&Duplicate].first_lines, [4, 5, 7]);
     assert_eq!(r.duplicate_of, [[4, 2], [5, 2], [7, 3]]);
-    assert_eq!(ds.source_line, [2, 3, 6]);
-    assert_eq!(ds.radiance, [1.0, 2.0, 3.0, 4.0, 9.0, 10.0]);
+    assert_eq!(ds.source_line, [2, 3, 6, 8, 9]);
+    // φ_r = −340° is 20° after wrapping; line 9 differs from line 3 in one sigma only.
+    assert_eq!(r.replicates.count, 2);
+    assert_eq!(r.replicates.first_lines, [8, 9]);
+    assert_eq!(
+        ds.radiance,
+        [1.0, 2.0, 3.0, 4.0, 9.0, 10.0, 5.0, 6.0, 3.0, 4.0]
+    );
     assert_eq!(
         ds.sigma.as_deref(),
-        Some(&[0.1, 0.2, 0.3, 0.4, 0.9, 1.0][..])
+        Some(&[0.1, 0.2, 0.3, 0.4, 0.9, 1.0, 0.5, 0.6, 0.3, 0.5][..])
     );
+    let text = r.to_string();
+    assert!(
+        text.contains("replicates (a direction measured again, kept): 2"),
+        "{text}"
+    );
+    // fit.json and `load --json` carry the count; an older report without it reads as 0.
+    let v = serde_json::to_value(&r).unwrap();
+    assert_eq!(v["replicates"]["count"], 2);
+    let old: hairfit::data::LoadReport = serde_json::from_str(r#"{"rows_read": 3}"#).unwrap();
+    assert_eq!(old.replicates.count, 0);
+}
+
+#[test]
+fn repeated_measurements_of_one_direction_are_all_kept() {
+    // Five readings at each of two directions, as a goniometer repeating a scan: all ten kept.
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("theta_i,phi_i,theta_r,phi_r,radiance\n");
+    for k in 0..5 {
+        text += &format!(
+            "30,0,-30,{},{}\n",
+            170 + 360 * (k % 2),
+            1.0 + 0.01 * k as f64
+        );
+        text += &format!("30,0,-30,-10,{}\n", 2.0 + 0.01 * k as f64);
+    }
+    let p = write(dir.path(), "rep.csv", &text);
+    let (ds, r) = load(&p, &LoadOptions::default()).unwrap();
+    assert_accounts(&r, &ds);
+    assert_eq!((r.accepted, r.rejected_total()), (10, 0));
+    assert_eq!(r.replicates.count, 8, "two directions, four repeats each");
 }

@@ -207,7 +207,7 @@ fn blank_and_whitespace_lines_are_not_rows_but_count_as_lines() {
 
 #[test]
 fn bom_and_crlf_load_like_plain_lf() {
-    let plain = format!("# note\n{HEADER}1,0,2,0,1\n\n1,0,2,0,2\n1,0,95,0,3\n");
+    let plain = format!("# note\n{HEADER}1,0,2,0,1\n\n1,0,2,0,1\n1,0,95,0,3\n");
     let (ds_lf, r_lf) = expect_report("lf.csv", plain.as_bytes());
     let mut crlf = b"\xEF\xBB\xBF".to_vec();
     crlf.extend_from_slice(plain.replace('\n', "\r\n").as_bytes());

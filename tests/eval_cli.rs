@@ -1,9 +1,11 @@
 //! `hairfit eval` end to end, as a user runs it: the output contract, the values (identical to the
 //! library's), streaming and the errors for bad input.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::{hairfit, s, write};
 use hairfit::params::ParameterFile as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use hairfit::model::{scattering, Angles, ModelConfig};
 use hairfit::params::ParamFile;
@@ -17,23 +19,6 @@ const ANGLES: &str = "theta_i,phi_i,theta_r,phi_r,label\n\
 10,-40,-5,170,b\n\
 -60,10,45,-80,c\n\
 -10,0,75,0,d\n";
-
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// Parse eval's CSV output into (header, rows of fields).
 fn read_csv(text: &str) -> (Vec<String>, Vec<Vec<String>>) {

@@ -2,30 +2,20 @@
 //! with the same option recovers the truth, fitting the same file as S does not, and the report
 //! reproduces the radiance fit's curves because fit.json says what was fitted.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::s as path;
 use std::path::Path;
-use std::process::Command;
 
 use hairfit::files::{read_curves_csv, FitJson};
 use hairfit::model::Measurement;
 use hairfit::report::{write_report_with, ReportOptions};
 use hairfit::synth::Truth;
 
+/// Run hairfit, which must succeed; its stdout.
 fn hairfit(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "hairfit {}: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
+    cli::stdout(&cli::hairfit_ok(args))
 }
 
 /// Noise-free radiance data: longitudinal scans at three incidences (cos θ_i = 0.87, 0.97,
@@ -204,16 +194,10 @@ fn demo_synthesizes_and_fits_radiance_when_asked() {
 #[test]
 fn every_command_spells_the_option_the_same_and_rejects_other_values() {
     for cmd in ["fit", "demo", "synth"] {
-        let out = Command::new(env!("CARGO_BIN_EXE_hairfit"))
-            .args([cmd, "--help"])
-            .output()
-            .unwrap();
+        let out = cli::hairfit(&[cmd, "--help"]);
         let help = String::from_utf8_lossy(&out.stdout);
         assert!(help.contains("--measurement"), "{cmd}: {help}");
-        let out = Command::new(env!("CARGO_BIN_EXE_hairfit"))
-            .args([cmd, "--measurement", "cos"])
-            .output()
-            .unwrap();
+        let out = cli::hairfit(&[cmd, "--measurement", "cos"]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{cmd}");
         assert!(

@@ -110,3 +110,49 @@ fn additive_floor_noise_sphere_in_exact_mode() {
         );
     }
 }
+
+#[test]
+fn the_goniometer_scan_example_is_fitted_with_every_parameter_determined() {
+    // data/README.md's scan, loaded with its documented options: a headerless rig file with a
+    // polar-angle column, fixed incidence and saturated readings. Every parameter must be
+    // determined and agree with the truth of the CSV it was made from.
+    let root = env!("CARGO_MANIFEST_DIR");
+    let options = LoadOptions {
+        columns: ["phi_r", "theta_r", "radiance"].map(String::from).to_vec(),
+        fixed: ["theta_i=20", "phi_i=0"].map(String::from).to_vec(),
+        maps: vec!["theta_r=90-x".into()],
+        missing: "?".into(),
+        ..LoadOptions::default()
+    };
+    let (ds, report) = load(format!("{root}/data/scan_example.txt").as_ref(), &options).unwrap();
+    assert_eq!(report.accepted, 167);
+    let truth: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{root}/data/scan_example.truth.json")).unwrap(),
+    )
+    .unwrap();
+    let truth: ParamFile = serde_json::from_value(truth["params"].clone()).unwrap();
+    let out = fit(
+        &fit_data(&ds),
+        "scan_example",
+        report,
+        &FitOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(out.json.status.as_str(), "converged");
+    let compared = compare(&out, &truth);
+    assert_eq!(compared.len(), 6, "σ_a, α_R, β_R, k_G, w_c, a are free");
+    for (name, v, se, status, want) in compared {
+        assert_eq!(status, "free", "{name}");
+        let se = se.unwrap_or_else(|| panic!("{name}: no standard error"));
+        // 4 SE, as above: six parameters, so a 3-SE miss would happen now and then by chance.
+        assert!(
+            (v - want).abs() < 4.0 * se,
+            "{name}: {v} ± {se}, truth {want}"
+        );
+    }
+    let scale = out.json.scale[0].value.unwrap();
+    assert!(
+        (scale - 400.0).abs() < 4.0 * out.json.scale[0].std_error.unwrap(),
+        "scale {scale}"
+    );
+}

@@ -1,5 +1,6 @@
 //! Nothing is lost under interruption: SIGINT stops `hairfit fit` at the next iteration, and it
-//! still writes a complete fit.json with status "interrupted" and finite best-so-far parameters.
+//! still writes a complete fit.json with status and verdict "interrupted" and finite best-so-far
+//! parameters, then exits 130 (143 after SIGTERM) so no script mistakes it for a finished fit.
 //! Output files are written atomically: a reader polling the output directory never sees a
 //! half-written fit.json, and no temporary file is left behind.
 
@@ -121,14 +122,21 @@ fn sigint_writes_a_complete_interrupted_fit_and_never_a_partial_file() {
 
     // 1. Interrupted mid-fit (loading takes ~0.3 s, the fit with ARGS ~30 s or more).
     let (f, stop) = interrupt_after(&data, &out, Duration::from_millis(2500));
+    // 130 = 128 + SIGINT: `hairfit fit … && publish` must not publish a stopped fit.
     assert_eq!(
         f.status.code(),
-        Some(0),
-        "interrupted fit should exit cleanly: {}",
+        Some(130),
+        "interrupted fit should write its best so far and exit 130: {}",
         f.stderr
     );
     let j = check_fit_dir(&out, "interrupted");
     assert_eq!(j["status"], "interrupted", "{}", f.stdout);
+    assert_eq!(j["verdict"], "interrupted", "{}", f.stdout);
+    assert!(
+        f.stdout.starts_with("verdict: interrupted"),
+        "the summary starts with the verdict: {}",
+        f.stdout
+    );
     for p in j["parameters"].as_array().unwrap() {
         assert!(
             p["value"].as_f64().is_some_and(f64::is_finite),
@@ -166,10 +174,10 @@ fn sigint_writes_a_complete_interrupted_fit_and_never_a_partial_file() {
     for delay_ms in [400, 1200] {
         let (f, _) = interrupt_after(&data, &out, Duration::from_millis(delay_ms));
         // SIGINT before the handler is installed kills the process with the default action
-        // (no output written); after, the fit exits 0 having written its best so far.
+        // (no output written); after, the fit exits 130 having written its best so far.
         let by_signal = f.status.code().is_none();
         assert!(
-            by_signal || f.status.code() == Some(0),
+            by_signal || f.status.code() == Some(130),
             "exit {:?}: {}",
             f.status,
             f.stderr
@@ -230,7 +238,7 @@ fn a_completed_run_replaces_fit_json_atomically_under_a_polling_reader() {
 }
 
 /// SIGTERM (what `timeout`, batch schedulers and service managers send before SIGKILL) keeps
-/// the best so far exactly like Ctrl-C.
+/// the best so far exactly like Ctrl-C, and exits 143 as the signal would.
 #[test]
 fn sigterm_also_writes_the_best_so_far() {
     let dir = tempfile::tempdir().unwrap();
@@ -246,15 +254,17 @@ fn sigterm_also_writes_the_best_so_far() {
         .success();
     assert!(ok, "kill -TERM failed");
     let f = wait_with_deadline(child, Duration::from_secs(60), "terminated fit");
+    // 143 = 128 + SIGTERM, after writing the best so far.
     assert_eq!(
         f.status.code(),
-        Some(0),
-        "SIGTERM killed the fit without output: {:?} {}",
+        Some(143),
+        "SIGTERM: {:?} {}",
         f.status,
         f.stderr
     );
     let j = check_fit_dir(&out, "terminated");
     assert_eq!(j["status"], "interrupted");
+    assert_eq!(j["verdict"], "interrupted");
 }
 
 /// Ctrl-C during `hairfit eval --output` must not leave the atomic writer's temporary file (it

@@ -1,10 +1,13 @@
 //! `hairfit report` from the command line: a fit directory renders; a missing or malformed
 //! fit.json fails with an error naming the file (and line and column), never a panic.
 
+#[path = "support/cli.rs"]
+mod cli;
+
 use std::process::Command;
 
 fn hairfit() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
+    cli::hairfit_command(&[])
 }
 
 #[test]

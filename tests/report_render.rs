@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use hairfit::family::FamilyParams;
 use hairfit::files::{
     read_curves_csv, write_curves_csv, Correlation, CurveRow, DataInfo, FitJson, FitStatus,
     LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
@@ -136,6 +137,9 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             5 => ParamStatus::Undetermined,
             _ => ParamStatus::Free,
         },
+        interval_68: None,
+        interval_95: None,
+        profile: Vec::new(),
     };
     let free: Vec<String> = names[1..].iter().map(|s| s.to_string()).collect();
     let n = free.len();
@@ -174,7 +178,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             seed: 7,
             ..OptionsRecord::default()
         },
-        params: ParamFile {
+        params: FamilyParams::Marschner(ParamFile {
             eta: 1.55,
             sigma_a: SigmaA::PerChannel(vec![0.3, 0.7, 1.1][..n_ch].to_vec()),
             alpha_r_deg: -7.0,
@@ -184,7 +188,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             eccentricity: 0.9,
             delta_eta_prime: 0.3,
             delta_h_m: 0.5,
-        },
+        }),
         parameters: names.iter().enumerate().map(|(i, n)| entry(i, n)).collect(),
         scale: (0..n_ch)
             .map(|c| ScaleEntry {
@@ -208,6 +212,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
             reduced_chi2: Some(1.04),
             dof: 500,
             per_channel: vec![],
+            down_weighted: None,
         },
         trace: vec![
             TraceStage {
@@ -223,6 +228,11 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
                 history: vec![0.2, 0.05, 0.011, 0.01],
             },
         ],
+        verdict: hairfit::files::Verdict::Undetermined,
+        reasons: vec!["k_g is undetermined — no sample near the glint".into()],
+        goodness_of_fit: Default::default(),
+        suggestions: vec![],
+        chiang: None,
     }
 }
 
@@ -565,7 +575,9 @@ fn write_report_reads_the_fit_directory() {
     let angles = measurement_angles();
     let rows = fixture_rows(&angles, &toy_model, 3);
     let mut fit = fixture_fit(angles.len(), 3);
-    fit.params.eccentricity = 0.5;
+    if let FamilyParams::Marschner(p) = &mut fit.params {
+        p.eccentricity = 0.5;
+    }
     fit.save(&dir.path().join("fit.json")).unwrap();
     write_curves_csv(&dir.path().join("curves.csv"), &rows).unwrap();
     let summary = write_report_with(dir.path(), &ReportOptions::default()).unwrap();
@@ -584,7 +596,7 @@ fn report_of_a_real_model_fixture_matches_the_fit_column() {
     // column to rounding (no calibration note), and every figure is written.
     let dir = tempfile::tempdir().unwrap();
     let fit = fixture_fit(measurement_angles().len(), 3);
-    let params = fit.params.to_params();
+    let params = fit.params.marschner().unwrap().to_params();
     let config = fit.model;
     let model = |a: &Angles, out: &mut [[f64; 3]]| {
         hairfit::model::scattering_by_lobe(&params, &config, a, out)

@@ -1,9 +1,13 @@
 //! `hairfit synth` end to end: reproducible bytes, a bit-exact round trip through the loader and
 //! the model, the truth sidecar, channel handling, and clear errors for bad options.
 
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::{hairfit, s, write};
 use hairfit::params::ParameterFile as _;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
 use hairfit::data::{load, write_csv, LoadOptions};
 use hairfit::model::{scattering, Angles, Effects, Measurement, ModelConfig, RootMode};
@@ -14,23 +18,6 @@ const PARAMS_3: &str = r#"{"eta": 1.55, "sigma_a": [0.2, 0.4, 0.8], "alpha_r_deg
   "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#;
 const PARAMS_1: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
   "w_c_deg": 15, "eccentricity": 0.9}"#;
-
-fn hairfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_hairfit"))
-        .args(args)
-        .output()
-        .expect("the hairfit binary runs")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn ok(out: &Output) {
     assert!(
@@ -208,8 +195,11 @@ fn truth_records_every_input() {
     );
     // A scalar sigma_a replicated to 3 channels: the truth holds the per-channel values, with a
     // note saying so.
-    assert_eq!(t.params.sigma_a, SigmaA::PerChannel(vec![0.4; 3]));
-    assert_eq!(t.params.alpha_r_deg, -7.0);
+    assert_eq!(
+        t.params.marschner().unwrap().sigma_a,
+        SigmaA::PerChannel(vec![0.4; 3])
+    );
+    assert_eq!(t.params.marschner().unwrap().alpha_r_deg, -7.0);
     assert!(t
         .notes
         .iter()
@@ -230,7 +220,10 @@ fn truth_records_every_input() {
     assert!(cmd.starts_with("hairfit synth --params ") && cmd.contains("--no-glints"));
     // The truth's params are a valid parameter file that reproduces the synthesis inputs.
     let json = serde_json::to_string(&t.params).unwrap();
-    assert_eq!(ParamFile::from_json_str(&json, "truth").unwrap(), t.params);
+    assert_eq!(
+        Some(&ParamFile::from_json_str(&json, "truth").unwrap()),
+        t.params.marschner()
+    );
 }
 
 #[test]
@@ -246,7 +239,7 @@ fn scalar_sigma_a_without_channels_is_one_radiance_column() {
     let text = String::from_utf8(bytes).unwrap();
     let header = text.lines().find(|l| !l.starts_with('#')).unwrap();
     assert_eq!(header, "theta_i,phi_i,theta_r,phi_r,radiance,sigma");
-    assert_eq!(t.params.sigma_a, SigmaA::Scalar(0.4));
+    assert_eq!(t.params.marschner().unwrap().sigma_a, SigmaA::Scalar(0.4));
     assert!(t.notes.is_empty());
 }
 
@@ -481,5 +474,104 @@ fn explicit_directions_are_used_as_given() {
     assert!(
         err.contains("direction 0") && err.contains("|theta| < 90"),
         "{err}"
+    );
+}
+
+/// The data and its truth are published together: a truth file that cannot be written leaves
+/// no CSV (and an earlier CSV untouched), and no temporary file.
+#[test]
+fn the_csv_and_its_truth_are_written_both_or_neither() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "p.json", PARAMS_1);
+    let csv = dir.path().join("d.csv");
+    // A directory where the sidecar goes: its rename fails.
+    std::fs::create_dir(truth_path(&csv)).unwrap();
+    let args = [
+        "synth",
+        "--params",
+        s(&p),
+        "--rig",
+        "sphere:n=50",
+        "--output",
+        s(&csv),
+    ];
+    let out = hairfit(&args);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!csv.exists(), "the CSV was published without its truth");
+    std::fs::write(&csv, "an earlier dataset").unwrap();
+    assert_eq!(hairfit(&args).status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), "an earlier dataset");
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["d.csv", "d.truth.json", "p.json"],
+        "temporaries left"
+    );
+}
+
+#[test]
+fn synth_refuses_to_replace_its_own_parameter_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = write(dir.path(), "x.truth.json", PARAMS_1);
+    let out = hairfit(&[
+        "synth",
+        "--params",
+        s(&truth),
+        "--rig",
+        "sphere:n=50",
+        "--output",
+        s(&dir.path().join("x.csv")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("would replace --params"), "{err}");
+    assert_eq!(std::fs::read_to_string(&truth).unwrap(), PARAMS_1);
+    assert!(!dir.path().join("x.csv").exists());
+}
+
+/// The issue's case: 10⁸ azimuthal steps aborted at 9.6 GB. Refused before allocating, naming
+/// the options; `--max-memory` sets the limit either way.
+#[test]
+fn synth_estimates_memory_before_allocating() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "p.json", PARAMS_1);
+    let csv = dir.path().join("d.csv");
+    let run = |rig: &str, extra: &[&str]| {
+        let mut a = vec![
+            "synth",
+            "--params",
+            s(&p),
+            "--rig",
+            rig,
+            "--output",
+            s(&csv),
+        ];
+        a.extend_from_slice(extra);
+        hairfit(&a)
+    };
+    let t0 = std::time::Instant::now();
+    let out = run("azimuthal:steps=100000000", &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--rig") && err.contains("steps") && err.contains("--max-memory"),
+        "{err}"
+    );
+    // Refused, not attempted: allocating 9.6 GB alone takes longer than this.
+    assert!(t0.elapsed() < std::time::Duration::from_secs(5));
+    // 3 incidences × 10k steps ≈ 3.8 MB: refused under 1M, written under 100M.
+    let out = run("azimuthal:steps=10000", &["--max-memory", "1M"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--max-memory"));
+    ok(&run("azimuthal:steps=10000", &["--max-memory", "100M"]));
+    let out = run("sphere:n=10", &["--max-memory", "lots"]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "clap refuses a size it cannot read"
     );
 }

@@ -3,14 +3,14 @@
 //! bytes and the same truth file, and every shipped synthetic CSV (one with a truth sidecar)
 //! must have its line.
 
-use std::path::{Path, PathBuf};
+#[path = "support/cli.rs"]
+mod cli;
+
+use cli::root;
+use std::path::Path;
 use std::process::Command;
 
 use hairfit::synth::Truth;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// The `hairfit synth ...` lines of data/README.md.
 fn documented_commands() -> Vec<String> {
@@ -43,16 +43,8 @@ fn every_documented_command_reproduces_its_shipped_files() {
         let mut rerun: Vec<String> = args.iter().map(|s| s.to_string()).collect();
         let k = rerun.iter().position(|a| a == "--output").unwrap();
         rerun[k + 1] = fresh.to_str().unwrap().to_string();
-        let out = Command::new(env!("CARGO_BIN_EXE_hairfit"))
-            .args(&rerun)
-            .current_dir(root())
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{line}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let rerun: Vec<&str> = rerun.iter().map(String::as_str).collect();
+        cli::hairfit_ok(&rerun);
         let want = std::fs::read(root().join(&shipped)).unwrap();
         let got = std::fs::read(&fresh).unwrap();
         assert!(
@@ -115,4 +107,31 @@ fn shipped_data_cover_both_channel_counts_and_every_rig() {
         .map(|e| e.unwrap().metadata().unwrap().len())
         .sum();
     assert!(total < 400_000, "data/ is {total} bytes");
+}
+
+/// `data/scan_example.txt` is `data/scan_example.csv` rewritten by the documented awk script:
+/// rerun it and compare the bytes (the CSV itself is checked with the other synth lines).
+#[test]
+fn the_scan_example_is_its_documented_rewrite_of_the_synthetic_csv() {
+    let readme = std::fs::read_to_string(root().join("data/README.md")).unwrap();
+    let line = "awk -f data/scan_example.awk data/scan_example.csv > data/scan_example.txt";
+    assert!(
+        readme.contains(line),
+        "data/README.md lost the command `{line}`"
+    );
+    let out = Command::new("awk")
+        .args(["-f", "data/scan_example.awk", "data/scan_example.csv"])
+        .current_dir(root())
+        .output()
+        .expect("awk runs (POSIX)");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let shipped = std::fs::read(root().join("data/scan_example.txt")).unwrap();
+    assert!(
+        out.stdout == shipped,
+        "data/scan_example.txt differs from what the awk command makes: regenerate it"
+    );
 }

@@ -1,4 +1,4 @@
-//! `hairfit batch --merge`: one row per manifest item in `DIR/summary.csv` (status, goodness of
+//! `hairfit batch --merge`: one row per manifest item in `DIR/summary.csv` (status, verdict, goodness of
 //! fit, every parameter with its standard error, the scales) and `DIR/index.html` linking each
 //! item's report. Items not run yet are listed as `missing`, never left out.
 
@@ -60,6 +60,11 @@ pub fn fit_status(dir: &Path) -> Option<String> {
     Some(fit.status.as_str().to_string())
 }
 
+/// The verdict in `dir/fit.json`, if it holds a readable fit.
+pub fn fit_verdict(dir: &Path) -> Option<crate::files::Verdict> {
+    Some(FitJson::load(&dir.join("fit.json")).ok()?.verdict)
+}
+
 /// What `--merge` found.
 #[derive(Debug, Clone)]
 pub struct MergeSummary {
@@ -73,10 +78,11 @@ fn number(x: Option<f64>) -> String {
     x.map(crate::error::readable).unwrap_or_default()
 }
 
-const FIXED_COLUMNS: [&str; 8] = [
+const FIXED_COLUMNS: [&str; 9] = [
     "name",
     "data",
     "status",
+    "verdict",
     "n_samples",
     "reduced_chi2",
     "rms",
@@ -138,11 +144,12 @@ pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSum
             Some(Err(_)) => row[2] = "unreadable".into(),
             Some(Ok(f)) => {
                 row[2] = f.status.as_str().into();
-                row[3] = f.data.n_samples.to_string();
-                row[4] = number(f.residuals.reduced_chi2);
-                row[5] = number(f.residuals.rms);
-                row[6] = f.residuals.dof.to_string();
-                row[7] = f.warnings.len().to_string();
+                row[3] = f.verdict.as_str().into();
+                row[4] = f.data.n_samples.to_string();
+                row[5] = number(f.residuals.reduced_chi2);
+                row[6] = number(f.residuals.rms);
+                row[7] = f.residuals.dof.to_string();
+                row[8] = f.warnings.len().to_string();
                 let base = FIXED_COLUMNS.len();
                 for p in &f.parameters {
                     let k = base + 3 * params.iter().position(|n| n == &p.name).unwrap_or(0);
@@ -198,7 +205,8 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
     s += "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}\
           td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;font-size:90%;white-space:nowrap}\
           td:first-child,th:first-child{text-align:left}\
-          .missing,.unreadable,.failed,.interrupted{color:#b00}</style></head><body>\n";
+          .missing,.unreadable,.failed,.interrupted,.v-failed,.v-interrupted{color:#b00}\
+          .v-poor_fit td:nth-child(3),.v-undetermined td:nth-child(3){background:#fff3cd}</style></head><body>\n";
     s += &format!(
         "<h1>hairfit batch</h1>\n<p>Manifest <code>{}</code>: {} items. Each name links to the item's report; the whole table is <a href=\"summary.csv\">summary.csv</a>.</p>\n<table>\n<tr>",
         escape(&manifest.path.display().to_string()),
@@ -210,7 +218,8 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
     s += "</tr>\n";
     for row in &table.rows {
         let status = &row[2];
-        s += &format!("<tr class=\"{}\">", escape(status));
+        let verdict = &row[3];
+        s += &format!("<tr class=\"{} v-{}\">", escape(status), escape(verdict));
         for &c in &shown {
             let cell = &row[c];
             if c == 0 && status != "missing" {

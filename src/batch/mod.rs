@@ -142,12 +142,14 @@ fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOut
     });
     match result {
         Err(e) => ItemOutcome::Failed(e.to_string()),
-        Ok(outcome) => {
-            // The report, as `hairfit fit` draws it after the fit.
-            let report = crate::report::report_line(&dir, &outcome.json, &outcome.curves);
+        Ok(run) => {
             let status = merge::fit_status(&dir).unwrap_or_else(|| "unknown".into());
             if status == "interrupted" {
                 return ItemOutcome::Interrupted;
+            }
+            // As `hairfit fit`, an item whose report could not be drawn failed (and reruns).
+            if let Err(e) = run.report_result(&dir) {
+                return ItemOutcome::Failed(e.to_string());
             }
             let stamp = ItemStamp {
                 argv: item.argv.clone(),
@@ -155,7 +157,7 @@ fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOut
             match stamp.write(out, &item.name) {
                 Ok(()) => ItemOutcome::Fitted {
                     status,
-                    report: report.trim_end().to_string(),
+                    report: run.report_line(&dir).trim_end().to_string(),
                 },
                 Err(e) => ItemOutcome::Failed(format!("fitted, but {e}")),
             }

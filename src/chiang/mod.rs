@@ -8,7 +8,9 @@
 //! - [`quadrature`]: cached Gauss–Legendre rules in γ = asin h;
 //! - [`evaluator`]: batches grouped by exit direction so the width integral is paid once each;
 //! - [`file`]: the Chiang parameter file (JSON names of CHIANG.md);
-//! - [`jacobian`]: seeding dual numbers, Jacobians of a batch.
+//! - [`jacobian`]: seeding dual numbers, Jacobians of a batch;
+//! - [`forward`]: the model as the fit's `Forward` (values and exact Jacobians per batch);
+//! - [`fit`]: `hairfit fit --model chiang` through the shared fit pipeline.
 //!
 //! Angles reuse [`crate::model::Angles`]: the frame and sign conventions are MODEL.md's.
 
@@ -25,9 +27,12 @@ pub mod azimuthal;
 pub mod bessel;
 pub mod evaluator;
 pub mod file;
+pub mod fit;
+pub mod forward;
 pub mod jacobian;
 pub mod longitudinal;
 pub mod quadrature;
+pub mod variant;
 
 pub use azimuthal::AzimuthalTable;
 pub use evaluator::{scattering, scattering_batch, scattering_from_table};
@@ -163,6 +168,15 @@ pub struct ParamFact {
     pub upper: f64,
     pub upper_inclusive: bool,
     pub default: Option<f64>,
+    /// Fit bounds `[fit_lo, fit_hi]`, file units, inside the domain.
+    pub fit_lo: f64,
+    pub fit_hi: f64,
+    /// Typical range, file units: the box the fit's start design samples.
+    pub typical: (f64, f64),
+    /// The value a fit holds the parameter at when it does not vary it (file units).
+    pub reference: f64,
+    /// True when a fit varies it only on request (`--free eta`), as for the Marschner model.
+    pub on_request: bool,
 }
 
 impl ParamFact {
@@ -206,11 +220,18 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "eta",
         meaning: "cortex index of refraction",
         unit: "1",
+        // CHIANG.md says > 1. Capped at 10 as in the Marschner table: no fibre comes near it
+        // (diamond is 2.42), and η² overflows for η near 1e154, turning S into NaN.
         lower: 1.0,
         lower_inclusive: false,
-        upper: f64::INFINITY,
-        upper_inclusive: false,
+        upper: 10.0,
+        upper_inclusive: true,
         default: Some(1.55),
+        fit_lo: 1.000001,
+        fit_hi: 2.5,
+        typical: (1.5, 1.6),
+        reference: 1.55,
+        on_request: true,
     },
     ParamFact {
         name: "sigma_a",
@@ -221,6 +242,12 @@ pub const PARAMETERS: [ParamFact; 5] = [
         upper: f64::INFINITY,
         upper_inclusive: false,
         default: None,
+        // σ_a = 50 per radius already removes all transmitted light.
+        fit_lo: 0.0,
+        fit_hi: 50.0,
+        typical: (0.05, 2.0),
+        reference: 0.4,
+        on_request: false,
     },
     ParamFact {
         name: "beta_m",
@@ -231,6 +258,12 @@ pub const PARAMETERS: [ParamFact; 5] = [
         upper: 1.0,
         upper_inclusive: true,
         default: None,
+        // pbrt-v4 clamps β to [0.01, 1].
+        fit_lo: 0.01,
+        fit_hi: 1.0,
+        typical: (0.1, 0.5),
+        reference: 0.3,
+        on_request: false,
     },
     ParamFact {
         name: "beta_n",
@@ -241,6 +274,12 @@ pub const PARAMETERS: [ParamFact; 5] = [
         upper: 1.0,
         upper_inclusive: true,
         default: None,
+        // Below 0.05 the logistic peaks get too narrow for the default 1024 width nodes.
+        fit_lo: 0.05,
+        fit_hi: 1.0,
+        typical: (0.1, 0.5),
+        reference: 0.3,
+        on_request: false,
     },
     ParamFact {
         name: "alpha_deg",
@@ -251,8 +290,25 @@ pub const PARAMETERS: [ParamFact; 5] = [
         upper: 90.0,
         upper_inclusive: false,
         default: None,
+        // As the Marschner α_R: a tilt beyond ±30° is not hair (|α| ≤ 5° in practice).
+        fit_lo: -30.0,
+        fit_hi: 30.0,
+        typical: (-5.0, 5.0),
+        reference: 2.0,
+        on_request: false,
     },
 ];
+
+/// The report's unit label of a Chiang parameter by its JSON name (`sigma_a[1]` included), from
+/// [`PARAMETERS`]: `deg`, `per fiber radius`, or empty.
+pub fn chiang_unit_label(json_name: &str) -> &'static str {
+    let base = json_name.split('[').next().unwrap_or(json_name);
+    match PARAMETERS.iter().find(|f| f.name == base).map(|f| f.unit) {
+        Some("degree") => "deg",
+        Some("1/radius") => "per fiber radius",
+        _ => "",
+    }
+}
 
 /// Chiang parameters, α in RADIANS, generic over the number type.
 #[derive(Debug, Clone, PartialEq)]

@@ -11,9 +11,11 @@ use clap::Args;
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
+use crate::family::ModelFamily;
 use crate::fit::{
-    fit, fit_data, write_outputs, EffectsChoice, FitOptions, FitOutcome, Global, Loss, Space,
+    fit_data, fit_family, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
+use crate::outdir::{publish_fit, PublishedFit};
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
 #[derive(Debug, Clone, Args)]
@@ -24,9 +26,16 @@ pub struct FitArgs {
     /// Loss: l2, huber, cauchy or soft-l1.
     #[arg(long, default_value = "l2")]
     pub loss: Loss,
-    /// Robust-loss scale C, in normalised residual units.
-    #[arg(long, default_value_t = 1.0)]
-    pub loss_scale: f64,
+    /// Robust-loss scale C in normalised residual units, or `auto`: the loss's tuning constant
+    /// (huber/soft-l1 1.345, cauchy 2.385) times the residuals' noise level (1.4826·MAD of a
+    /// least-squares fit, refined once from the robust fit); fit.json records the value used.
+    #[arg(long, default_value = "auto")]
+    pub loss_scale: LossScale,
+    /// Parameter intervals: `profile` (profile likelihood, Δχ² = 1 and 3.84, beside the
+    /// linearised standard error), `linear` (standard errors only) or `auto` (profile when the
+    /// estimated cost is at most a few seconds; fit.json records the choice and why).
+    #[arg(long, default_value = "auto")]
+    pub intervals: Intervals,
     /// Number of multi-start points (Latin hypercube over MODEL.md's typical ranges).
     #[arg(long, default_value_t = 16)]
     pub starts: usize,
@@ -36,7 +45,8 @@ pub struct FitArgs {
     /// Global stage between multi-start and polish: none, pso or nelder-mead.
     #[arg(long, default_value = "none")]
     pub global: Global,
-    /// Fix a parameter, NAME=VALUE (MODEL.md names, degrees for *_deg); repeatable.
+    /// Fix a parameter, NAME=VALUE (MODEL.md's or, with --model chiang, CHIANG.md's names;
+    /// degrees for *_deg); repeatable.
     #[arg(long = "fix")]
     pub fix: Vec<String>,
     /// Free a parameter that is fixed by default (only `eta`).
@@ -61,6 +71,13 @@ pub struct FitArgs {
     /// Never show a progress bar.
     #[arg(long)]
     pub no_progress: bool,
+    /// Replace an output directory that holds files other than a hairfit result (the run's own
+    /// input data file is never replaced).
+    #[arg(long)]
+    pub force: bool,
+    /// Exit 2 when the verdict is poor_fit or undetermined (0 without --strict).
+    #[arg(long)]
+    pub strict: bool,
     #[command(flatten)]
     pub model: ModelArgs,
     #[command(flatten)]
@@ -70,6 +87,7 @@ pub struct FitArgs {
 impl FitArgs {
     /// The fit options these arguments ask for.
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
+        self.model.check_family_options()?;
         let cfg = self.model.config()?;
         let default_lobes = crate::model::Lobes::default();
         let explicit = cfg.effects.lobes != default_lobes
@@ -99,7 +117,12 @@ impl FitArgs {
                 "eta" => free_eta = true,
                 other => {
                     return Err(Error::Other(format!(
-                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on; delta_eta_prime and delta_h_m stay fixed)"
+                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on{})",
+                        if self.model.family == ModelFamily::Marschner {
+                            "; delta_eta_prime and delta_h_m stay fixed"
+                        } else {
+                            ""
+                        }
                     )))
                 }
             }
@@ -123,12 +146,6 @@ impl FitArgs {
                 self.starts
             )));
         }
-        if !(self.loss_scale.is_finite() && self.loss_scale > 0.0) {
-            return Err(Error::Other(format!(
-                "--loss-scale {}: must be a positive number",
-                self.loss_scale
-            )));
-        }
         Ok(FitOptions {
             space: self.space,
             loss: self.loss,
@@ -147,26 +164,45 @@ impl FitArgs {
             polish_iters: self.polish_iters,
             cancel,
             progress: !self.no_progress,
+            intervals: self.intervals,
+            family: self.model.family,
+            chiang: self.model.chiang()?,
         })
     }
 }
 
-/// `hairfit fit DATA --out DIR`: load, fit, write the fit's files into `out`; the outcome.
+/// `hairfit fit DATA --out DIR`: lock `out`, load, fit, and publish the fit's files with its
+/// report as one set (see [`crate::outdir`]).
 pub fn fit_command(
     data_path: &Path,
     load_options: &LoadOptions,
     args: &FitArgs,
     out: &Path,
     cancel: Option<Arc<AtomicBool>>,
-) -> Result<FitOutcome> {
+) -> Result<PublishedFit> {
     let opts = args.options(cancel)?;
-    let (ds, report) = load(data_path, load_options)?;
-    let data = fit_data(&ds);
-    let mut outcome = fit(&data, &data_path.display().to_string(), report, &opts)?;
-    // The loader's settings are options of this fit too.
-    outcome.json.options.load = Some(format!("{load_options:?}"));
-    write_outputs(out, &outcome)?;
-    Ok(outcome)
+    publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
+        let (ds, report) = load(data_path, load_options)?;
+        let load_warnings = report.warnings.clone();
+        // --strict: angles that look like radians are an error, not a warning.
+        if args.strict {
+            if let Some(w) = load_warnings
+                .iter()
+                .find(|w| w.starts_with(crate::data::unit::RADIANS_WARNING))
+            {
+                return Err(Error::Other(format!(
+                    "{}: {w} (--strict makes this an error)",
+                    data_path.display()
+                )));
+            }
+        }
+        let data = fit_data(&ds);
+        let mut outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
+        // The loader's settings are options of this fit too, and its warnings the fit's.
+        outcome.json.options.load = Some(format!("{load_options:?}"));
+        outcome.json.warnings.splice(0..0, load_warnings);
+        Ok(outcome)
+    })
 }
 
 /// Everything `hairfit fit` takes: the data file, the loader's options, the fit's options and
@@ -180,7 +216,7 @@ pub struct FitCommandArgs {
     pub load: LoadOptions,
     #[command(flatten)]
     pub fit: FitArgs,
-    /// Output directory (e.g. fits/NAME).
+    /// Output directory (e.g. fits/NAME), replaced as a whole by the new result (see --force).
     #[arg(long)]
     pub out: std::path::PathBuf,
 }

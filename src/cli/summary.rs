@@ -1,4 +1,5 @@
-//! The one-screen summary printed by `hairfit fit` / `hairfit demo`.
+//! The one-screen summary printed by `hairfit fit` / `hairfit demo`: the verdict, its reasons
+//! and suggestions first, then the model, parameters, residuals, stages and warnings.
 
 use std::path::Path;
 
@@ -14,8 +15,29 @@ fn pm(v: Option<f64>, e: Option<f64>) -> String {
     }
 }
 
+/// The 68% profile interval column: `  68% [lo, hi]` (an open side reads "open"); empty when
+/// the parameter was not profiled.
+fn interval(i: Option<&crate::files::Interval>) -> String {
+    let side = |v: Option<f64>| v.map_or("open".to_string(), |v| format!("{v:.6}"));
+    i.map_or(String::new(), |i| {
+        format!("  68% [{}, {}]", side(i.lower), side(i.upper))
+    })
+}
+
+/// `verdict: …`, a line per reason and per suggestion (what to try, then why).
+pub fn verdict_lines(j: &crate::files::FitJson) -> String {
+    let mut s = format!("verdict: {}\n", j.verdict);
+    for r in &j.reasons {
+        s += &format!("  - {r}\n");
+    }
+    for t in &j.suggestions {
+        s += &format!("  try: {}\n       because {}\n", t.action, t.evidence);
+    }
+    s
+}
+
 /// The summary of `out`; `dir` is where its files were written, if they were.
-pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
+pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     let j = &out.json;
     let mut s = String::new();
     let l = j.model.effects.lobes;
@@ -25,6 +47,7 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         .map(|(_, n)| *n)
         .collect();
     let on_off = |b: bool| if b { "on" } else { "off" };
+    s += &verdict_lines(j);
     s += &format!(
         "hairfit fit: {} — {} samples × {} channel(s) from {}\n",
         j.status,
@@ -32,14 +55,25 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         j.data.channels.len(),
         j.data.file
     );
-    s += &format!(
-        "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
-        j.model.mode,
-        lobes.join("+"),
-        on_off(j.model.effects.glints),
-        on_off(j.model.effects.eccentricity),
-        j.options.effects_choice
-    );
+    match &j.chiang {
+        Some(c) => {
+            s += &format!(
+                "model: chiang, terms {}, {} width nodes\n",
+                c.effects_text(),
+                c.width_nodes
+            )
+        }
+        None => {
+            s += &format!(
+                "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
+                j.model.mode,
+                lobes.join("+"),
+                on_off(j.model.effects.glints),
+                on_off(j.model.effects.eccentricity),
+                j.options.effects_choice
+            )
+        }
+    }
     if j.options.measurement == Measurement::Radiance {
         s += "measurement: radiance, the model times cos theta_i (--measurement radiance)\n";
     }
@@ -49,10 +83,11 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
     s += "parameters:\n";
     for p in &j.parameters {
         s += &format!(
-            "  {:<16} {}  {}\n",
+            "  {:<16} {}  {}{}\n",
             p.name,
             pm(p.value, p.std_error),
-            p.status
+            p.status,
+            interval(p.interval_68.as_ref())
         );
     }
     for c in &j.scale {
@@ -72,6 +107,28 @@ pub fn summary(out: &FitOutcome, dir: Option<&Path>) -> String {
         r.reduced_chi2.map_or("null".into(), |v| format!("{v:.4e}")),
         r.dof
     );
+    if !j.options.intervals.is_empty() {
+        s += &format!(
+            "intervals: {} ({})\n",
+            j.options.intervals, j.options.intervals_reason
+        );
+    }
+    if let Some(d) = &r.down_weighted {
+        let lines: Vec<String> = d.lines.iter().take(12).map(|l| l.to_string()).collect();
+        s += &format!(
+            "robust loss (scale {:.4e}{}): {} value(s) down-weighted (weight < {}){}{}\n",
+            j.options.loss_scale,
+            if j.options.loss_scale_auto {
+                ", auto"
+            } else {
+                ""
+            },
+            d.count,
+            d.threshold,
+            if lines.is_empty() { "" } else { ", lines " },
+            lines.join(", ") + if d.lines.len() > 12 { ", …" } else { "" }
+        );
+    }
     for t in &j.trace {
         s += &format!(
             "  stage {:<18} iterations {:>5}  cost {:.6e}  {:.2} s\n",

@@ -16,7 +16,8 @@ pub(super) struct CostFigure {
 }
 
 /// (section, caption, x-axis description) of each plot, left to right.
-const SECTIONS: [(&str, &str, &str); 3] = [
+/// Only the sections present in the ledger are drawn (`--model chiang` has its own two).
+const SECTIONS: [(&str, &str, &str); 5] = [
     (
         "model",
         "Model: roots × effects",
@@ -31,6 +32,16 @@ const SECTIONS: [(&str, &str, &str); 3] = [
         "fit",
         "Fit: stages, starts, samples",
         "fit wall time (s, log)",
+    ),
+    (
+        "chiang-b0.3",
+        "Chiang width nodes, beta_m = beta_n = 0.3",
+        "time per sample (s, log)",
+    ),
+    (
+        "chiang-b0.05",
+        "Chiang width nodes, beta_m = beta_n = 0.05",
+        "time per sample (s, log)",
     ),
 ];
 
@@ -50,8 +61,12 @@ impl Figure for CostFigure {
             if self.quick { "; --quick run" } else { "" }
         );
         let (_, body) = header(root, 70, &self.title(), &sub)?;
-        let areas = body.split_evenly((1, 3));
-        for ((section, caption, x_desc), area) in SECTIONS.iter().zip(areas.iter()) {
+        let present: Vec<_> = SECTIONS
+            .iter()
+            .filter(|(section, _, _)| self.rows.iter().any(|r| r.section == *section))
+            .collect();
+        let areas = body.split_evenly((1, present.len().max(1)));
+        for ((section, caption, x_desc), area) in present.into_iter().zip(areas.iter()) {
             let rows: Vec<&CostRow> = self.rows.iter().filter(|r| r.section == *section).collect();
             draw_section(area, &rows, caption, x_desc)?;
         }

@@ -8,6 +8,7 @@
 //! Files: [`model`], [`jacobian`] and [`fits`] measure one section each, [`ledger`] marks the
 //! Pareto front and writes the files, [`figure`] draws cost.svg/png with the plotting kit.
 
+mod chiang;
 mod figure;
 mod fits;
 mod jacobian;
@@ -35,6 +36,11 @@ pub const COST_SEED: u64 = 20_03;
 pub struct CostOptions {
     /// Fewer angles, shorter timings, fewer fit variants: under a minute on 2 cores.
     pub quick: bool,
+    /// Replace an output directory that holds files other than a hairfit result.
+    pub force: bool,
+    /// `chiang`: the Chiang section instead (width nodes × cache against accuracy, with the
+    /// Marschner model's time as the yardstick).
+    pub family: crate::family::ModelFamily,
 }
 
 /// One measured setting of one knob.
@@ -93,12 +99,19 @@ fn time_per_call(min_s: f64, mut f: impl FnMut()) -> f64 {
 
 /// Measure everything and write cost.csv, cost.json, cost.svg and cost.png into `out`.
 pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
+    // Locked before measuring, so a second run fails fast; the files are published as one set.
+    let set = crate::outdir::OutputSet::begin(out, "hairfit cost", options.force, &[])?;
     let t0 = Instant::now();
     let quick = options.quick;
-    let mut rows = model::model_rows(quick);
-    let data = fits::synthetic_data();
-    rows.extend(jacobian::jacobian_rows(&data, quick)?);
-    rows.extend(fits::fit_rows(&data, quick)?);
+    let mut rows = Vec::new();
+    if options.family == crate::family::ModelFamily::Chiang {
+        rows.extend(chiang::chiang_rows(quick)?);
+    } else {
+        rows.extend(model::model_rows(quick));
+        let data = fits::synthetic_data();
+        rows.extend(jacobian::jacobian_rows(&data, quick)?);
+        rows.extend(fits::fit_rows(&data, quick)?);
+    }
     mark_pareto(&mut rows);
     let ledger = CostLedger {
         hairfit_version: env!("CARGO_PKG_VERSION").into(),
@@ -109,10 +122,12 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
             "model": "relative error of S per channel against exact roots with every effect, denominator floored at 1e-3 x the median reference S; time per evaluation (one direction pair, all channels, one thread)",
             "jacobian": "per parameter column: ||J_fd - J_ad|| / ||J_ad|| (max and RMS over columns); time per full Jacobian of the synthetic data",
             "fit": "|estimate - truth| / width of MODEL.md's typical range, over the free shape parameters (max and RMS); wall time of the whole fit",
+            "chiang-b0.3, chiang-b0.05": "relative error of the Chiang S per channel against 4096 width nodes, denominator floored at 1e-3 x the median reference S; time per sample (all channels, one thread); evaluations per second per core = 1/time_s; section baseline: the Marschner model's time on the same random directions (its error is not comparable)",
         }),
         rows,
         wall_time_s: t0.elapsed().as_secs_f64(),
     };
-    ledger::write_ledger(out, &ledger)?;
+    ledger::write_ledger(set.staging(), &ledger)?;
+    set.publish()?;
     Ok(ledger)
 }

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use super::lines::{csv_error, next_line, read_error, LineCounter};
 use super::rows::{Cell, RowCells, Rows};
-use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
+use super::{Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 
@@ -23,11 +23,10 @@ struct Columns {
     ignored: Vec<String>,
 }
 
-/// What comes before the data: the header fields, the unit directive if any (with its line),
-/// and the number of lines consumed (comments, blanks and the header).
+/// What comes before the data: the header fields and the number of lines consumed (comments,
+/// blanks and the header). The unit line is read by [`super::unit::file_directive`].
 struct Preamble {
     header: csv::StringRecord,
-    directive: Option<(AngleUnit, u64)>,
     lines: u64,
 }
 
@@ -40,33 +39,11 @@ fn skip_bom(reader: &mut impl BufRead, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The `# angles: rad|deg` directive in a comment line, if the comment is one.
-fn angle_directive(comment: &str, path: &Path, line: u64) -> Result<Option<AngleUnit>> {
-    let body = comment.trim_start_matches('#').trim();
-    let Some(rest) = body
-        .strip_prefix("angles:")
-        .or_else(|| body.strip_prefix("angles :"))
-    else {
-        return Ok(None);
-    };
-    match rest.trim() {
-        "deg" => Ok(Some(AngleUnit::Deg)),
-        "rad" => Ok(Some(AngleUnit::Rad)),
-        other => Err(Error::input(
-            path,
-            line,
-            1,
-            format!("unit directive `angles: {other}`: write `# angles: deg` or `# angles: rad`"),
-        )),
-    }
-}
-
 /// Read the comment/blank lines and the header line at the top of a CSV file.
 fn read_preamble(reader: &mut impl BufRead, delimiter: u8, path: &Path) -> Result<Preamble> {
     skip_bom(reader, path)?;
     let mut buf = Vec::new();
     let mut lines = 0u64;
-    let mut directive = None;
     loop {
         if !next_line(reader, &mut buf, path)? {
             return Err(Error::input(
@@ -84,17 +61,10 @@ fn read_preamble(reader: &mut impl BufRead, delimiter: u8, path: &Path) -> Resul
             continue;
         }
         if t.starts_with('#') {
-            if let Some(unit) = angle_directive(t, path, lines)? {
-                directive = Some((unit, lines));
-            }
             continue;
         }
         let header = parse_header_line(&buf, delimiter, path, lines)?;
-        return Ok(Preamble {
-            header,
-            directive,
-            lines,
-        });
+        return Ok(Preamble { header, lines });
     }
 }
 
@@ -327,7 +297,8 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
     let mut reader = super::open(path)?;
     let delimiter = options.delimiter_for(path)?;
     let pre = read_preamble(&mut reader, delimiter, path)?;
-    let unit = resolve_unit(options.angles, pre.directive, path)?;
+    let directive = super::unit::file_directive(path, 1)?;
+    let unit = super::unit::resolve(options.angles, directive, path)?;
     let header_line = pre.lines;
     let cols = columns_from_header(&pre.header, path, header_line)?;
     let mut rows = Rows::new(
@@ -336,7 +307,8 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
         cols.has_weight,
         unit,
         options.negative_tolerance,
-    );
+    )
+    .unit_stated(options.angles.is_some() || directive.is_some());
     if !cols.ignored.is_empty() {
         rows.note(format!("ignored columns: {}", cols.ignored.join(", ")));
     }
@@ -357,36 +329,6 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
         ));
     }
     Ok(rows.finish())
-}
-
-/// The angle unit: `--angles` wins only if it agrees with the file's own directive.
-fn resolve_unit(
-    option: Option<AngleUnit>,
-    directive: Option<(AngleUnit, u64)>,
-    path: &Path,
-) -> Result<AngleUnit> {
-    match (option, directive) {
-        (Some(o), Some((d, line))) if o != d => Err(Error::input(
-            path,
-            line,
-            1,
-            format!(
-                "the file says its angles are in {} but --angles {} was given; drop --angles",
-                unit_name(d),
-                unit_name(o)
-            ),
-        )),
-        (Some(o), _) => Ok(o),
-        (None, Some((d, _))) => Ok(d),
-        (None, None) => Ok(AngleUnit::Deg),
-    }
-}
-
-fn unit_name(u: AngleUnit) -> &'static str {
-    match u {
-        AngleUnit::Deg => "deg",
-        AngleUnit::Rad => "rad",
-    }
 }
 
 /// Where the data rows come from.

@@ -217,7 +217,9 @@ pub(crate) fn load_json(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         has_weight,
         AngleUnit::Deg,
         options.negative_tolerance,
-    );
+    )
+    // The format itself says degrees (and refuses --angles rad): nothing to guess.
+    .unit_stated(true);
     *rows.meta_mut() = file.meta.clone();
     let mut radiance: Vec<Cell> = vec![None; nc];
     let mut sigma: Vec<Cell> = vec![None; if has_sigma { nc } else { 0 }];

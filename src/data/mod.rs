@@ -30,6 +30,7 @@ pub(crate) mod lines;
 mod report;
 mod rows;
 mod scan;
+pub(crate) mod unit;
 
 use std::path::Path;
 

@@ -40,7 +40,15 @@ impl fmt::Display for LoadReport {
             )?;
         }
         for [line, earlier] in &self.duplicate_of {
-            writeln!(f, "    line {line} repeats the angles of line {earlier}")?;
+            writeln!(f, "    line {line} repeats line {earlier}")?;
+        }
+        if self.replicates.count > 0 {
+            writeln!(
+                f,
+                "  replicates (a direction measured again, kept): {} (lines {})",
+                self.replicates.count,
+                line_list(&self.replicates)
+            )?;
         }
         if self.negative_kept.count > 0 {
             writeln!(
@@ -52,6 +60,9 @@ impl fmt::Display for LoadReport {
         }
         for note in &self.notes {
             writeln!(f, "  note: {note}")?;
+        }
+        for warning in &self.warnings {
+            writeln!(f, "  warning: {warning}")?;
         }
         Ok(())
     }

@@ -13,6 +13,8 @@ pub(crate) struct Rows {
     ds: Dataset,
     report: LoadReport,
     unit: AngleUnit,
+    /// The file or `--angles` said the unit (else degrees were assumed, and checked).
+    unit_stated: bool,
     negative_tolerance: Option<f64>,
 }
 
@@ -56,8 +58,16 @@ impl Rows {
             ds: Dataset::with_channels(channels, sigma, weight),
             report: LoadReport::default(),
             unit,
+            unit_stated: false,
             negative_tolerance,
         }
+    }
+
+    /// Whether the unit was stated (a unit line, `--angles`, a format that fixes it); when it
+    /// was not, [`Rows::finish`] warns about degrees that look like radians.
+    pub fn unit_stated(mut self, stated: bool) -> Self {
+        self.unit_stated = stated;
+        self
     }
 
     /// Add a note to the report.
@@ -190,6 +200,18 @@ impl Rows {
     pub fn finish(mut self) -> (Dataset, LoadReport) {
         remove_duplicates(&mut self.ds, &mut self.report);
         count_negative_kept(&self.ds, &mut self.report);
+        if !self.unit_stated && self.unit == AngleUnit::Deg {
+            self.report
+                .warnings
+                .extend(super::unit::radians_warning(&self.ds));
+        }
+        if self.report.replicates.count > 0 {
+            self.report.notes.push(format!(
+                "{} rows measure again the direction of an earlier row with other values (kept \
+                 as replicates; identical lines are rejected as duplicates)",
+                self.report.replicates.count
+            ));
+        }
         self.report.accepted = self.ds.len() as u64;
         shrink_if_loose(&mut self.ds);
         if self.report.negative_kept.count > 0 {
@@ -203,9 +225,19 @@ impl Rows {
     }
 }
 
-/// The bit pattern of an angle, with -0 and +0 equal (they are the same direction).
-fn angle_key(x: f64) -> u64 {
-    (x + 0.0).to_bits()
+/// Directions closer than this (radians) are the same direction: an angle written as 370° and
+/// as 10° differ in the last bits after conversion and wrapping.
+const SAME_DIRECTION_RAD: f64 = 1e-9;
+
+/// An angle as an integer number of [`SAME_DIRECTION_RAD`], azimuths wrapped to [0, 2π) first
+/// (so −180°, 180° and 540° are one direction); -0 and +0 are equal.
+fn angle_key(x: f64, wrap: bool) -> u64 {
+    use std::f64::consts::TAU;
+    let x = if wrap { x.rem_euclid(TAU) } else { x };
+    let steps = (x / SAME_DIRECTION_RAD).round();
+    let turn = (TAU / SAME_DIRECTION_RAD).round();
+    let steps = if wrap && steps >= turn { 0.0 } else { steps };
+    (steps as i64) as u64
 }
 
 /// A 64-bit mix of a sample's four angle keys (FxHash-style multiply-rotate).
@@ -215,17 +247,31 @@ fn angles_hash(keys: [u64; 4]) -> u64 {
     })
 }
 
-/// Duplicate rejection: a sample with the same four angles as an earlier accepted sample is
-/// removed. Candidates are found by sorting one u64 per sample (hash in the high bits, index in
-/// the low bits: 8 bytes per sample, far less than a hash map), then confirmed on the angles.
+/// Whether samples `i` and `j` hold the same values (radiance, sigma, weight), bit for bit.
+fn same_values(ds: &Dataset, i: usize, j: usize) -> bool {
+    let nc = ds.n_channels();
+    let same = |v: &Vec<f64>| {
+        let (a, b) = (&v[i * nc..(i + 1) * nc], &v[j * nc..(j + 1) * nc]);
+        a.iter()
+            .zip(b)
+            .all(|(x, y)| (x + 0.0).to_bits() == (y + 0.0).to_bits())
+    };
+    same(&ds.radiance) && ds.sigma.as_ref().is_none_or(same) && ds.weight.as_ref().is_none_or(same)
+}
+
+/// Duplicate rejection: a sample with the same direction (φ compared after wrapping) and the
+/// same values as an earlier accepted sample is removed; the same direction with other values
+/// is a replicate, kept and counted. Candidates are found by sorting one u64 per sample (hash
+/// in the high bits, index in the low bits: 8 bytes per sample, far less than a hash map), then
+/// confirmed on the angles.
 fn remove_duplicates(ds: &mut Dataset, report: &mut LoadReport) {
     let n = ds.len();
     let key = |i: usize| {
         [
-            angle_key(ds.theta_i[i]),
-            angle_key(ds.phi_i[i]),
-            angle_key(ds.theta_r[i]),
-            angle_key(ds.phi_r[i]),
+            angle_key(ds.theta_i[i], false),
+            angle_key(ds.phi_i[i], true),
+            angle_key(ds.theta_r[i], false),
+            angle_key(ds.phi_r[i], true),
         ]
     };
     let index_bits = usize::BITS - n.leading_zeros();
@@ -235,8 +281,9 @@ fn remove_duplicates(ds: &mut Dataset, report: &mut LoadReport) {
         .collect();
     order.par_sort_unstable();
     let index = |v: u64| (v & index_mask) as usize;
-    // (duplicate index, first index with the same angles)
+    // (duplicate index, first index with the same line)
     let mut dups: Vec<(usize, usize)> = Vec::new();
+    let mut replicates: Vec<usize> = Vec::new();
     let mut start = 0;
     while start < n {
         let hash = order[start] & !index_mask;
@@ -245,14 +292,30 @@ fn remove_duplicates(ds: &mut Dataset, report: &mut LoadReport) {
             end += 1;
         }
         // Within an equal-hash group (indices ascending), match each member to the earliest
-        // member with identical angles; groups are tiny unless the file is adversarial.
+        // member with the same direction; groups are small unless the file is adversarial or
+        // holds many replicates of one direction.
         for j in start + 1..end {
-            let kj = key(index(order[j]));
-            if let Some(&first) = order[start..j].iter().find(|&&v| key(index(v)) == kj) {
-                dups.push((index(order[j]), index(first)));
+            let (ij, kj) = (index(order[j]), key(index(order[j])));
+            let mut same_direction = order[start..j]
+                .iter()
+                .map(|&v| index(v))
+                .filter(|&i| key(i) == kj);
+            let Some(first) = same_direction.next() else {
+                continue;
+            };
+            match std::iter::once(first)
+                .chain(same_direction)
+                .find(|&i| same_values(ds, i, ij))
+            {
+                Some(same) => dups.push((ij, same)),
+                None => replicates.push(ij),
             }
         }
         start = end;
+    }
+    replicates.sort_unstable();
+    for &r in &replicates {
+        report.replicates.add(ds.source_line[r]);
     }
     if dups.is_empty() {
         return;

@@ -266,7 +266,8 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         Error::Other(m) => Error::Other(format!("{}: {m}", path.display())),
         other => other,
     })?;
-    let unit = options.angles.unwrap_or(AngleUnit::Deg);
+    let directive = super::unit::file_directive(path, 0)?;
+    let unit = super::unit::resolve(options.angles, directive, path)?;
     check_fixed_theta(&lay.fixed, unit)?;
     let mut rows = Rows::new(
         lay.channels.clone(),
@@ -274,7 +275,8 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
         lay.has_weight,
         unit,
         options.negative_tolerance,
-    );
+    )
+    .unit_stated(options.angles.is_some() || directive.is_some());
     let fixed: Vec<String> = ANGLE_COLUMNS
         .iter()
         .zip(lay.fixed)

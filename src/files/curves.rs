@@ -46,10 +46,10 @@ pub struct CurveRow {
 }
 
 impl CurveRow {
-    /// The robust loss gave this sample less than full weight: the one definition of an
-    /// "outlier" that the report marks and counts.
+    /// The robust loss really discounted this value (weight below [`DOWN_WEIGHT`]): the one
+    /// definition of an "outlier" that the fit counts and the report marks.
     pub fn down_weighted(&self) -> bool {
-        self.weight < 1.0
+        self.weight < DOWN_WEIGHT
     }
 
     /// The four angles in degrees, `[θ_i, φ_i, θ_r, φ_r]`.
@@ -57,6 +57,11 @@ impl CurveRow {
         [self.theta_i, self.phi_i, self.theta_r, self.phi_r]
     }
 }
+
+/// A value whose robust-loss weight ρ′ is below this counts as down-weighted. Every robust loss
+/// gives weights just below 1 to ordinary residuals (Cauchy: 0.8 at one loss scale's fifth); below
+/// one half the loss has removed most of the value's pull (Cauchy: |r| > C, Huber: |r| > 2C).
+pub const DOWN_WEIGHT: f64 = 0.5;
 
 /// The header `curves.csv` has, in this order (the fields of [`CurveRow`]; a test checks).
 pub const CURVES_HEADER: [&str; 15] = [

@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyParams};
 use crate::model::{Measurement, ModelConfig, RootMode};
-use crate::params::ParamFile;
 
 /// How a fit (or one solver run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -68,6 +68,105 @@ impl std::fmt::Display for ParamStatus {
     }
 }
 
+/// `fit.json` → `verdict`: what a fit's result is good for. Exit codes follow it (0 for
+/// `good`, `poor_fit`, `undetermined`; 1 for `failed`; 128 + the signal for `interrupted`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// The model describes the data within their noise and every free parameter is determined.
+    Good,
+    /// The residuals show the model does not describe the data (χ² test with a σ column, else
+    /// structure along scans or lack of fit against replicates).
+    PoorFit,
+    /// The fit describes the data but some parameter is not determined by them.
+    #[default]
+    Undetermined,
+    /// The numbers are not a fit (no progress, non-finite values, overflowing weights).
+    Failed,
+    /// Stopped by a signal: the best point so far.
+    Interrupted,
+}
+
+impl Verdict {
+    /// The JSON spelling.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Verdict::Good => "good",
+            Verdict::PoorFit => "poor_fit",
+            Verdict::Undetermined => "undetermined",
+            Verdict::Failed => "failed",
+            Verdict::Interrupted => "interrupted",
+        }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// `fit.json` → `suggestions[]`: one thing to try and why this fit points to it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Suggestion {
+    /// What to change, as options of `hairfit fit` where possible (e.g. `--loss cauchy`).
+    pub action: String,
+    /// The evidence from this fit, with its numbers.
+    pub evidence: String,
+}
+
+/// `fit.json` → `goodness_of_fit.thresholds`: the limits the verdict applied (see
+/// `src/fit/verdict.rs` for why each is what it is).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GofThresholds {
+    /// A test's p-value below this rejects the model.
+    pub p_value: f64,
+    /// With σ: reduced χ² must also exceed this (a misfit worth acting on).
+    pub reduced_chi2: f64,
+    /// Without σ: lag-1 autocorrelation must also exceed this.
+    pub lag1: f64,
+    /// Without σ: observed/expected runs must also be below this.
+    pub runs_ratio: f64,
+    /// Without σ: the lack-of-fit F must also exceed this.
+    pub lack_of_fit_f: f64,
+    /// With a robust loss and σ: residuals beyond this many σ are left out of the χ² test.
+    pub robust_exclusion_sigma: f64,
+}
+
+/// `fit.json` → `goodness_of_fit`: the statistics of the residuals (normalised, in the fit's
+/// space) that decide between `good` and `poor_fit`. `null` where a test does not apply.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GoodnessOfFit {
+    /// The data carry a σ column: the χ² test decides.
+    pub sigma_given: bool,
+    /// Σ r² over the residuals the test uses, its degrees of freedom and upper-tail p-value.
+    pub chi2: Option<f64>,
+    pub chi2_dof: usize,
+    pub chi2_p_value: Option<f64>,
+    /// Residuals left out of the χ² test (a robust loss discounts them; see thresholds).
+    pub chi2_excluded: usize,
+    /// The factor already in every linearised standard error: √(Σr̃²/dof), the residual
+    /// scale (with σ: √(reduced χ²), the PDG scale factor of a poor fit).
+    pub se_scale_factor: Option<f64>,
+    /// Noise level the residuals show, robustly: 1.4826 × median |r| (normalised units).
+    pub robust_noise: Option<f64>,
+    /// Residuals beyond 5 × `robust_noise`, and their share of Σ r².
+    pub large_residuals: usize,
+    pub large_residual_share: Option<f64>,
+    /// Scan slices (fixed incidence and one outgoing angle, ≥ 3 points) the structure tests use.
+    pub slices: usize,
+    /// Wald–Wolfowitz runs test of residual signs along the slices.
+    pub runs: Option<crate::fit::gof::RunsTest>,
+    /// Lag-1 autocorrelation of residuals along the slices.
+    pub lag1: Option<crate::fit::gof::Autocorrelation>,
+    /// Directions (per channel) measured more than once, and the lack-of-fit F test on them.
+    pub replicate_groups: usize,
+    pub lack_of_fit: Option<crate::fit::gof::LackOfFit>,
+    pub thresholds: GofThresholds,
+}
+
 /// `fit.json` → `data`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DataInfo {
@@ -88,6 +187,41 @@ pub struct ParameterEntry {
     /// `null` when fixed or undetermined.
     pub std_error: Option<f64>,
     pub status: ParamStatus,
+    /// Profile-likelihood interval where Δχ² = 1 (68%); `null` when not profiled
+    /// (`options.intervals` = `linear`, or fixed).
+    #[serde(default)]
+    pub interval_68: Option<Interval>,
+    /// Profile-likelihood interval where Δχ² = 3.84 (95%).
+    #[serde(default)]
+    pub interval_95: Option<Interval>,
+    /// The profile's points `[value, Δχ²]` in reporting units, ascending in value (the report
+    /// draws them without refitting); empty when not profiled.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub profile: Vec<[f64; 2]>,
+}
+
+/// A profile-likelihood interval in reporting units: `null` on a side where the profile stays
+/// below the Δχ² threshold up to the parameter's fit bound (or the search limit), an open side.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Interval {
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+}
+
+/// `fit.json` → `residuals.down_weighted`: values the robust loss really discounted (weight
+/// below [`crate::files::DOWN_WEIGHT`]).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct DownWeighted {
+    /// The weight below which a value counts as discounted.
+    pub threshold: f64,
+    pub count: usize,
+    /// Source lines of the discounted values (the first [`DownWeighted::MAX_LINES`]).
+    pub lines: Vec<u64>,
+}
+
+impl DownWeighted {
+    /// At most this many lines are listed (curves.csv has every weight).
+    pub const MAX_LINES: usize = 200;
 }
 
 /// One channel's scale factor: `fit.json` → `scale[]` (fitted, with its standard error) and
@@ -128,6 +262,9 @@ pub struct ResidualSummary {
     pub dof: usize,
     #[serde(default)]
     pub per_channel: Vec<ChannelResiduals>,
+    /// Robust losses only: how many values the loss discounted, and which.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub down_weighted: Option<DownWeighted>,
 }
 
 /// `fit.json` → `trace[]`: one solver stage and its cost per iteration (its wall time is in
@@ -171,12 +308,19 @@ pub struct OptionsRecord {
     /// Parameters freed that are fixed by default (`--free eta`).
     pub freed: Vec<String>,
     pub global: String,
+    /// How the parameter intervals were computed: `profile` or `linear` (`--intervals`).
+    pub intervals: String,
+    /// Why (`--intervals auto` records its estimate of the profiling cost).
+    pub intervals_reason: String,
     /// The loader's settings (`hairfit fit` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load: Option<String>,
     pub log_floored: Floored,
     pub loss: String,
+    /// The robust-loss scale used (normalised residual units).
     pub loss_scale: f64,
+    /// True when `loss_scale` was estimated from the residuals (`--loss-scale auto`).
+    pub loss_scale_auto: bool,
     /// What the data's values are: `s` (scale·S) or `radiance` (scale·S·cos θ_i).
     pub measurement: Measurement,
     pub mode: RootMode,
@@ -198,11 +342,14 @@ pub struct FitJson {
     pub hairfit_version: String,
     pub status: FitStatus,
     pub data: DataInfo,
-    /// The forward model's configuration the fit used (the report evaluates the same).
+    /// The forward model's configuration the fit used (the report evaluates the same). A
+    /// Chiang fit records its lobes here (glints and eccentricity off) and its own
+    /// configuration in `chiang`.
     pub model: ModelConfig,
     pub options: OptionsRecord,
-    /// The fitted parameters, exactly a parameter file.
-    pub params: ParamFile,
+    /// The fitted parameters, exactly a parameter file of the fit's family (a Chiang file
+    /// carries `"model": "chiang"`).
+    pub params: FamilyParams,
     pub parameters: Vec<ParameterEntry>,
     pub scale: Vec<ScaleEntry>,
     #[serde(default)]
@@ -212,9 +359,31 @@ pub struct FitJson {
     pub residuals: ResidualSummary,
     #[serde(default)]
     pub trace: Vec<TraceStage>,
+    /// What the result is good for (`src/fit/verdict.rs` decides; precedence interrupted >
+    /// failed > poor_fit > undetermined > good). Files written before verdicts read as
+    /// `undetermined`: nobody judged them.
+    #[serde(default)]
+    pub verdict: Verdict,
+    /// Why: sentences carrying their numbers, the deciding ones first.
+    #[serde(default)]
+    pub reasons: Vec<String>,
+    /// Every goodness-of-fit statistic computed for the verdict.
+    #[serde(default)]
+    pub goodness_of_fit: GoodnessOfFit,
+    /// What to try, each with the evidence from this fit that suggests it.
+    #[serde(default)]
+    pub suggestions: Vec<Suggestion>,
+    /// A Chiang fit's model configuration; absent for a Marschner fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chiang: Option<ChiangRecord>,
 }
 
 impl FitJson {
+    /// The model family the fit used.
+    pub fn family(&self) -> crate::family::ModelFamily {
+        self.params.family()
+    }
+
     /// Read `fit.json`; a syntax or schema error names line and column.
     pub fn load(path: &Path) -> Result<FitJson> {
         super::read_json(
@@ -261,7 +430,7 @@ mod tests {
         let mut sorted = written.clone();
         sorted.sort();
         assert_eq!(written, sorted);
-        assert_eq!(written.len(), 20);
+        assert_eq!(written.len(), 23);
     }
 
     /// A fit.json written before the load report was typed (the demo's five fields) still reads.

@@ -28,7 +28,8 @@ pub enum RejectReason {
     NonPositiveSigma,
     /// A weight ≤ 0.
     NonPositiveWeight,
-    /// The same four angles as an earlier accepted row.
+    /// The same line as an earlier accepted row: the same direction (φ compared after
+    /// wrapping) and the same values. (Same direction, other values: a replicate, kept.)
     Duplicate,
 }
 
@@ -43,7 +44,7 @@ impl RejectReason {
             RejectReason::NegativeRadiance => "negative radiance beyond tolerance",
             RejectReason::NonPositiveSigma => "sigma <= 0",
             RejectReason::NonPositiveWeight => "weight <= 0",
-            RejectReason::Duplicate => "duplicate angles",
+            RejectReason::Duplicate => "duplicate of an earlier row",
         }
     }
 }
@@ -82,6 +83,12 @@ pub struct LoadReport {
     /// `[line, earlier line]` for the first duplicates: which earlier row each one repeats.
     pub duplicate_of: Vec<[u64; 2]>,
     pub notes: Vec<String>,
+    /// Accepted rows that measure again the direction of an earlier row (φ compared after
+    /// wrapping) with other values: repeated measurements, kept (they estimate the pure error).
+    pub replicates: LineTally,
+    /// Things that may make a fit of this file wrong (e.g. angles that look like radians read
+    /// as degrees); `--strict` makes them errors.
+    pub warnings: Vec<String>,
 }
 
 impl LoadReport {

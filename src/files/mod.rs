@@ -20,10 +20,11 @@ use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 pub use crate::params::ParamFile;
 
-pub use curves::{read_curves_csv, write_curves_csv, CurveRow, CURVES_HEADER};
+pub use curves::{read_curves_csv, write_curves_csv, CurveRow, CURVES_HEADER, DOWN_WEIGHT};
 pub use fit_json::{
-    ChannelResiduals, Correlation, DataInfo, FitJson, FitStatus, Floored, OptionsRecord,
-    ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, TraceStage,
+    ChannelResiduals, Correlation, DataInfo, DownWeighted, FitJson, FitStatus, Floored,
+    GofThresholds, GoodnessOfFit, Interval, OptionsRecord, ParamStatus, ParameterEntry,
+    ResidualSummary, ScaleEntry, Suggestion, TraceStage, Verdict,
 };
 pub use load_report::{LineTally, LoadReport, RejectReason, FIRST_LINES};
 pub use timing::{StageTiming, Timing};

@@ -7,15 +7,16 @@ use serde::{Deserialize, Serialize};
 
 use super::fit_json::ScaleEntry;
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyParams};
 use crate::model::{Measurement, ModelConfig};
-use crate::params::ParamFile;
 
 /// The sidecar `FILE.truth.json`: the exact inputs of a synthetic dataset.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Truth {
     pub hairfit_version: String,
-    /// The exact parameters (a parameter file: degrees, MODEL.md names).
-    pub params: ParamFile,
+    /// The exact parameters (a parameter file of the model's family: degrees, MODEL.md's or
+    /// CHIANG.md's names).
+    pub params: FamilyParams,
     pub channels: Vec<String>,
     /// Measured value = scale × S (× cos θ_i for `radiance`, see `measurement`), per channel.
     pub scale: Vec<ScaleEntry>,
@@ -39,6 +40,9 @@ pub struct Truth {
     pub notes: Vec<String>,
     /// The command that made the files (absent when made through the library).
     pub command_line: Option<String>,
+    /// Data made by the Chiang model: its configuration; absent for Marschner data.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chiang: Option<ChiangRecord>,
 }
 
 impl Truth {

@@ -1,31 +1,45 @@
 //! The fit's typed result at the solver's final point ([`assemble`]): parameter values and
 //! statuses with standard errors in natural units, the scale, correlations, residual
-//! statistics, the curves at every sample, and the warnings that explain them.
+//! statistics, the curves at every sample, the warnings that explain them, and the verdict
+//! ([`super::verdict`]) that says what the result is good for.
 
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::bounds::{report_factor, typical_range, Bound};
-use super::diagnostics::{null_space_weights, why_undetermined, NULL_WEIGHT, POORLY_DETERMINED};
-use super::problem::{Evaluation, Evaluator, FitData, Forward, ModelForward, ScaleMode};
-use super::{all_parameters, FitOutcome};
+use super::diagnostics::{null_space_weights, NULL_WEIGHT, POORLY_DETERMINED};
+use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode};
+use super::FitOutcome;
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyParams};
 use crate::files::{
-    finite, ChannelResiduals, Correlation, CurveRow, DataInfo, FitJson, FitStatus, LoadReport,
-    OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, StageTiming, Timing,
-    TraceStage,
+    finite, ChannelResiduals, Correlation, CurveRow, DataInfo, DownWeighted, FitJson, FitStatus,
+    LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
+    StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
-use crate::model::{ModelConfig, ParamName, Params};
-use crate::params::ParamFile;
+use crate::model::ModelConfig;
+
+/// Why the data cannot determine a parameter: words for its warning, from the parameter, the
+/// fitted set and its strongly correlated partners (family-specific geometry).
+pub type WhyUndetermined<'a, P> =
+    &'a (dyn Fn(P, &<P as FitParam>::Set, &[String]) -> String + Sync);
 
 /// What [`assemble`] needs from the fit driver.
-pub struct Assembly<'a, 'e, 'f> {
+pub struct Assembly<'a, 'e, 'f, F: Forward> {
     pub data: &'a FitData,
     pub file: &'a str,
     pub load_report: LoadReport,
+    /// fit.json `model`: the Marschner configuration (for a Chiang fit: its lobes, no glints,
+    /// no eccentricity; the Chiang configuration is `chiang`).
     pub config: ModelConfig,
-    pub ev: &'e Evaluator<'f, ModelForward>,
+    /// fit.json `chiang`, for a Chiang fit.
+    pub chiang: Option<ChiangRecord>,
+    /// Every parameter of the family in output order (fit.json `parameters`).
+    pub all: Vec<F::Param>,
+    pub why: WhyUndetermined<'a, F::Param>,
+    /// The parameter file of a fitted set (fit.json `params`, params.json).
+    pub params_file: fn(&ParamSet<F>) -> FamilyParams,
+    pub ev: &'e Evaluator<'f, F>,
     pub u: &'a [f64],
     pub status: FitStatus,
     pub options: OptionsRecord,
@@ -58,13 +72,13 @@ impl Uncertainty {
 }
 
 /// Jacobian in natural reporting units (degrees for angles) with the natural scales fixed.
-fn uncertainty(
-    ev: &Evaluator<'_, ModelForward>,
+fn uncertainty<F: Forward>(
+    ev: &Evaluator<'_, F>,
     x: &[f64],
     scale: &[f64],
     warnings: &mut Vec<String>,
 ) -> Uncertainty {
-    let col: Vec<f64> = ev.free.iter().map(|&p| 1.0 / report_factor(p)).collect();
+    let col: Vec<f64> = ev.free.iter().map(|&p| 1.0 / p.report_factor()).collect();
     // Accumulated in chunks (MᵀM = JᵀJ, ‖t‖ = ‖r̃‖): the same covariance without storing J.
     let lin = ev
         .linearize(x, &col, ScaleMode::FixedNatural(scale), None)
@@ -94,27 +108,25 @@ fn uncertainty(
 }
 
 /// Every parameter's entry in output order, with the warnings that explain its status.
-fn parameter_entries(
-    ev: &Evaluator<'_, ModelForward>,
-    data: &FitData,
-    config: &ModelConfig,
-    params: &Params<f64>,
+fn parameter_entries<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    all: &[F::Param],
+    why_undetermined: WhyUndetermined<'_, F::Param>,
+    params: &ParamSet<F>,
     unc: &Uncertainty,
     warnings: &mut Vec<String>,
 ) -> Vec<ParameterEntry> {
     let nf = ev.free.len();
     // Statistically undetermined: the standard error exceeds the whole typical range (the data
     // say less than the prior box does), even when JᵀJ is numerically invertible.
-    let range_width = |p: ParamName| {
-        let (a, b) = typical_range(p);
-        (b - a) * report_factor(p)
+    let range_width = |p: F::Param| {
+        let (a, b) = p.typical_range();
+        (b - a) * p.report_factor()
     };
-    let why = |p: ParamName, partners: &[String]| {
-        why_undetermined(p, data, config.mode, params, partners)
-    };
+    let why = |p: F::Param, partners: &[String]| why_undetermined(p, params, partners);
     let mut parameters = Vec::new();
-    for p in all_parameters(data.n_channels()) {
-        let value = params.get(p) * report_factor(p);
+    for &p in all {
+        let value = p.get(params) * p.report_factor();
         let entry = match ev.free.iter().position(|q| *q == p) {
             Some(j) => {
                 let se = unc.std_of(j);
@@ -147,7 +159,7 @@ fn parameter_entries(
                         }
                     ));
                     ParamStatus::Undetermined
-                } else if Bound::of(p).at_bound(params.get(p)) {
+                } else if p.bound().at_bound(p.get(params)) {
                     warnings.push(format!(
                         "{}: at its bound {:.6} (the data push it there; its standard error is one-sided; {})",
                         p.json_name(),
@@ -171,6 +183,9 @@ fn parameter_entries(
                     value: finite(value),
                     std_error: if undetermined { None } else { se },
                     status,
+                    interval_68: None,
+                    interval_95: None,
+                    profile: Vec::new(),
                 }
             }
             None => ParameterEntry {
@@ -178,6 +193,9 @@ fn parameter_entries(
                 value: finite(value),
                 std_error: None,
                 status: ParamStatus::Fixed,
+                interval_68: None,
+                interval_95: None,
+                profile: Vec::new(),
             },
         };
         if entry.value.is_none() {
@@ -192,8 +210,8 @@ fn parameter_entries(
 }
 
 /// Residual statistics in the fit space (normalised residuals), overall and per channel.
-fn residual_summary(
-    ev: &Evaluator<'_, ModelForward>,
+fn residual_summary<F: Forward>(
+    ev: &Evaluator<'_, F>,
     data: &FitData,
     e: &Evaluation,
     unc: &Uncertainty,
@@ -223,19 +241,51 @@ fn residual_summary(
         reduced_chi2: finite(rt_ss / dof as f64),
         dof,
         per_channel,
+        down_weighted: down_weighted(ev, data, e),
     }
+}
+
+/// Robust losses: the values the loss really discounted (weight below [`DOWN_WEIGHT`]).
+fn down_weighted<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    data: &FitData,
+    e: &Evaluation,
+) -> Option<DownWeighted> {
+    if ev.loss == super::Loss::L2 {
+        return None;
+    }
+    let nc = data.n_channels();
+    let hit: Vec<usize> = (0..e.robust_weight.len())
+        .filter(|&k| e.robust_weight[k] < DOWN_WEIGHT)
+        .collect();
+    let mut lines: Vec<u64> = hit
+        .iter()
+        .map(|&k| {
+            data.line
+                .get(k / nc)
+                .copied()
+                .unwrap_or((k / nc) as u64 + 1)
+        })
+        .collect();
+    lines.dedup();
+    lines.truncate(DownWeighted::MAX_LINES);
+    Some(DownWeighted {
+        threshold: DOWN_WEIGHT,
+        count: hit.len(),
+        lines,
+    })
 }
 
 /// One row per sample and channel: the data, the fit and its lobes (with the evaluator's
 /// measurement factor and the fitted scale), the residual and the robust weight.
-fn curve_rows(
-    ev: &Evaluator<'_, ModelForward>,
+fn curve_rows<F: Forward>(
+    ev: &Evaluator<'_, F>,
     data: &FitData,
-    params: &Params<f64>,
+    params: &ParamSet<F>,
     e: &Evaluation,
 ) -> Vec<CurveRow> {
     let nc = data.n_channels();
-    let fwd = *ev.forward;
+    let fwd = ev.forward;
     // Per-lobe values in parallel, one Vec per sample, collected in sample order.
     let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
         .angles
@@ -277,12 +327,16 @@ fn curve_rows(
 }
 
 /// Build the outcome (fit.json content, parameters, curves, timing) at solver parameters `u`.
-pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
+pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<ParamSet<F>>> {
     let Assembly {
         data,
         file,
         load_report,
         config,
+        chiang,
+        all,
+        why,
+        params_file,
         ev,
         u,
         status,
@@ -298,12 +352,13 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
     let mut params = ev.params_at(&x);
     // Transforms keep x inside; clamp anyway so rounding can never leave the domain.
     for &p in &ev.free {
-        let v = params.get(p);
-        params.set(p, Bound::of(p).clamp(v));
+        let v = p.get(&params);
+        p.set(&mut params, p.bound().clamp(v));
     }
-    let e = ev.eval_internal(u, false);
+    // The scale in the noise model's space (unbiased; the log-space optimum is a geometric mean).
+    let e = ev.noise_space_scale(&x, ev.eval_internal(u, false), data.sigma.is_some());
     let unc = uncertainty(ev, &x, &e.scale, &mut warnings);
-    let parameters = parameter_entries(ev, data, &config, &params, &unc, &mut warnings);
+    let parameters = parameter_entries(ev, &all, why, &params, &unc, &mut warnings);
     let scale: Vec<ScaleEntry> = (0..nc)
         .map(|c| ScaleEntry {
             channel: data.channels[c].clone(),
@@ -328,6 +383,26 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
             .collect(),
     };
     let residuals = residual_summary(ev, data, &e, &unc);
+    // Everything fixed: no solver unknowns, the scales come in closed form (variable
+    // projection). The solver has nothing to run on and says `failed`; the fit is complete.
+    let status = if ev.n_params() == 0 && status == FitStatus::Failed && e.cost().is_finite() {
+        FitStatus::Converged
+    } else {
+        status
+    };
+    let judgement = super::verdict::judge(&super::verdict::Evidence {
+        data,
+        ev,
+        e: &e,
+        config: &config,
+        params: &params,
+        status,
+        parameters: &parameters,
+        scale: &scale,
+        trace: &trace,
+        warnings: &warnings,
+        dof: unc.dof,
+    });
     let curves = curve_rows(ev, data, &params, &e);
     if curves.iter().any(|r| {
         ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
@@ -349,13 +424,18 @@ pub fn assemble(a: Assembly<'_, '_, '_>) -> Result<FitOutcome> {
         },
         model: config,
         options,
-        params: ParamFile::from_params(&params),
+        params: params_file(&params),
         parameters,
         scale,
         correlation,
         warnings,
         residuals,
         trace,
+        verdict: judgement.verdict,
+        reasons: judgement.reasons,
+        goodness_of_fit: judgement.goodness_of_fit,
+        suggestions: judgement.suggestions,
+        chiang,
     };
     Ok(FitOutcome {
         json,

@@ -6,10 +6,12 @@ use std::path::Path;
 
 use super::problem::FitData;
 use super::FitOptions;
-use super::{fit, write_outputs, FitOutcome};
+use super::{fit_family, FitOutcome};
 use crate::error::Result;
+use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 use crate::model::{Angles, ModelConfig, Params};
+use crate::outdir::PublishedFit;
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
 pub fn demo_truth() -> Params<f64> {
@@ -92,18 +94,76 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
         .collect()
 }
 
-/// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`), write
-/// `data.csv` and `truth.json`, fit from the default start design, write the fit's files.
-pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
-    let truth = demo_truth();
+/// The Chiang demo's true parameters (CHIANG.md's ranges, the same brown-ish absorption; R
+/// toward the root, so `alpha_deg` < 0).
+pub fn chiang_demo_truth() -> crate::chiang::ChiangParams<f64> {
+    crate::chiang::ChiangParams {
+        eta: 1.55,
+        sigma_a: vec![0.25, 0.45, 0.8],
+        beta_m: 0.25,
+        beta_n: 0.35,
+        alpha: (-2.5f64).to_radians(),
+    }
+}
+
+/// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`) and the
+/// model family `opts.family`, write `data.csv` and `truth.json`, fit the same family from the
+/// default start design, and publish them with the fit's files as one set (`force` as
+/// `hairfit fit --force`).
+pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
+    // A bad --fix is an error about the option, before anything touches the output directory.
+    if opts.family == ModelFamily::Marschner {
+        super::parse_fixes(&opts.fix, demo_truth().sigma_a.len())?;
+    }
+    crate::outdir::publish_fit(out, "hairfit demo", force, &[], |staging| {
+        demo_into(opts, out, staging)
+    })
+}
+
+/// The demo's data, truth and fit, written into `staging` (published later as `out`).
+fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome<FamilyParams>> {
     let config = ModelConfig {
         mode: opts.mode,
         ..ModelConfig::default()
     };
+    let (model, file, config, chiang) = match opts.family {
+        ModelFamily::Marschner => {
+            let truth = demo_truth();
+            (
+                FamilyModel::Marschner {
+                    params: truth.clone(),
+                    config,
+                },
+                FamilyParams::Marschner(crate::params::ParamFile::from_params(&truth)),
+                config,
+                None,
+            )
+        }
+        ModelFamily::Chiang => {
+            let truth = chiang_demo_truth();
+            (
+                FamilyModel::Chiang {
+                    params: truth.clone(),
+                    model: opts.chiang.clone(),
+                },
+                FamilyParams::Chiang(crate::chiang::ChiangParamFile::from_params(&truth)),
+                crate::chiang::fit::lobes_config(&opts.chiang.effects),
+                Some(ChiangRecord {
+                    effects: opts.chiang.effects,
+                    width_nodes: opts.chiang.width_nodes(),
+                }),
+            )
+        }
+    };
     let noise = crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}"))?;
-    let (dataset, truth_record) = crate::synth::synthesize_directions(
-        &truth,
-        &config,
+    let source = crate::synth::Source {
+        model: &model,
+        file: &file,
+        config: &config,
+        chiang,
+    };
+    let (dataset, truth_record) = crate::synth::synthesize_model(
+        &source,
         &demo_directions(),
         "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
         &noise,
@@ -111,10 +171,10 @@ pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
         opts.measurement,
         opts.seed,
     )?;
-    std::fs::create_dir_all(out).map_err(|e| crate::Error::io(out, e))?;
+    // Files go to the staging directory; the fit records where they will be.
     let data_path = out.join("data.csv");
-    crate::data::write_csv(&dataset, &data_path)?;
-    truth_record.save(&out.join("truth.json"))?;
+    crate::data::write_csv(&dataset, &staging.join("data.csv"))?;
+    truth_record.save(&staging.join("truth.json"))?;
     let report = LoadReport {
         file: data_path.display().to_string(),
         format: "synthetic".into(),
@@ -127,18 +187,32 @@ pub fn demo_command(opts: &FitOptions, out: &Path) -> Result<FitOutcome> {
         ..LoadReport::default()
     };
     let data = super::fit_data(&dataset);
-    let outcome = fit(&data, &data_path.display().to_string(), report, opts)?;
-    write_outputs(out, &outcome)?;
-    Ok(outcome)
+    fit_family(&data, &data_path.display().to_string(), report, opts)
 }
 
-/// The demo's truth, for the end of its summary.
-pub fn truth_line(out: &Path) -> String {
-    let truth = demo_truth();
-    format!(
-        "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
-        truth.sigma_a,
-        DEMO_SCALE,
-        out.join("truth.json").display()
-    )
+/// The demo's truth (of `family`), for the end of its summary.
+pub fn truth_line(out: &Path, family: ModelFamily) -> String {
+    match family {
+        ModelFamily::Marschner => {
+            let truth = demo_truth();
+            format!(
+                "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
+                truth.sigma_a,
+                DEMO_SCALE,
+                out.join("truth.json").display()
+            )
+        }
+        ModelFamily::Chiang => {
+            let t = chiang_demo_truth();
+            format!(
+                "truth: sigma_a {:?}, beta_m {}, beta_n {}, alpha_deg {}, scale {:?} (see {})\n",
+                t.sigma_a,
+                t.beta_m,
+                t.beta_n,
+                t.alpha.to_degrees(),
+                DEMO_SCALE,
+                out.join("truth.json").display()
+            )
+        }
+    }
 }

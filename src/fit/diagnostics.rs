@@ -1,6 +1,7 @@
 //! Why a parameter is undetermined or poorly determined: the Jacobian's numerical null space,
 //! and the data's geometry as the parameter sees it (samples near the glint, the spread of
-//! θ_h and of cos 2φ_h). Words for fit.json's warnings; no numbers are changed here.
+//! θ_h and of cos 2φ_h), and which samples sit near the glints (evidence for the verdict's
+//! suggestions). Words for fit.json's warnings; no numbers are changed here.
 
 use std::f64::consts::PI;
 
@@ -23,13 +24,12 @@ pub const NULL_WEIGHT: f64 = 1e-6;
 /// computation, shared with the covariance).
 pub use crate::lm::null_space_weights;
 
-/// Samples within 2 w_c of the glint azimuth φ_c(θ_d) the model places (its caustic under the
-/// fit's root mode, index η), and the span of |φ| they cover.
-fn samples_near_glint(data: &FitData, mode: RootMode, eta: f64, w_c: f64) -> (usize, f64) {
-    let near: Vec<f64> = data
-        .angles
+/// Per sample: within 2 w_c of the glint azimuth φ_c(θ_d) the model places (its caustic under
+/// the fit's root mode, index η). Where the glint's shape, and so the root map, matters most.
+pub fn near_glint(data: &FitData, mode: RootMode, eta: f64, w_c: f64) -> Vec<bool> {
+    data.angles
         .iter()
-        .filter(|a| {
+        .map(|a| {
             let td = 0.5 * (a.theta_r - a.theta_i);
             let (s, c) = td.sin_cos();
             let eta_p = bravais_indices(&eta, s, c).eta_p;
@@ -42,7 +42,16 @@ fn samples_near_glint(data: &FitData, mode: RootMode, eta: f64, w_c: f64) -> (us
             let phi = wrap(a.phi_r - a.phi_i).abs();
             (phi - phi_c).abs() < 2.0 * w_c
         })
-        .map(|a| wrap(a.phi_r - a.phi_i).abs())
+        .collect()
+}
+
+/// Samples near the glint ([`near_glint`]) and the span of |φ| they cover.
+fn samples_near_glint(data: &FitData, mode: RootMode, eta: f64, w_c: f64) -> (usize, f64) {
+    let near: Vec<f64> = near_glint(data, mode, eta, w_c)
+        .iter()
+        .zip(&data.angles)
+        .filter(|(n, _)| **n)
+        .map(|(_, a)| wrap(a.phi_r - a.phi_i).abs())
         .collect();
     let span = near.iter().copied().fold(f64::NEG_INFINITY, f64::max)
         - near.iter().copied().fold(f64::INFINITY, f64::min);

@@ -2,6 +2,7 @@
 //! when it is not, structure along scan slices (residual runs, lag-1 autocorrelation) and the
 //! pure-error lack-of-fit F test on repeated measurements. Pure functions of residuals.
 
+use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor, Normal};
 
 /// Upper-tail probability of a χ² at least `chi2` with `dof` degrees of freedom: the chance that
@@ -19,7 +20,7 @@ fn standard_normal() -> Normal {
 
 /// The Wald–Wolfowitz runs test of residual signs, pooled over slices: residuals of a model that
 /// fits change sign at random along a scan; a systematic misfit gives long runs of one sign.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RunsTest {
     /// Runs observed, summed over slices.
     pub runs: usize,
@@ -65,7 +66,7 @@ pub fn runs_test<'a>(slices: impl IntoIterator<Item = &'a [f64]>) -> Option<Runs
 
 /// Lag-1 autocorrelation of residuals along slices, pooled: neighbours on a scan that fits are
 /// uncorrelated; a smooth misfit makes them alike.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Autocorrelation {
     /// Σ r_t r_{t+1} / Σ r_t² over neighbouring pairs within slices.
     pub r1: f64,
@@ -111,7 +112,7 @@ pub fn lag1_autocorrelation<'a>(
 
 /// The lack-of-fit F test: residual scatter between repeated measurements of one direction
 /// (pure error) against the misfit of the direction means (lack of fit).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LackOfFit {
     /// Σ over replicate groups of Σ (r − group mean)².
     pub ss_pure_error: f64,
@@ -167,6 +168,22 @@ pub fn lack_of_fit(residuals: &[f64], group: &[usize], n_params: usize) -> Optio
         p_value,
         pure_error_sd: (ss_pe / dof_pe as f64).sqrt(),
     })
+}
+
+/// 1.4826 × the median |r|: the standard deviation of Gaussian residuals, unmoved by a minority
+/// of outliers (the residuals of a fit with a scale have median near zero). `None` when empty.
+pub fn robust_sd(residuals: &[f64]) -> Option<f64> {
+    let mut a: Vec<f64> = residuals
+        .iter()
+        .filter(|r| r.is_finite())
+        .map(|r| r.abs())
+        .collect();
+    if a.is_empty() {
+        return None;
+    }
+    let mid = a.len() / 2;
+    let (_, m, _) = a.select_nth_unstable_by(mid, f64::total_cmp);
+    Some(1.4826 * *m)
 }
 
 #[cfg(test)]

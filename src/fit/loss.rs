@@ -1,4 +1,6 @@
-//! Robust losses (Ceres conventions: `ρ(s)` of the squared residual `s = r²`, scaled by `C`).
+//! Robust losses (Ceres conventions: `ρ(s)` of the squared residual `s = r²`, scaled by `C`),
+//! and the data-driven choice of `C` (`--loss-scale auto`: a tuning constant times a robust
+//! estimate of the residuals' noise level).
 //!
 //! The generic LM minimises `½‖r̃‖²`, so the loss enters as the square-root residual
 //! `r̃ = sign(r)·sqrt(ρ_C(r²))` with exact Jacobian rows `dr̃ = ρ′·r/r̃ · dr`: `½‖r̃‖²` is then
@@ -55,9 +57,77 @@ impl fmt::Display for Loss {
     }
 }
 
+/// `--loss-scale`: estimated from the residuals, or given.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum LossScale {
+    /// [`Loss::tuning`] × the noise level the residuals show ([`noise_mad`]).
+    #[default]
+    Auto,
+    /// This `C`, in normalised residual units.
+    Fixed(f64),
+}
+
+impl FromStr for LossScale {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
+        let t = s.trim();
+        if t.eq_ignore_ascii_case("auto") {
+            return Ok(LossScale::Auto);
+        }
+        match t.parse::<f64>() {
+            Ok(c) if c.is_finite() && c > 0.0 => Ok(LossScale::Fixed(c)),
+            _ => Err(Error::Other(format!(
+                "--loss-scale `{t}`: use auto or a positive number (normalised residual units)"
+            ))),
+        }
+    }
+}
+
+impl fmt::Display for LossScale {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LossScale::Auto => f.write_str("auto"),
+            LossScale::Fixed(c) => write!(f, "{c}"),
+        }
+    }
+}
+
+/// Noise level of residuals that may hold outliers: `1.4826·MAD` (the standard deviation for
+/// Gaussian residuals, unmoved by up to half the values being outliers). Non-finite residuals
+/// are skipped; `None` when nothing is left or the spread is zero.
+pub fn noise_mad(residuals: &[f64]) -> Option<f64> {
+    let mut r: Vec<f64> = residuals
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    if r.is_empty() {
+        return None;
+    }
+    let median = |v: &mut Vec<f64>| {
+        let mid = v.len() / 2;
+        *v.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let m = median(&mut r);
+    let mut dev: Vec<f64> = r.iter().map(|v| (v - m).abs()).collect();
+    let mad = 1.4826 * median(&mut dev);
+    (mad.is_finite() && mad > 0.0).then_some(mad)
+}
+
 impl Loss {
     /// Every loss.
     pub const ALL: [Loss; 4] = [Loss::L2, Loss::Huber, Loss::Cauchy, Loss::SoftL1];
+
+    /// The loss scale as a multiple of the noise σ that keeps 95% of least squares' efficiency
+    /// on Gaussian residuals (Huber's 1.345, Cauchy's 2.385; soft-l1 is a smooth Huber and takes
+    /// Huber's constant) while an outlier many σ out keeps little pull.
+    pub fn tuning(&self) -> f64 {
+        match self {
+            Loss::L2 => 1.0,
+            Loss::Huber | Loss::SoftL1 => 1.345,
+            Loss::Cauchy => 2.385,
+        }
+    }
 
     /// `(ρ(s), ρ′(s))` of the unit-scale loss.
     fn rho(&self, s: f64) -> (f64, f64) {
@@ -109,6 +179,26 @@ mod tests {
         assert_eq!(" Soft_L1 ".parse::<Loss>().unwrap(), Loss::SoftL1);
         let msg = "tukey".parse::<Loss>().unwrap_err().to_string();
         assert!(msg.contains("unknown loss `tukey`"), "{msg}");
+    }
+
+    #[test]
+    fn loss_scale_parses_auto_and_positive_numbers_only() {
+        assert_eq!("Auto".parse::<LossScale>().unwrap(), LossScale::Auto);
+        assert_eq!("0.05".parse::<LossScale>().unwrap(), LossScale::Fixed(0.05));
+        for bad in ["0", "-1", "nan", "inf", "x"] {
+            assert!(bad.parse::<LossScale>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn mad_noise_ignores_a_minority_of_outliers() {
+        // -2..=2 repeated (median absolute deviation 1) plus 10% of values at 1000: the MAD
+        // stays 1, so exactly 1.4826 (a standard deviation would be ~300).
+        let mut r: Vec<f64> = (0..900).map(|i| (i % 5) as f64 - 2.0).collect();
+        r.extend([1000.0; 100]);
+        let s = noise_mad(&r).unwrap();
+        assert!((s - 1.4826).abs() < 1e-12, "{s}");
+        assert_eq!(noise_mad(&[0.0; 5]), None);
     }
 
     #[test]

@@ -1,12 +1,14 @@
-//! The fit (`hairfit fit`, `hairfit demo`): least squares of the Marschner model to samples, with
+//! The fit (`hairfit fit`, `hairfit demo`): least squares of a model family (Marschner, or
+//! Chiang through `crate::chiang::fit`) to samples, with
 //! exact AD Jacobians, bounds by smooth transforms, per-channel scale by variable projection,
 //! robust losses, a seeded parallel multi-start, LM polish, and uncertainties in natural units.
 //!
 //! Pipeline ([`fit`], its stages in [`stages`]): choose effects → free parameters →
 //! Latin-hypercube starts → short LM runs on a subsample (parallel over starts) → optional
 //! global stage → LM polish of the best few on all data → covariance, warnings, residual
-//! statistics, curves ([`assemble`]). The result is typed ([`FitOutcome`], formats from
-//! [`crate::files`]); the caller writes it and hands it to the report.
+//! statistics, curves ([`assemble`]), the verdict ([`verdict`]). The result is typed
+//! ([`FitOutcome`], formats from [`crate::files`]); the caller writes it and hands it to the
+//! report.
 
 pub mod assemble;
 pub mod auto;
@@ -17,8 +19,11 @@ pub mod diagnostics;
 pub mod gof;
 pub mod loss;
 pub mod problem;
+pub mod profile;
 pub mod solve;
 pub mod stages;
+pub mod suggest;
+pub mod verdict;
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -29,14 +34,20 @@ use serde::Serialize;
 
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
-pub use loss::Loss;
-pub use problem::{Evaluator, FitData, Forward, ModelForward, ScaleMode, Space};
+pub use loss::{Loss, LossScale};
+pub use problem::{
+    Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
+};
+pub use profile::Intervals;
 
+use crate::chiang::ChiangModel;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::files::{CurveRow, FitJson, LoadReport, Timing};
-use crate::model::{Effects, Measurement, ParamName, Params, RootMode};
-use bounds::{report_factor, typical_range, Bound};
+use crate::family::{FamilyParams, ModelFamily};
+use crate::files::{CurveRow, FitJson, Floored, LoadReport, OptionsRecord, Timing};
+use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
+use crate::params::ParamFile;
+use bounds::{report_factor, Bound};
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -94,8 +105,8 @@ impl std::str::FromStr for Global {
 pub struct FitOptions {
     pub space: Space,
     pub loss: Loss,
-    /// Robust-loss scale C (in normalised residual units).
-    pub loss_scale: f64,
+    /// Robust-loss scale C (normalised residual units), or estimated from the residuals.
+    pub loss_scale: LossScale,
     /// Number of multi-start points.
     pub starts: usize,
     pub seed: u64,
@@ -119,6 +130,12 @@ pub struct FitOptions {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Show a progress bar on a terminal.
     pub progress: bool,
+    /// Profile-likelihood or linearised intervals (or profile when cheap).
+    pub intervals: Intervals,
+    /// The model family [`fit_family`] fits (`--model`).
+    pub family: ModelFamily,
+    /// The Chiang model's terms and width nodes (`--terms`, `--width-nodes`), for `--model chiang`.
+    pub chiang: ChiangModel,
 }
 
 impl Default for FitOptions {
@@ -126,7 +143,7 @@ impl Default for FitOptions {
         FitOptions {
             space: Space::Log,
             loss: Loss::L2,
-            loss_scale: 1.0,
+            loss_scale: LossScale::Auto,
             starts: 16,
             seed: 1,
             global: Global::None,
@@ -141,6 +158,9 @@ impl Default for FitOptions {
             polish_iters: 300,
             cancel: None,
             progress: false,
+            intervals: Intervals::Auto,
+            family: ModelFamily::Marschner,
+            chiang: ChiangModel::default(),
         }
     }
 }
@@ -234,22 +254,36 @@ fn bound_text(p: ParamName) -> String {
     }
 }
 
-/// The result of [`fit`]: fit.json's content, the parameters, curves.csv's rows and the run's
+/// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,
+/// or a parameter file of either family from [`fit_family`]), curves.csv's rows and the run's
 /// wall-clock times (timing.json).
 #[derive(Debug, Clone)]
-pub struct FitOutcome {
+pub struct FitOutcome<P = Params<f64>> {
     pub json: FitJson,
-    pub params: Params<f64>,
+    pub params: P,
     pub curves: Vec<CurveRow>,
     pub timing: Timing,
 }
 
+impl<P> FitOutcome<P> {
+    /// The same outcome with its parameters mapped by `f`.
+    pub fn map_params<Q>(self, f: impl FnOnce(&P) -> Q) -> FitOutcome<Q> {
+        FitOutcome {
+            params: f(&self.params),
+            json: self.json,
+            curves: self.curves,
+            timing: self.timing,
+        }
+    }
+}
+
 /// Write the outcome's files into `dir` (fit.json, params.json, curves.csv, timing.json).
-pub fn write_outputs(dir: &Path, out: &FitOutcome) -> Result<()> {
+pub fn write_outputs<P>(dir: &Path, out: &FitOutcome<P>) -> Result<()> {
     crate::files::write_fit_dir(dir, &out.json, &out.curves, &out.timing)
 }
 
-/// Fit `data` (from file `file`, loader report `load_report`) with `opts`.
+/// Fit `data` (from file `file`, loader report `load_report`) with `opts`, the Marschner model
+/// (`opts.family` is not consulted: [`fit_family`] dispatches on it).
 pub fn fit(
     data: &FitData,
     file: &str,
@@ -257,12 +291,7 @@ pub fn fit(
     opts: &FitOptions,
 ) -> Result<FitOutcome> {
     let started = Instant::now();
-    let nc = data.n_channels();
-    if data.is_empty() || nc == 0 {
-        return Err(Error::Other(format!(
-            "{file}: no samples to fit (check the loader report)"
-        )));
-    }
+    let nc = require_samples(data, file)?;
     let mut warnings = Vec::new();
     let choice = stages::choose_model(data, opts);
     let forward = ModelForward {
@@ -270,18 +299,113 @@ pub fn fit(
         measurement: opts.measurement,
     };
     let set = stages::free_set(&choice.config.effects, nc, opts, &mut warnings)?;
-    let evaluator = |d: &FitData| {
+    let options = |sub: usize, explicit: bool, floored| {
+        stages::options_record(opts, &choice, &set, sub, explicit, floored)
+    };
+    let why = |p: ParamName, params: &Params<f64>, partners: &[String]| {
+        diagnostics::why_undetermined(p, data, choice.config.mode, params, partners)
+    };
+    fit_with(
+        FitRun {
+            data,
+            file,
+            load_report,
+            opts,
+            forward: &forward,
+            base: set.base.clone(),
+            free: set.free.clone(),
+            options: &options,
+            config: choice.config,
+            chiang: None,
+            all: all_parameters(nc),
+            why: &why,
+            params_file: |p| FamilyParams::Marschner(ParamFile::from_params(p)),
+            started,
+        },
+        warnings,
+    )
+}
+
+/// Fit `data` with the model family `opts.family`; the outcome's parameters as a parameter
+/// file of that family.
+pub fn fit_family(
+    data: &FitData,
+    file: &str,
+    load_report: LoadReport,
+    opts: &FitOptions,
+) -> Result<FitOutcome<FamilyParams>> {
+    match opts.family {
+        ModelFamily::Marschner => {
+            let out = fit(data, file, load_report, opts)?;
+            Ok(out.map_params(|p| FamilyParams::Marschner(ParamFile::from_params(p))))
+        }
+        ModelFamily::Chiang => {
+            let out = crate::chiang::fit::fit_chiang(data, file, load_report, opts)?;
+            Ok(out.map_params(|p| {
+                FamilyParams::Chiang(crate::chiang::ChiangParamFile::from_params(p))
+            }))
+        }
+    }
+}
+
+/// The number of channels of `data`, or an error when there is nothing to fit.
+pub fn require_samples(data: &FitData, file: &str) -> Result<usize> {
+    let nc = data.n_channels();
+    if data.is_empty() || nc == 0 {
+        return Err(Error::Other(format!(
+            "{file}: no samples to fit (check the loader report)"
+        )));
+    }
+    Ok(nc)
+}
+
+/// The options record of a run from the multi-start's subsample size, whether the scale is
+/// explicit, and the floored values.
+pub type OptionsOf<'a> = &'a dyn Fn(usize, bool, Floored) -> OptionsRecord;
+
+/// One family's fit, as [`fit_with`] runs it through the shared stages.
+pub struct FitRun<'a, F: Forward> {
+    pub data: &'a FitData,
+    pub file: &'a str,
+    pub load_report: LoadReport,
+    pub opts: &'a FitOptions,
+    pub forward: &'a F,
+    /// Fixed values (and start values of the free ones).
+    pub base: ParamSet<F>,
+    pub free: Vec<F::Param>,
+    pub options: OptionsOf<'a>,
+    pub config: ModelConfig,
+    pub chiang: Option<crate::family::ChiangRecord>,
+    pub all: Vec<F::Param>,
+    pub why: assemble::WhyUndetermined<'a, F::Param>,
+    pub params_file: fn(&ParamSet<F>) -> FamilyParams,
+    pub started: Instant,
+}
+
+/// The stages every family's fit runs: multi-start on a subsample, optional global stage,
+/// polish on all data, then the typed result.
+pub fn fit_with<F: Forward>(
+    run: FitRun<'_, F>,
+    mut warnings: Vec<String>,
+) -> Result<FitOutcome<ParamSet<F>>> {
+    let FitRun {
+        data,
+        opts,
+        forward,
+        ..
+    } = run;
+    let evaluator = |d: &FitData, loss: Loss, loss_scale: f64| {
         Evaluator::new(
-            &forward,
+            forward,
             d,
             opts.space,
-            opts.loss,
-            opts.loss_scale,
-            set.base.clone(),
-            set.free.clone(),
+            loss,
+            loss_scale,
+            run.base.clone(),
+            run.free.clone(),
         )
     };
-    let (ev_full, floored) = evaluator(data)?;
+    let (mut ev_full, floored) = evaluator(data, opts.loss, 1.0)?;
     stages::warn_floored(data, &floored, &mut warnings);
     let sub_idx = design::subsample(
         data.len(),
@@ -289,31 +413,54 @@ pub fn fit(
         opts.seed ^ 0x5b5b_0000_0001,
     );
     let sub_data = data.subset(&sub_idx);
-    let (ev_sub, _) = evaluator(&sub_data)?;
+    let (mut ev_sub, _) = evaluator(&sub_data, opts.loss, 1.0)?;
 
-    let ranges: Vec<(f64, f64)> = set.free.iter().map(|&p| typical_range(p)).collect();
-    let starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
-    let bar = stages::progress_bar(opts, opts.starts.max(1) + opts.polish.max(1));
+    let ranges: Vec<(f64, f64)> = run.free.iter().map(|&p| p.typical_range()).collect();
+    let mut starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
+    let auto_scale = opts.loss != Loss::L2 && opts.loss_scale == LossScale::Auto;
+    let runs_total = opts.starts.max(1) * if auto_scale { 2 } else { 1 } + opts.polish.max(1);
+    let bar = stages::progress_bar(opts, runs_total);
     let mut log = stages::StageLog::default();
+    // The loss scale: given, or the tuning constant times the noise level of a least-squares
+    // multi-start's residuals (MAD, so the outliers a robust loss is for barely move it).
+    let loss_scale = match opts.loss_scale {
+        LossScale::Fixed(c) => c,
+        LossScale::Auto if !auto_scale => 1.0,
+        LossScale::Auto => {
+            let (ev_l2, _) = evaluator(&sub_data, Loss::L2, 1.0)?;
+            let (runs, order) =
+                stages::multistart_as("loss-scale-l2", &ev_l2, &starts, opts, &bar, &mut log);
+            let e = ev_l2.eval_internal(&runs[order[0]].u, false);
+            // Its best point also starts the robust multi-start (outliers bias it, but it lies
+            // in the right basin far more often than a design point).
+            starts.push(ev_l2.natural(&runs[order[0]].u[..run.free.len()]));
+            loss::noise_mad(&e.raw).map_or(1.0, |s| opts.loss.tuning() * s)
+        }
+    };
+    ev_full.loss_scale = loss_scale;
+    ev_sub.loss_scale = loss_scale;
     let (runs, order) = stages::multistart(&ev_sub, &starts, opts, &bar, &mut log);
     let mut candidates = stages::distinct_candidates(&ev_sub, &runs, &order, &ranges, opts.polish);
     stages::global_stage(&ev_sub, &mut candidates, &ranges, opts, &mut log);
-    let best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
+    let mut best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
+    if auto_scale {
+        // Refine once from the robust fit's own residuals (outliers no longer bias the shape).
+        best = stages::rescale_loss(&mut ev_full, best, opts, &mut log);
+    }
     let status = stages::final_status(&best, data, opts, &mut warnings);
 
-    let options = stages::options_record(
-        opts,
-        &choice,
-        &set,
-        sub_idx.len(),
-        ev_full.explicit_scale,
-        floored,
-    );
-    assemble::assemble(assemble::Assembly {
+    let mut options = (run.options)(sub_idx.len(), ev_full.explicit_scale, floored);
+    options.loss_scale = ev_full.loss_scale;
+    let x_best = ev_full.natural(&best.u[..run.free.len()]);
+    let mut out = assemble::assemble(assemble::Assembly {
         data,
-        file,
-        load_report,
-        config: choice.config,
+        file: run.file,
+        load_report: run.load_report,
+        config: run.config,
+        chiang: run.chiang,
+        all: run.all,
+        why: run.why,
+        params_file: run.params_file,
         ev: &ev_full,
         u: &best.u,
         status,
@@ -321,8 +468,26 @@ pub fn fit(
         warnings,
         trace: log.trace,
         stage_times: log.times,
-        started,
-    })
+        started: run.started,
+    })?;
+    let optimum = profile::Optimum {
+        forward,
+        data,
+        space: opts.space,
+        loss: opts.loss,
+        loss_scale: ev_full.loss_scale,
+        params: ev_full.params_at(&x_best),
+        free: run.free.clone(),
+        u: best.u.clone(),
+        cost: best.cost,
+        chi2_unit: 0.0,
+        dof: 0,
+        max_iters: opts.polish_iters,
+        cancel: opts.cancel.clone(),
+    };
+    profile::intervals(&mut out, optimum, &best, opts, run.started)?;
+    verdict::after_profiles(&mut out.json);
+    Ok(out)
 }
 
 /// `get` re-exported for callers that index parameters by name.

@@ -14,7 +14,7 @@ mod projection;
 mod residual;
 
 pub use evaluator::{Evaluator, Floored, Space, LOG_MIN_SNR};
-pub use forward::{gradients, Forward, ModelForward};
+pub use forward::{gradients, FitParam, Forward, ModelForward, ParamSet};
 pub use linearize::Linearization;
 pub use residual::{chunked_sum, Evaluation, ScaleMode, CHUNK};
 

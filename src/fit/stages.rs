@@ -7,7 +7,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bounds::{self, report_factor};
-use super::problem::{self, Evaluator, FitData, ModelForward, ScaleMode};
+use super::problem::{self, Evaluator, FitData, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
 use super::{choose_effects, free_parameters, parse_fixes, EffectsChoice, FitOptions, Global};
 use crate::error::Result;
@@ -109,7 +109,8 @@ pub struct StageLog {
 }
 
 impl StageLog {
-    fn record(
+    /// Record a finished stage.
+    pub fn record(
         &mut self,
         stage: &str,
         iterations: u64,
@@ -130,22 +131,33 @@ impl StageLog {
     }
 }
 
-/// Internal solver coordinates of natural point `x` (plus the explicit log-scales from the
-/// projection when the scale is explicit).
-fn to_internal(ev: &Evaluator<'_, ModelForward>, x: &[f64]) -> Vec<f64> {
+/// Internal solver coordinates of natural point `x` (plus the explicit log-scales, started at
+/// the median of ln(y/S), when the scale is explicit).
+fn to_internal<F: Forward>(ev: &Evaluator<'_, F>, x: &[f64]) -> Vec<f64> {
     let mut u = ev.internal(x);
     if ev.explicit_scale {
-        let ones = vec![1.0; x.len()];
-        let e = ev.evaluate(x, &ones, ScaleMode::Projected, false);
-        u.extend(e.scale.iter().map(|s| s.max(1e-300).ln()));
+        // The median, not the projected mean: a robust loss's outliers drag the mean.
+        u.extend(ev.median_log_scale(x));
     }
     u
 }
 
 /// Short LM runs from every start on the subsample (parallel); returns the runs and their
 /// order by cost.
-pub fn multistart(
-    ev_sub: &Evaluator<'_, ModelForward>,
+pub fn multistart<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
+    starts: &[Vec<f64>],
+    opts: &FitOptions,
+    bar: &indicatif::ProgressBar,
+    log: &mut StageLog,
+) -> (Vec<LocalRun>, Vec<usize>) {
+    multistart_as("multistart", ev_sub, starts, opts, bar, log)
+}
+
+/// [`multistart`] recorded as stage `stage`.
+pub fn multistart_as<F: Forward>(
+    stage: &str,
+    ev_sub: &Evaluator<'_, F>,
     starts: &[Vec<f64>],
     opts: &FitOptions,
     bar: &indicatif::ProgressBar,
@@ -182,7 +194,7 @@ pub fn multistart(
     let mut order: Vec<usize> = (0..runs.len()).collect();
     order.sort_by(|&a, &b| runs[a].cost.total_cmp(&runs[b].cost).then(a.cmp(&b)));
     log.record(
-        "multistart",
+        stage,
         runs.iter().map(|r| r.iterations).sum(),
         runs[order[0]].cost,
         ts,
@@ -193,8 +205,8 @@ pub fn multistart(
 
 /// The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
 /// typical range) are polished once, so the full-data stage is not spent twice on one basin.
-pub fn distinct_candidates(
-    ev_sub: &Evaluator<'_, ModelForward>,
+pub fn distinct_candidates<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
     runs: &[LocalRun],
     order: &[usize],
     ranges: &[(f64, f64)],
@@ -232,8 +244,8 @@ pub fn distinct_candidates(
 }
 
 /// The optional global stage on the subsample; its result is polished first.
-pub fn global_stage(
-    ev_sub: &Evaluator<'_, ModelForward>,
+pub fn global_stage<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
     candidates: &mut Vec<Vec<f64>>,
     ranges: &[(f64, f64)],
     opts: &FitOptions,
@@ -278,8 +290,8 @@ pub fn global_stage(
 }
 
 /// LM polish of every candidate on all data; the best run.
-pub fn polish(
-    ev_full: &Evaluator<'_, ModelForward>,
+pub fn polish<F: Forward>(
+    ev_full: &Evaluator<'_, F>,
     candidates: &[Vec<f64>],
     opts: &FitOptions,
     bar: &indicatif::ProgressBar,
@@ -304,6 +316,36 @@ pub fn polish(
     let best = best.expect("at least one candidate is polished");
     log.record("polish", iterations, best.cost, tp, best.history.clone());
     best
+}
+
+/// `--loss-scale auto`, refined: the loss scale from the robust fit's own residuals (tuning
+/// constant × 1.4826·MAD), then a polish from `best` with it. Skipped when cancelled or when the
+/// scale moves by less than 1%.
+pub fn rescale_loss<F: Forward>(
+    ev_full: &mut Evaluator<'_, F>,
+    best: LocalRun,
+    opts: &FitOptions,
+    log: &mut StageLog,
+) -> LocalRun {
+    let e = ev_full.eval_internal(&best.u, false);
+    let Some(noise) = super::loss::noise_mad(&e.raw) else {
+        return best;
+    };
+    let c = opts.loss.tuning() * noise;
+    if is_cancelled(&opts.cancel) || (c / ev_full.loss_scale - 1.0).abs() < 0.01 {
+        return best;
+    }
+    let tp = Instant::now();
+    ev_full.loss_scale = c;
+    let r = run_local(ev_full, &best.u, opts.polish_iters, &opts.cancel);
+    log.record(
+        "polish-rescaled",
+        r.iterations,
+        r.cost,
+        tp,
+        r.history.clone(),
+    );
+    r
 }
 
 /// How the fit ended: interrupted, failed (no finite cost anywhere), or as the polish ended.
@@ -356,10 +398,16 @@ pub fn options_record(
             vec![]
         },
         global: opts.global.to_string(),
+        intervals: opts.intervals.to_string(),
+        intervals_reason: String::new(),
         load: None,
         log_floored: floored,
         loss: opts.loss.to_string(),
-        loss_scale: opts.loss_scale,
+        loss_scale: match opts.loss_scale {
+            super::LossScale::Fixed(c) => c,
+            super::LossScale::Auto => 1.0,
+        },
+        loss_scale_auto: opts.loss_scale == super::LossScale::Auto,
         measurement: opts.measurement,
         mode: opts.mode,
         polish: opts.polish,

@@ -17,7 +17,10 @@ th{background:#f0f2f5}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .note{background:#eef3fb;border-left:4px solid #5b7fc0;padding:6px 12px;margin:4px 0}\
 figure{margin:12px 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}\
 figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;overflow:auto;font-size:.85em}\
-.grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}";
+.grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}\
+.verdict{border:2px solid;border-radius:6px;padding:8px 16px;margin:12px 0}.verdict h2{border:0;margin:4px 0}\
+.v-good{border-color:#2a8a2a;background:#eef8ee}.v-poor_fit,.v-undetermined{border-color:#e0a000;background:#fff6e0}\
+.v-failed,.v-interrupted{border-color:#a11;background:#fbeaea}";
 
 /// The page for `fit` and the figures in `summary`.
 pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOptions) -> String {
@@ -31,6 +34,7 @@ pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOption
         escape(&fit.hairfit_version),
         if options.linear { "linear" } else { "logarithmic" }
     );
+    verdict_box(&mut h, fit);
     summary_section(&mut h, fit);
     if !fit.warnings.is_empty() || !summary.notes.is_empty() {
         h.push_str("<h2>Warnings and notes</h2>\n");
@@ -69,6 +73,35 @@ pub fn index_html(fit: &FitJson, summary: &ReportSummary, options: &ReportOption
     h
 }
 
+/// The verdict, its reasons and suggestions, in a box at the top of the page.
+fn verdict_box(h: &mut String, fit: &FitJson) {
+    let v = fit.verdict.as_str();
+    let _ = writeln!(
+        h,
+        "<div class=\"verdict v-{v}\" id=\"verdict\">\n<h2>Verdict: {v}</h2>"
+    );
+    if !fit.reasons.is_empty() {
+        h.push_str("<ul>\n");
+        for r in &fit.reasons {
+            let _ = writeln!(h, "<li>{}</li>", escape(r));
+        }
+        h.push_str("</ul>\n");
+    }
+    if !fit.suggestions.is_empty() {
+        h.push_str("<p><b>What to try</b></p>\n<ul>\n");
+        for t in &fit.suggestions {
+            let _ = writeln!(
+                h,
+                "<li><code>{}</code> — {}</li>",
+                escape(&t.action),
+                escape(&t.evidence)
+            );
+        }
+        h.push_str("</ul>\n");
+    }
+    h.push_str("</div>\n");
+}
+
 /// Optional number for a table cell.
 fn opt(v: Option<f64>) -> String {
     v.map_or("—".into(), fmt_num)
@@ -103,13 +136,20 @@ fn summary_section(h: &mut String, fit: &FitJson) {
     row("channels", escape(&fit.data.channels.join(", ")));
     row(
         "model",
-        format!(
-            "{} roots; lobes {}; glints {}; eccentricity {}",
-            fit.model.mode,
-            lobes.join("+"),
-            if e.glints { "on" } else { "off" },
-            if e.eccentricity { "on" } else { "off" }
-        ),
+        match &fit.chiang {
+            Some(c) => format!(
+                "Chiang 2016; terms {}; {} width nodes (the TRT curve includes the p ≥ 3 residual)",
+                c.effects_text(),
+                c.width_nodes
+            ),
+            None => format!(
+                "{} roots; lobes {}; glints {}; eccentricity {}",
+                fit.model.mode,
+                lobes.join("+"),
+                if e.glints { "on" } else { "off" },
+                if e.eccentricity { "on" } else { "off" }
+            ),
+        },
     );
     row(
         "residuals",
@@ -161,8 +201,13 @@ fn table_section(
 fn parameter_table(h: &mut String, fit: &FitJson) {
     let rows = fit.parameters.iter().map(|p| {
         // The parameter table knows each unit (σ_a: per fiber radius).
-        let unit =
-            crate::model::ParamName::from_json_name(&p.name).map_or("", |n| n.spec().unit.label());
+        let unit = match fit.family() {
+            crate::family::ModelFamily::Marschner => {
+                crate::model::ParamName::from_json_name(&p.name)
+                    .map_or("", |n| n.spec().unit.label())
+            }
+            crate::family::ModelFamily::Chiang => crate::chiang::chiang_unit_label(&p.name),
+        };
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
             ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),
@@ -178,12 +223,30 @@ fn parameter_table(h: &mut String, fit: &FitJson) {
             Cell::Text(escape(&with_channel(&p.name, &fit.data.channels))),
             Cell::Num(opt(p.value)),
             Cell::Num(err),
+            Cell::Num(interval_cell(p.interval_68.as_ref())),
+            Cell::Num(interval_cell(p.interval_95.as_ref())),
             Cell::Text(unit.into()),
             Cell::Text(status),
         ]
     });
-    let head = ["parameter", "value", "std. error", "unit", "status"];
+    let head = [
+        "parameter",
+        "value",
+        "std. error",
+        "68% profile interval",
+        "95% profile interval",
+        "unit",
+        "status",
+    ];
     table_section(h, "Parameters", &head, rows);
+}
+
+/// A profile interval `[lower, upper]` (an open side reads "open"); "—" when not profiled.
+fn interval_cell(i: Option<&crate::files::Interval>) -> String {
+    let side = |v: Option<f64>| v.map_or("open".to_string(), fmt_num);
+    i.map_or("—".into(), |i| {
+        format!("[{}, {}]", side(i.lower), side(i.upper))
+    })
 }
 
 /// `sigma_a[1]` → `sigma_a[1] (g)`: name the channel of a per-channel parameter.

@@ -19,14 +19,15 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
+use crate::family::FamilyModel;
 use crate::files::{read_curves_csv, CurveRow, FitJson};
-use crate::model::{scattering_by_lobe, Angles};
-use crate::params::ParameterFile as _;
+use crate::model::Angles;
 
 use crate::plot::{render, YScale};
 use decimate::stride_indices;
 use figures::{
-    channel_color, ConvergenceFigure, CorrelationFigure, CurvesFigure, PolarFigure, SlicePanel,
+    channel_color, ConvergenceFigure, CorrelationFigure, CurvesFigure, PolarFigure, ProfileFigure,
+    ProfilePanel, SlicePanel,
 };
 use panels::Ctx;
 use slices::{collect_samples, find_slices, Slice, SliceKind};
@@ -75,25 +76,35 @@ pub fn write_report(dir: &Path) -> Result<ReportSummary> {
 }
 
 /// `hairfit report DIR`: read the fit's fit.json and curves.csv from `dir` and report them.
+/// The directory is republished as one set: its other files carried over, the figures redrawn.
 pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSummary> {
+    // A missing directory is reported as such before any lock is taken beside it.
+    std::fs::metadata(dir).map_err(|e| crate::Error::io(dir, e))?;
+    let set = crate::outdir::OutputSet::begin(dir, "hairfit report", false, &[])?;
     let fit = FitJson::load(&dir.join("fit.json"))?;
     let rows = read_curves_csv(&dir.join("curves.csv"))?;
-    write_report_of(dir, &fit, &rows, options)
+    set.keep_all_but(crate::outdir::is_report_file)?;
+    let summary = write_report_of(set.staging(), &fit, &rows, options)?;
+    set.publish()?;
+    Ok(summary)
 }
 
 /// Report the fit `fit` with curves `rows` into `dir`: the dense curves evaluate the fit's
-/// model configuration and measurement with its fitted parameters.
+/// model family, configuration and measurement with its fitted parameters.
 pub fn write_report_of(
     dir: &Path,
     fit: &FitJson,
     rows: &[CurveRow],
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
-    let params = fit.params.to_params();
-    let config = fit.model;
+    let chiang_model = match &fit.chiang {
+        Some(record) => record.model()?,
+        None => crate::chiang::ChiangModel::default(),
+    };
+    let family_model = FamilyModel::new(&fit.params, fit.model, &chiang_model);
     let measurement = fit.options.measurement;
     let model = move |a: &Angles, out: &mut [[f64; 3]]| {
-        scattering_by_lobe(&params, &config, a, out);
+        family_model.by_lobe(a, out);
         let f = measurement.factor(a);
         out.iter_mut().flatten().for_each(|v| *v *= f);
     };
@@ -112,15 +123,6 @@ pub fn write_report_of(
     let mut summary = render_report(dir, fit, rows, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
-}
-
-/// Draw the report of a fit just written to `dir`; the fit's files stand whatever happens
-/// here, so a drawing failure is a line of the summary, not an error.
-pub fn report_line(dir: &Path, fit: &FitJson, rows: &[CurveRow]) -> String {
-    match write_report_of(dir, fit, rows, &ReportOptions::default()) {
-        Ok(_) => format!("report: {}\n", dir.join("index.html").display()),
-        Err(e) => format!("warning: the plotted report could not be drawn: {e}\n"),
-    }
 }
 
 /// Render the report of `fit` and its `rows` into `dir`, evaluating `model` (with `n_model`
@@ -254,6 +256,12 @@ pub fn render_report(
         };
         summary.figures.push(render(dir, &fig)?);
     }
+    let profiles = profile_panels(fit);
+    if !profiles.is_empty() {
+        summary
+            .figures
+            .push(render(dir, &ProfileFigure { panels: profiles })?);
+    }
     let stages: Vec<(String, Vec<f64>)> = fit
         .trace
         .iter()
@@ -285,6 +293,29 @@ pub fn render_report(
     })?;
     summary.files.push("index.html".into());
     Ok(summary)
+}
+
+/// The profiled parameters' panels (fit.json stores the points, so nothing is refitted).
+fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
+    fit.parameters
+        .iter()
+        .filter(|p| !p.profile.is_empty())
+        .map(|p| {
+            let unit = crate::model::ParamName::from_json_name(&p.name)
+                .map_or("", |n| n.spec().unit.label());
+            ProfilePanel {
+                title: if unit.is_empty() {
+                    p.name.clone()
+                } else {
+                    format!("{} ({unit})", p.name)
+                },
+                value: p.value.unwrap_or(f64::NAN),
+                std_error: p.std_error,
+                points: p.profile.iter().map(|q| (q[0], q[1])).collect(),
+            }
+        })
+        .filter(|p| p.value.is_finite())
+        .collect()
 }
 
 /// Channels in fit.json's order, then any other channel named in curves.csv.

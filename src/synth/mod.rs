@@ -6,6 +6,7 @@
 //! per purpose (see [`random`]), so a seed gives the same draws on any machine and any future
 //! build; the model values themselves can differ in the last digit with the platform's `libm`.
 
+pub mod memory;
 mod noise;
 pub mod random;
 mod rig;
@@ -17,9 +18,9 @@ use rayon::prelude::*;
 use crate::cli::{MeasurementArgs, ModelArgs};
 use crate::data::{round_trip_degrees, write_csv, Dataset};
 use crate::error::{Error, Result};
+use crate::family::{ChiangRecord, FamilyModel, FamilyParams};
 pub use crate::files::{ScaleEntry, Truth};
-use crate::model::{scattering, Angles, Measurement, ModelConfig, Params};
-use crate::params::ParameterFile as _;
+use crate::model::{Angles, Measurement, ModelConfig, Params};
 use crate::params::{ParamFile, SigmaA};
 
 pub use self::noise::{Noise, Noisy, OUTLIER_FACTOR};
@@ -85,6 +86,41 @@ pub fn synthesize_directions(
     measurement: Measurement,
     seed: u64,
 ) -> Result<(Dataset, Truth)> {
+    params.validate()?;
+    let model = FamilyModel::Marschner {
+        params: params.clone(),
+        config: *config,
+    };
+    let file = FamilyParams::Marschner(ParamFile::from_params(params));
+    let source = Source {
+        model: &model,
+        file: &file,
+        config,
+        chiang: None,
+    };
+    synthesize_model(&source, directions, label, noise, scale, measurement, seed)
+}
+
+/// What a synthetic dataset is made from: a family's model, its parameter file and
+/// configuration (recorded in the truth).
+pub struct Source<'a> {
+    pub model: &'a FamilyModel,
+    pub file: &'a FamilyParams,
+    /// The truth's `model` (for Chiang data: its lobes, see `chiang::fit::lobes_config`).
+    pub config: &'a ModelConfig,
+    pub chiang: Option<ChiangRecord>,
+}
+
+/// [`synthesize_directions`] for either model family; `source.file` must be valid.
+pub fn synthesize_model(
+    source: &Source<'_>,
+    directions: &[[f64; 4]],
+    label: &str,
+    noise: &Noise,
+    scale: &[f64],
+    measurement: Measurement,
+    seed: u64,
+) -> Result<(Dataset, Truth)> {
     if let Some((i, a)) = directions
         .iter()
         .enumerate()
@@ -94,8 +130,8 @@ pub fn synthesize_directions(
             "direction {i} = {a:?} (degrees): angles must be finite and |theta| < 90"
         )));
     }
-    params.validate()?;
-    let nc = params.sigma_a.len();
+    source.file.validate()?;
+    let nc = source.model.n_channels();
     if scale.len() != nc {
         return Err(Error::Other(format!(
             "--scale: {} values for {nc} channels; give one per channel (or one for all)",
@@ -114,7 +150,7 @@ pub fn synthesize_directions(
         .iter()
         .map(|a| a.map(|d| round_trip_degrees(d.to_radians()).to_radians()))
         .collect();
-    let clean = clean_values(params, config, &radians, scale, measurement)?;
+    let clean = clean_values(source, &radians, scale, measurement)?;
     let noisy = noise.apply(&clean, nc, seed);
     noise.check_finite(&noisy)?;
 
@@ -136,7 +172,7 @@ pub fn synthesize_directions(
     };
     let truth = Truth {
         hairfit_version: env!("CARGO_PKG_VERSION").into(),
-        params: ParamFile::from_params(params),
+        params: source.file.clone(),
         scale: channels
             .iter()
             .zip(scale)
@@ -153,7 +189,8 @@ pub fn synthesize_directions(
         sigma_written: dataset.sigma.is_some(),
         seed,
         rng: RNG_DESCRIPTION.into(),
-        model: *config,
+        model: *source.config,
+        chiang: source.chiang,
         n_samples: dataset.len(),
         outliers: noisy.outliers,
         notes: Vec::new(),
@@ -174,28 +211,34 @@ fn record_truth(dataset: &mut Dataset, truth: &Truth) -> Result<()> {
 /// `scale[c] · S_c` (times the measurement factor) at every direction (row-major), evaluated in
 /// parallel; a value that is not finite and ≥ 0 is a model bug and reported with its angles.
 fn clean_values(
-    params: &Params<f64>,
-    config: &ModelConfig,
+    source: &Source<'_>,
     radians: &[[f64; 4]],
     scale: &[f64],
     measurement: Measurement,
 ) -> Result<Vec<f64>> {
     let nc = scale.len();
     let mut values = vec![0.0; radians.len() * nc];
+    let angles: Vec<Angles> = radians
+        .iter()
+        .map(|a| Angles {
+            theta_i: a[0],
+            phi_i: a[1],
+            theta_r: a[2],
+            phi_r: a[3],
+        })
+        .collect();
+    // Batches of samples share the Chiang width integral per exit direction.
+    const BATCH: usize = 256;
     values
-        .par_chunks_mut(nc)
-        .zip(radians.par_iter())
-        .for_each(|(out, a)| {
-            let angles = Angles {
-                theta_i: a[0],
-                phi_i: a[1],
-                theta_r: a[2],
-                phi_r: a[3],
-            };
-            scattering(params, config, &angles, out);
-            let f = measurement.factor(&angles);
-            for (v, s) in out.iter_mut().zip(scale) {
-                *v *= s * f;
+        .par_chunks_mut(nc * BATCH)
+        .zip(angles.par_chunks(BATCH))
+        .for_each(|(out, batch)| {
+            source.model.eval_batch(batch, out);
+            for (row, a) in out.chunks_mut(nc).zip(batch) {
+                let f = measurement.factor(a);
+                for (v, s) in row.iter_mut().zip(scale) {
+                    *v *= s * f;
+                }
             }
         });
     if let Some(j) = values.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
@@ -208,7 +251,7 @@ fn clean_values(
             a[1],
             a[2],
             a[3],
-            serde_json::to_string(&ParamFile::from_params(params)).unwrap_or_default()
+            source.file.json_line()
         )));
     }
     Ok(values)
@@ -217,7 +260,8 @@ fn clean_values(
 /// Options of `hairfit synth`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SynthArgs {
-    /// Parameter file with the true parameters (JSON, MODEL.md's names).
+    /// Parameter file with the true parameters (JSON, MODEL.md's names; CHIANG.md's with
+    /// --model chiang).
     #[arg(long)]
     pub params: PathBuf,
     /// Sample geometry: azimuthal, longitudinal, sphere or photo, with options, e.g.
@@ -249,6 +293,10 @@ pub struct SynthArgs {
     pub model: ModelArgs,
     #[command(flatten)]
     pub measurement: MeasurementArgs,
+    /// Most memory the dataset may take, e.g. 500M or 2G (checked before allocating)
+    /// [default: half this machine's memory].
+    #[arg(long, value_parser = memory::parse_size)]
+    pub max_memory: Option<u64>,
 }
 
 /// What `hairfit synth` wrote.
@@ -281,16 +329,17 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
             args.output.display()
         )));
     }
+    refuse_overwriting_input(&args.params, &args.output)?;
     let rig = Rig::parse(&args.rig)?;
     let noise = Noise::parse(&args.noise)?;
+    args.model.check_family_options()?;
     let config = args.model.config()?;
-    let file = ParamFile::load(&args.params).map_err(|e| match e {
-        Error::Parameter { .. } => Error::Other(format!("{}: {e}", args.params.display())),
-        other => other,
-    })?;
+    let chiang = args.model.chiang()?;
+    let file = FamilyParams::load(&args.params, args.model.family)?;
     let (file, notes) = reconcile_channels(file, args.channels, &args.params)?;
     let nc = file.n_channels();
-    rig.check_memory(nc, &args.rig)?;
+    let limit = args.max_memory.unwrap_or_else(memory::machine_default);
+    rig.check_memory(nc, &args.rig, limit)?;
     let scale = match args.scale.len() {
         1 => vec![args.scale[0]; nc],
         n if n == nc => args.scale.clone(),
@@ -301,10 +350,28 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
             )))
         }
     };
-    let (mut dataset, mut truth) = synthesize(
-        &file.to_params(),
-        &config,
-        &rig,
+    let model = FamilyModel::new(&file, config, &chiang);
+    let (config, record) = match &file {
+        FamilyParams::Marschner(_) => (config, None),
+        FamilyParams::Chiang(_) => (
+            crate::chiang::fit::lobes_config(&chiang.effects),
+            Some(ChiangRecord {
+                effects: chiang.effects,
+                width_nodes: chiang.width_nodes(),
+            }),
+        ),
+    };
+    let source = Source {
+        model: &model,
+        file: &file,
+        config: &config,
+        chiang: record,
+    };
+    let directions = rig.angles(&mut random::generator(args.seed, random::Stream::Angles));
+    let (mut dataset, mut truth) = synthesize_model(
+        &source,
+        &directions,
+        &rig.to_string(),
         &noise,
         &scale,
         args.measurement.measurement,
@@ -315,9 +382,16 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     truth.command_line = command_line;
     record_truth(&mut dataset, &truth)?;
 
+    // The data and its truth are published together: both or neither.
     let truth_file = truth_path(&args.output);
-    write_csv(&dataset, &args.output)?;
-    truth.save(&truth_file)?;
+    let mut staged = crate::atomic::StagedFiles::new();
+    let csv_tmp = staged.stage(&args.output);
+    write_csv(&dataset, &csv_tmp).map_err(|e| name_target(e, &csv_tmp, &args.output))?;
+    let truth_tmp = staged.stage(&truth_file);
+    truth
+        .save(&truth_tmp)
+        .map_err(|e| name_target(e, &truth_tmp, &truth_file))?;
+    staged.publish()?;
     Ok(SynthSummary {
         csv: args.output.clone(),
         truth: truth_file,
@@ -327,21 +401,53 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     })
 }
 
+/// `--params X.truth.json --output X.csv` would replace the parameter file being read (or the
+/// CSV itself): refuse.
+fn refuse_overwriting_input(params: &Path, output: &Path) -> Result<()> {
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    for target in [output.to_path_buf(), truth_path(output)] {
+        if same(params, &target) {
+            return Err(Error::Other(format!(
+                "--output {} would replace --params {} (the truth goes to {}): write the new \
+                 dataset under another name",
+                output.display(),
+                params.display(),
+                truth_path(output).display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// An error about the staged temporary file `tmp`, worded about the file the user asked for.
+fn name_target(e: Error, tmp: &Path, target: &Path) -> Error {
+    let text = e.to_string();
+    let tmp = tmp.display().to_string();
+    if text.contains(&tmp) {
+        Error::Other(text.replace(&tmp, &target.display().to_string()))
+    } else {
+        e
+    }
+}
+
 /// Apply `--channels`: a scalar sigma_a is replicated (with a note), an array must match.
 fn reconcile_channels(
-    mut file: ParamFile,
+    mut file: FamilyParams,
     channels: Option<usize>,
     path: &Path,
-) -> Result<(ParamFile, Vec<String>)> {
+) -> Result<(FamilyParams, Vec<String>)> {
     let mut notes = Vec::new();
-    match (channels, file.sigma_a.clone()) {
+    match (channels, file.sigma_a_mut().clone()) {
         (Some(0), _) => {
             return Err(Error::Other(
                 "--channels 0: give at least one colour channel".into(),
             ))
         }
         (Some(n), SigmaA::Scalar(s)) if n > 1 => {
-            file.sigma_a = SigmaA::PerChannel(vec![s; n]);
+            *file.sigma_a_mut() = SigmaA::PerChannel(vec![s; n]);
             notes.push(format!(
                 "sigma_a = {s} (a scalar in {}) replicated to all {n} channels",
                 path.display()

@@ -249,51 +249,23 @@ impl Rig {
     }
 }
 
-/// Bytes the synthesizer holds per sample with `nc` channels: the directions in degrees and
-/// radians and the dataset's four angle columns and source line (4 × 8 + 4 × 8 + 5 × 8), plus
-/// per channel the clean value, the noisy value and its σ (3 × 8).
-fn bytes_per_sample(nc: usize) -> u64 {
-    104 + 24 * nc as u64
-}
-
-/// Memory the synthesizer may use: half the machine's memory (`MemTotal` in /proc/meminfo),
-/// or 4 GiB where that is unknown.
-fn memory_limit() -> u64 {
-    let total = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|text| {
-            let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
-            let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-            Some(kib * 1024)
-        });
-    total.map_or(4 << 30, |t| t / 2)
-}
-
 impl Rig {
     /// Refuse before allocating a dataset that would not fit in memory (an azimuthal rig of
     /// 10⁸ steps aborted at 9.6 GB); the error names the options that set the size.
-    pub fn check_memory(&self, n_channels: usize, spec: &str) -> Result<()> {
+    pub fn check_memory(&self, n_channels: usize, spec: &str, limit: u64) -> Result<()> {
         let samples = self.sample_count().unwrap_or(usize::MAX) as u64;
-        let need = samples.saturating_mul(bytes_per_sample(n_channels));
-        let limit = memory_limit();
-        if need > limit {
-            let sizes = match self {
-                Rig::Azimuthal { .. } => "incidences or steps",
-                Rig::Longitudinal { .. } => "incidences, phi or steps",
-                Rig::Sphere { .. } => "n",
-                Rig::Photo { .. } => "lights or views",
-            };
-            return Err(rig_error(
+        let sizes = match self {
+            Rig::Azimuthal { .. } => "incidences or steps",
+            Rig::Longitudinal { .. } => "incidences, phi or steps",
+            Rig::Sphere { .. } => "n",
+            Rig::Photo { .. } => "lights or views",
+        };
+        super::memory::check(samples, n_channels, limit, |why| {
+            rig_error(
                 spec,
-                format!(
-                    "{samples} samples × {n_channels} channels need about {:.1} GB, more than \
-                     the {:.1} GB allowed (half this machine's memory): use fewer {sizes}",
-                    need as f64 / 1e9,
-                    limit as f64 / 1e9
-                ),
-            ));
-        }
-        Ok(())
+                format!("{why}: use fewer {sizes}, or raise --max-memory"),
+            )
+        })
     }
 }
 

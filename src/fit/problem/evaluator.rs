@@ -4,12 +4,12 @@
 
 use serde::Serialize;
 
-use super::forward::Forward;
+use super::forward::{FitParam, Forward, ParamSet};
 use super::residual::{Evaluation, ScaleMode};
 use super::FitData;
 use crate::fit::bounds::Bound;
 use crate::fit::loss::Loss;
-use crate::model::{Angles, ParamName, Params};
+use crate::model::Angles;
 
 /// Residual space.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Default)]
@@ -62,8 +62,8 @@ pub struct Evaluator<'f, F: Forward> {
     /// arbitrary, hugely weighted outlier. They do not enter the closed-form scale.
     pub(super) lin: Vec<bool>,
     /// Fixed parameters (and the start values of free ones).
-    pub base: Params<f64>,
-    pub free: Vec<ParamName>,
+    pub base: ParamSet<F>,
+    pub free: Vec<F::Param>,
     pub bounds: Vec<Bound>,
     /// Scale is explicit (robust loss) rather than projected.
     pub explicit_scale: bool,
@@ -86,8 +86,8 @@ impl<'f, F: Forward> Evaluator<'f, F> {
         space: Space,
         loss: Loss,
         loss_scale: f64,
-        base: Params<f64>,
-        free: Vec<ParamName>,
+        base: ParamSet<F>,
+        free: Vec<F::Param>,
     ) -> crate::Result<(Self, Floored)> {
         let nc = data.n_channels();
         let mut floored = Floored {
@@ -143,7 +143,7 @@ impl<'f, F: Forward> Evaluator<'f, F> {
             w.push(if wk.is_finite() { wk } else { 0.0 });
             lin.push(fallback);
         }
-        let bounds = free.iter().map(|&n| Bound::of(n)).collect();
+        let bounds = free.iter().map(|&n| n.bound()).collect();
         Ok((
             Evaluator {
                 forward,
@@ -203,10 +203,10 @@ impl<'f, F: Forward> Evaluator<'f, F> {
     }
 
     /// Full parameter set with free values `x` (natural units).
-    pub fn params_at(&self, x: &[f64]) -> Params<f64> {
+    pub fn params_at(&self, x: &[f64]) -> ParamSet<F> {
         let mut p = self.base.clone();
         for (&n, &v) in self.free.iter().zip(x) {
-            p.set(n, v);
+            n.set(&mut p, v);
         }
         p
     }

@@ -1,22 +1,86 @@
-//! The forward model as the fit sees it: the [`Forward`] trait (model values for a chunk of
-//! samples, in any number type), its implementation by the Marschner model under one
-//! configuration, and exact gradients of any [`Forward`] by forward-mode AD ([`gradients`]).
+//! The forward model as the fit sees it: the [`Forward`] trait (model values and exact
+//! gradients for a chunk of samples, over one model family's parameters [`FitParam`]), its
+//! implementation by the Marschner model under one configuration, and the Marschner gradients
+//! by forward-mode AD ([`gradients`]). The Chiang model implements it in `crate::chiang::forward`.
 
 use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
 use num_dual::{DualNum, DualVec64};
 
+use crate::fit::bounds::Bound;
 use crate::model::jacobian::seeded;
 use crate::model::{
     scattering, scattering_by_lobe, Angles, Measurement, ModelConfig, ParamName, Params,
 };
 
+/// One parameter of a model family as the fit handles it: read and set in the family's
+/// parameter set (natural units, radians for angles), its bounds and its reporting facts, all
+/// from the family's parameter table.
+pub trait FitParam: Copy + PartialEq + std::fmt::Debug + Send + Sync + 'static {
+    /// The family's parameter set in natural units.
+    type Set: Clone + std::fmt::Debug + Send + Sync;
+    fn get(self, p: &Self::Set) -> f64;
+    fn set(self, p: &mut Self::Set, value: f64);
+    /// The fit's bounds (natural units).
+    fn bound(self) -> Bound;
+    /// The JSON name (`sigma_a[1]` for a channel).
+    fn json_name(self) -> String;
+    /// Factor from natural to reporting units (degrees for angles).
+    fn report_factor(self) -> f64;
+    /// The typical range (natural units): the start design's box.
+    fn typical_range(self) -> (f64, f64);
+}
+
+impl FitParam for ParamName {
+    type Set = Params<f64>;
+    fn get(self, p: &Params<f64>) -> f64 {
+        p.get(self)
+    }
+    fn set(self, p: &mut Params<f64>, value: f64) {
+        p.set(self, value)
+    }
+    fn bound(self) -> Bound {
+        Bound::of(self)
+    }
+    fn json_name(self) -> String {
+        ParamName::json_name(&self)
+    }
+    fn report_factor(self) -> f64 {
+        crate::fit::bounds::report_factor(self)
+    }
+    fn typical_range(self) -> (f64, f64) {
+        crate::fit::bounds::typical_range(self)
+    }
+}
+
+/// The parameter set of a [`Forward`]'s family.
+pub type ParamSet<F> = <<F as Forward>::Param as FitParam>::Set;
+
 /// The forward model seen by the fit: values and exact gradients for a chunk of samples.
 pub trait Forward: Sync {
-    /// `out[k * nc + c]` = model value of sample `k`, channel `c`, in any number type: `f64`, or
-    /// dual numbers whose derivative parts then carry exact gradients ([`gradients`]).
-    fn values<T: DualNum<f64>>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]);
-    /// Per-lobe values `[R, TT, TRT]` per channel (for curves.csv); `None` when not available.
-    fn by_lobe(&self, _p: &Params<f64>, _angles: &Angles, _out: &mut [[f64; 3]]) -> bool {
+    /// The family's parameter key.
+    type Param: FitParam;
+    /// `out[k * nc + c]` = model value of sample `k`, channel `c`.
+    fn values(&self, p: &ParamSet<Self>, angles: &[Angles], out: &mut [f64]);
+    /// Values into `out`, and `grad[(k * nc + c) * nf + j]` = ∂value/∂`free[j]` (natural
+    /// units), exact (forward-mode AD).
+    fn gradients(
+        &self,
+        p: &ParamSet<Self>,
+        free: &[Self::Param],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    );
+    /// Per-lobe values `[R, TT, TRT]` per channel (for curves.csv); `false` when not available.
+    fn by_lobe(&self, _p: &ParamSet<Self>, _angles: &Angles, _out: &mut [[f64; 3]]) -> bool {
+        false
+    }
+    /// What the data's values are (S, or radiance S·cos θ_i).
+    fn measurement(&self) -> Measurement;
+    /// Values (as [`Forward::values`]) of the family's exact form when this forward model is an
+    /// approximation of it (Marschner's cubic root map → the exact one): the verdict's evidence
+    /// for `--mode exact`. `false` (nothing written) when there is no such alternative.
+    fn exact_values(&self, _p: &ParamSet<Self>, _angles: &[Angles], _out: &mut [f64]) -> bool {
         false
     }
 }
@@ -29,8 +93,10 @@ pub struct ModelForward {
     pub measurement: Measurement,
 }
 
-impl Forward for ModelForward {
-    fn values<T: DualNum<f64>>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]) {
+impl ModelForward {
+    /// [`Forward::values`] in any number type: `f64`, or dual numbers whose derivative parts
+    /// then carry exact gradients ([`gradients`]).
+    pub fn values_in<T: DualNum<f64>>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]) {
         let nc = p.sigma_a.len();
         for (a, o) in angles.iter().zip(out.chunks_mut(nc)) {
             scattering(p, &self.config, a, o);
@@ -41,7 +107,43 @@ impl Forward for ModelForward {
             }
         }
     }
+}
 
+impl Forward for ModelForward {
+    type Param = ParamName;
+
+    fn values(&self, p: &Params<f64>, angles: &[Angles], out: &mut [f64]) {
+        self.values_in(p, angles, out)
+    }
+
+    fn gradients(
+        &self,
+        p: &Params<f64>,
+        free: &[ParamName],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        gradients(self, p, free, angles, out, grad)
+    }
+
+    fn measurement(&self) -> Measurement {
+        self.measurement
+    }
+    fn exact_values(&self, p: &Params<f64>, angles: &[Angles], out: &mut [f64]) -> bool {
+        if self.config.mode == crate::model::RootMode::Exact {
+            return false;
+        }
+        let exact = ModelForward {
+            config: ModelConfig {
+                mode: crate::model::RootMode::Exact,
+                ..self.config
+            },
+            measurement: self.measurement,
+        };
+        exact.values(p, angles, out);
+        true
+    }
     fn by_lobe(&self, p: &Params<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
         scattering_by_lobe(p, &self.config, angles, out);
         let f = self.measurement.factor(angles);
@@ -50,10 +152,10 @@ impl Forward for ModelForward {
     }
 }
 
-/// Values of `forward` into `out`, and `grad[(k * nc + c) * nf + j]` = ∂value/∂`free[j]`
-/// (natural units), by forward-mode AD.
-pub fn gradients<F: Forward>(
-    forward: &F,
+/// Values of the Marschner `forward` into `out`, and `grad[(k * nc + c) * nf + j]` =
+/// ∂value/∂`free[j]` (natural units), by forward-mode AD.
+pub fn gradients(
+    forward: &ModelForward,
     p: &Params<f64>,
     free: &[ParamName],
     angles: &[Angles],
@@ -74,8 +176,8 @@ pub fn gradients<F: Forward>(
 }
 
 /// [`gradients`] with `dim`-sized dual numbers; `(out, grad)` as there.
-fn gradients_dim<F: Forward, D: Dim>(
-    forward: &F,
+fn gradients_dim<D: Dim>(
+    forward: &ModelForward,
     dim: D,
     p: &Params<f64>,
     free: &[ParamName],
@@ -90,7 +192,7 @@ fn gradients_dim<F: Forward, D: Dim>(
     let pd = seeded(p, free, dim);
     let mut o: Vec<DualVec64<D>> = vec![DualVec64::from_re(0.0); nc];
     for (k, a) in angles.iter().enumerate() {
-        forward.values(&pd, std::slice::from_ref(a), &mut o);
+        forward.values_in(&pd, std::slice::from_ref(a), &mut o);
         for (c, v) in o.iter().enumerate() {
             out[k * nc + c] = v.re;
             let e = v.eps.clone().unwrap_generic(dim, U1);

@@ -3,12 +3,11 @@
 //! linear in samples × channels instead of samples × channels × parameters. Also the cost alone,
 //! in chunks, without storing any residual.
 //!
-//! Block structure: channel `c`'s rows depend on the shared parameters, on `σ_a[c]` and on the
-//! scale `s_c` only (a [`Forward`] must not couple channels through σ_a). So the AD pass seeds every
-//! channel's σ_a in one dual slot (Curtis–Powell–Reid column compression: `n_shared + 1`
-//! directions, not `n_shared + n_channels`), and each channel keeps its own Householder QR of its
-//! rows `[∂r/∂scale | ∂r/∂shared, ∂r/∂σ_a[c] | r̃]` — never the normal matrix, so the conditioning of
-//! `J` is not squared and the SVD-based LM step and covariance keep their accuracy.
+//! Block structure: channel `c`'s rows depend on the free parameters and on its own scale `s_c`.
+//! Each chunk's values and exact gradients come from [`Forward::gradients`] (any model family;
+//! memory [`CHUNK`] × channels × free per chunk in flight), and each channel keeps its own
+//! Householder QR of its rows `[∂r/∂scale | ∂r/∂free | r̃]` — never the normal matrix, so the
+//! conditioning of `J` is not squared and the SVD-based LM step and covariance keep their accuracy.
 //!
 //! Variable projection: with the scale projected, `J = B + a·dsᵀ` per channel, where `a` is
 //! `∂r/∂scale`, `B` the Jacobian at fixed scale and `ds` the derivative of the optimal scale —
@@ -20,14 +19,12 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use nalgebra::{allocator::Allocator, Const, DMatrix, DVector, DefaultAllocator, Dim, Dyn, U1};
-use num_dual::{Derivative, DualNum, DualVec64};
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 use super::evaluator::{Evaluator, Space};
-use super::forward::Forward;
+use super::forward::{Forward, ParamSet};
 use super::residual::{ScaleMode, CHUNK};
-use crate::model::{ParamName, Params};
 
 /// Model values below this are floored before taking logarithms (as in the residual pass).
 const MODEL_FLOOR: f64 = 1e-300;
@@ -48,45 +45,6 @@ pub struct Linearization {
     pub rows: usize,
     /// Per-channel scale `s_c` used.
     pub scale: Vec<f64>,
-}
-
-/// Which solver columns one channel's rows touch.
-struct Layout {
-    /// Indices into `free` of the shared (non-σ_a) parameters.
-    shared: Vec<usize>,
-    /// Per channel, the index into `free` of its σ_a, if free.
-    sigma: Vec<Option<usize>>,
-    /// Whether any σ_a is free (one compressed dual slot).
-    has_sigma: bool,
-}
-
-impl Layout {
-    fn of(free: &[ParamName], nc: usize) -> Layout {
-        let mut sigma = vec![None; nc];
-        let mut shared = Vec::new();
-        for (j, name) in free.iter().enumerate() {
-            match name {
-                ParamName::SigmaA(c) if *c < nc => sigma[*c] = Some(j),
-                _ => shared.push(j),
-            }
-        }
-        let has_sigma = sigma.iter().any(Option::is_some);
-        Layout {
-            shared,
-            sigma,
-            has_sigma,
-        }
-    }
-
-    /// Local gradient columns: shared, then the compressed σ_a slot.
-    fn n_local(&self) -> usize {
-        self.shared.len() + usize::from(self.has_sigma)
-    }
-
-    /// Row width: scale column, local gradient columns, residual.
-    fn width(&self) -> usize {
-        self.n_local() + 2
-    }
 }
 
 /// One chunk's reduction: per channel the R factor of its rows, and the projection sums.
@@ -121,7 +79,7 @@ fn triangle(a: DMatrix<f64>) -> DMatrix<f64> {
 
 impl<F: Forward> Evaluator<'_, F> {
     /// Model values of every row (sample-major), in chunks; `None` when cancelled.
-    fn model_values(&self, p: &Params<f64>, cancel: Option<&AtomicBool>) -> Option<Vec<f64>> {
+    fn model_values(&self, p: &ParamSet<F>, cancel: Option<&AtomicBool>) -> Option<Vec<f64>> {
         let nc = self.n_channels;
         let mut model = vec![0.0; self.angles.len() * nc];
         let done: Vec<bool> = model
@@ -291,32 +249,6 @@ impl<F: Forward> Evaluator<'_, F> {
         mode: ScaleMode<'_>,
         cancel: Option<&AtomicBool>,
     ) -> Option<Linearization> {
-        let layout = Layout::of(&self.free, self.n_channels);
-        let dim = layout.n_local().max(1);
-        macro_rules! dispatch {
-            ($($n:literal)*) => {
-                match dim {
-                    $($n => self.linearize_dim(Const::<$n>, &layout, x, col_factor, mode, cancel),)*
-                    d => self.linearize_dim(Dyn(d), &layout, x, col_factor, mode, cancel),
-                }
-            };
-        }
-        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12)
-    }
-
-    fn linearize_dim<D: Dim>(
-        &self,
-        dim: D,
-        layout: &Layout,
-        x: &[f64],
-        col_factor: &[f64],
-        mode: ScaleMode<'_>,
-        cancel: Option<&AtomicBool>,
-    ) -> Option<Linearization>
-    where
-        DefaultAllocator: Allocator<D>,
-        DualVec64<D>: DualNum<f64> + Sync,
-    {
         let nc = self.n_channels;
         let nf = self.free.len();
         let p = self.params_at(x);
@@ -326,24 +258,8 @@ impl<F: Forward> Evaluator<'_, F> {
         };
         let s = self.natural_scale(&sq);
         let projected = matches!(mode, ScaleMode::Projected);
-        let nl = layout.n_local();
-        let w = layout.width();
-        let ns = layout.shared.len();
-        // Compressed seeding: shared parameter i in slot i, every free σ_a in slot ns.
-        let mut pd = p.map(|&v| DualVec64::<D>::from_re(v));
-        for (i, &j) in layout.shared.iter().enumerate() {
-            let name = self.free[j];
-            let dir = Derivative::derivative_generic(dim, U1, i);
-            pd.set(name, DualVec64::new(p.get(name), dir));
-        }
-        for (c, j) in layout.sigma.iter().enumerate() {
-            if j.is_some() {
-                let name = ParamName::SigmaA(c);
-                let dir = Derivative::derivative_generic(dim, U1, ns);
-                pd.set(name, DualVec64::new(p.get(name), dir));
-            }
-        }
-        let sum_width = 2 + 2 * nl;
+        let w = nf + 2;
+        let sum_width = 2 + 2 * nf;
         let n_chunks = self.angles.len().div_ceil(CHUNK);
         let mut tri: Vec<DMatrix<f64>> = vec![DMatrix::zeros(0, w); nc];
         let mut sums = vec![0.0; nc * sum_width];
@@ -354,7 +270,7 @@ impl<F: Forward> Evaluator<'_, F> {
                     if cancelled(cancel) {
                         return None;
                     }
-                    Some(self.chunk_part(dim, layout, &pd, ci, col_factor, mode, &sq, &s))
+                    Some(self.chunk_part(&p, ci, col_factor, mode, &sq, &s))
                 })
                 .collect();
             for part in parts {
@@ -367,10 +283,10 @@ impl<F: Forward> Evaluator<'_, F> {
                 }
             }
         }
-        // Derivative of the projected scale per channel (local columns), as in `project`.
+        // Derivative of the projected scale per channel (free columns), as in `project`.
         let ds = |c: usize| -> Vec<f64> {
             let a = &sums[c * sum_width..(c + 1) * sum_width];
-            let mut d = vec![0.0; nl];
+            let mut d = vec![0.0; nf];
             if !projected {
                 return d;
             }
@@ -378,7 +294,7 @@ impl<F: Forward> Evaluator<'_, F> {
                 Space::Linear if a[1] != 0.0 => {
                     let sc = a[0] / a[1];
                     for (j, dj) in d.iter_mut().enumerate() {
-                        *dj = (a[2 + j] - 2.0 * sc * a[2 + nl + j]) / a[1];
+                        *dj = (a[2 + j] - 2.0 * sc * a[2 + nf + j]) / a[1];
                     }
                 }
                 Space::Log if a[0] != 0.0 => {
@@ -400,11 +316,8 @@ impl<F: Forward> Evaluator<'_, F> {
             let dc = ds(c);
             for i in 0..t.nrows() {
                 let ra = t[(i, 0)];
-                for (l, &j) in layout.shared.iter().enumerate() {
-                    matrix[(row, j)] = t[(i, 1 + l)] + ra * dc[l];
-                }
-                if let Some(j) = layout.sigma[c] {
-                    matrix[(row, j)] = t[(i, 1 + ns)] + ra * dc[ns];
+                for (j, dj) in dc.iter().enumerate() {
+                    matrix[(row, j)] = t[(i, 1 + j)] + ra * dj;
                 }
                 if !projected {
                     matrix[(row, nf + c)] = ra;
@@ -422,46 +335,38 @@ impl<F: Forward> Evaluator<'_, F> {
     }
 
     /// Rows of chunk `ci`, reduced to one R factor per channel, with the projection sums.
-    #[allow(clippy::too_many_arguments)]
-    fn chunk_part<D: Dim>(
+    fn chunk_part(
         &self,
-        dim: D,
-        layout: &Layout,
-        pd: &Params<DualVec64<D>>,
+        p: &ParamSet<F>,
         ci: usize,
         col_factor: &[f64],
         mode: ScaleMode<'_>,
         sq: &[f64],
         s: &[f64],
-    ) -> ChunkPart
-    where
-        DefaultAllocator: Allocator<D>,
-        DualVec64<D>: DualNum<f64>,
-    {
+    ) -> ChunkPart {
         let nc = self.n_channels;
-        let nl = layout.n_local();
-        let ns = layout.shared.len();
-        let w = layout.width();
-        let sum_width = 2 + 2 * nl;
+        let nf = self.free.len();
+        let w = nf + 2;
+        let sum_width = 2 + 2 * nf;
         let lo = ci * CHUNK;
         let hi = (lo + CHUNK).min(self.angles.len());
-        let mut rows: Vec<DMatrix<f64>> = vec![DMatrix::zeros(hi - lo, w); nc];
+        let n = hi - lo;
+        let mut out = vec![0.0; n * nc];
+        let mut grad = vec![0.0; n * nc * nf];
+        self.forward
+            .gradients(p, &self.free, &self.angles[lo..hi], &mut out, &mut grad);
+        let mut rows: Vec<DMatrix<f64>> = vec![DMatrix::zeros(n, w); nc];
         let mut sums = vec![0.0; nc * sum_width];
-        let mut out: Vec<DualVec64<D>> = vec![DualVec64::from_re(0.0); nc];
-        let mut g = vec![0.0; nl];
-        for (i, a) in self.angles[lo..hi].iter().enumerate() {
-            self.forward.values(pd, std::slice::from_ref(a), &mut out);
-            for (c, v) in out.iter().enumerate() {
-                let k = (lo + i) * nc + c;
-                let mk = v.re;
-                let e = v.eps.clone().unwrap_generic(dim, U1);
-                for (l, &j) in layout.shared.iter().enumerate() {
-                    g[l] = e[l] * col_factor[j];
+        let mut g = vec![0.0; nf];
+        let log = self.space == Space::Log;
+        for i in 0..n {
+            for c in 0..nc {
+                let kl = i * nc + c;
+                let k = lo * nc + kl;
+                let mk = out[kl];
+                for (l, gl) in g.iter_mut().enumerate() {
+                    *gl = grad[kl * nf + l] * col_factor[l];
                 }
-                if layout.has_sigma {
-                    g[ns] = layout.sigma[c].map_or(0.0, |j| e[ns] * col_factor[j]);
-                }
-                let log = self.space == Space::Log;
                 if log {
                     for gl in g.iter_mut() {
                         *gl = if mk > MODEL_FLOOR { *gl / mk } else { 0.0 };
@@ -488,7 +393,7 @@ impl<F: Forward> Evaluator<'_, F> {
                 let finite0 = |v: f64| if v.is_finite() { v } else { 0.0 };
                 let mut rm = rows[c].row_mut(i);
                 rm[0] = finite0(f * a);
-                for l in 0..nl {
+                for l in 0..nf {
                     rm[1 + l] = finite0(f * bmul * g[l]);
                 }
                 rm[w - 1] = r;
@@ -499,15 +404,15 @@ impl<F: Forward> Evaluator<'_, F> {
                         Space::Linear => {
                             acc[0] += w2 * y * qk;
                             acc[1] += w2 * qk * qk;
-                            for l in 0..nl {
+                            for l in 0..nf {
                                 acc[2 + l] += w2 * y * g[l];
-                                acc[2 + nl + l] += w2 * qk * g[l];
+                                acc[2 + nf + l] += w2 * qk * g[l];
                             }
                         }
                         Space::Log => {
                             acc[0] += w2;
                             acc[1] += w2 * (y - qk);
-                            for l in 0..nl {
+                            for l in 0..nf {
                                 acc[2 + l] += w2 * g[l];
                             }
                         }

@@ -7,7 +7,7 @@
 use rayon::prelude::*;
 
 use super::evaluator::{Evaluator, Space};
-use super::forward::{gradients, Forward};
+use super::forward::Forward;
 
 /// Samples per parallel work item and per partial sum (fixed: part of the result's bit pattern).
 pub const CHUNK: usize = 256;
@@ -90,7 +90,7 @@ impl<F: Forward> Evaluator<'_, F> {
                 .zip(dq.par_chunks_mut(CHUNK * nc * nf))
                 .zip(self.angles.par_chunks(CHUNK))
                 .for_each(|((m, g), a)| {
-                    gradients(self.forward, &p, &self.free, a, m, g);
+                    self.forward.gradients(&p, &self.free, a, m, g);
                     for (k, row) in g.chunks_mut(nf).enumerate() {
                         for (gj, cf) in row.iter_mut().zip(col_factor) {
                             *gj *= cf;

@@ -240,7 +240,7 @@ fn draw_legend<DB: DrawingBackend>(
     x += 60;
     area.draw(&Cross::new((x + 6, y), 5, BLACK.stroke_width(2)))
         .map_err(de)?;
-    area.draw(&text("down-weighted by the loss (weight < 1)", x + 18))
+    area.draw(&text("down-weighted by the loss (weight < 0.5)", x + 18))
         .map_err(de)?;
     Ok(())
 }

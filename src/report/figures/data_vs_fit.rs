@@ -91,7 +91,7 @@ impl Figure for DataVsFitFigure {
                 ))
             }))
             .map_err(de)?
-            .label("down-weighted (weight < 1)")
+            .label("down-weighted (weight < 0.5)")
             .legend(|(x, y)| Cross::new((x + 12, y), 5, BLACK.stroke_width(2)));
         draw_key(&mut chart, SeriesLabelPosition::UpperLeft, 13)
     }

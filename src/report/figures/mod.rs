@@ -1,6 +1,6 @@
 //! The report's figures, one file each, drawn with the plotting kit ([`crate::plot`]) onto any
 //! backend (the same code writes SVG and PNG): per-slice curves, data against fit, residuals, a
-//! polar view, the correlation heatmap and the convergence trace. This module owns what they
+//! polar view, the correlation heatmap, the profile likelihoods and the convergence trace. This module owns what they
 //! share: the drawn form of a slice ([`SlicePanel`] and its parts), channel colours and the
 //! header heights. Figures receive prepared, already decimated data; they only draw.
 
@@ -9,6 +9,7 @@ mod correlation;
 mod curves;
 mod data_vs_fit;
 mod polar;
+mod profile;
 mod residuals;
 
 use plotters::style::RGBColor;
@@ -18,6 +19,7 @@ pub use correlation::CorrelationFigure;
 pub use curves::CurvesFigure;
 pub use data_vs_fit::DataVsFitFigure;
 pub use polar::PolarFigure;
+pub use profile::{ProfileFigure, ProfilePanel};
 pub use residuals::ResidualsFigure;
 
 /// Height of a figure's header (title and explanation).
@@ -51,7 +53,7 @@ pub struct Point {
     pub x: f64,
     pub y: f64,
     pub sigma: Option<f64>,
-    /// Robust-loss weight < 1: marked as down-weighted.
+    /// Robust-loss weight below `files::DOWN_WEIGHT`: marked as down-weighted.
     pub outlier: bool,
 }
 

@@ -168,7 +168,7 @@ fn draw_marker_legend<DB: DrawingBackend>(
     area.draw(&Cross::new((x + 6, y), 5, BLACK.stroke_width(1)))
         .map_err(de)?;
     area.draw(&Text::new(
-        "down-weighted by the loss (weight < 1), in the channel's colour",
+        "down-weighted by the loss (weight < 0.5), in the channel's colour",
         (x + 16, y),
         style,
     ))

@@ -1,0 +1,288 @@
+//! `hairfit fit --model chiang`: the Chiang family's part of a fit — its free parameters (what
+//! the terms in play depend on, minus `--fix`, η only on `--free eta`), its `--fix` names, the
+//! words for an undetermined parameter — handed to the shared stages ([`crate::fit::fit_with`]).
+
+use std::time::Instant;
+
+use super::forward::ChiangForward;
+use super::{ChiangEffects, ChiangParamFile, ChiangParamName, ChiangParams, PARAMETERS};
+use crate::error::{Error, Result};
+use crate::family::{ChiangRecord, FamilyParams};
+use crate::files::{Floored, LoadReport, OptionsRecord};
+use crate::fit::problem::{FitData, FitParam};
+use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
+use crate::model::angles::wrap;
+use crate::model::{Effects, Lobes, ModelConfig};
+
+/// Every Chiang parameter for `nc` channels, in output order (the table's order).
+pub fn all_parameters(nc: usize) -> Vec<ChiangParamName> {
+    let mut v = vec![ChiangParamName::Eta];
+    v.extend((0..nc).map(ChiangParamName::SigmaA));
+    v.extend([
+        ChiangParamName::BetaM,
+        ChiangParamName::BetaN,
+        ChiangParamName::Alpha,
+    ]);
+    v
+}
+
+/// The table's reference values: what a fit holds a parameter it does not vary at.
+pub fn reference_params(nc: usize) -> ChiangParams<f64> {
+    let r = |i: usize| PARAMETERS[i].reference;
+    ChiangParams {
+        eta: r(0),
+        sigma_a: vec![r(1); nc],
+        beta_m: r(2),
+        beta_n: r(3),
+        alpha: r(4).to_radians(),
+    }
+}
+
+/// Parse `--fix NAME=VALUE` with CHIANG.md's names (file units; `sigma_a=v` fixes every
+/// channel) into natural-unit values inside the fit bounds.
+pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ChiangParamName, f64)>> {
+    let mut out: Vec<(ChiangParamName, f64)> = Vec::new();
+    let all = all_parameters(nc);
+    for item in items {
+        let (name, value) = item.split_once('=').ok_or_else(|| {
+            Error::Other(format!(
+                "--fix `{item}`: write NAME=VALUE, e.g. --fix beta_n=0.3 or --fix alpha_deg=-2"
+            ))
+        })?;
+        let name = name.trim();
+        let v: f64 = value.trim().parse().map_err(|_| {
+            Error::Other(format!(
+                "--fix `{item}`: `{}` is not a number",
+                value.trim()
+            ))
+        })?;
+        let names: Vec<ChiangParamName> = if name == "sigma_a" {
+            (0..nc).map(ChiangParamName::SigmaA).collect()
+        } else {
+            match all.iter().find(|p| p.json_name() == name) {
+                Some(&p) => vec![p],
+                None => {
+                    let known: Vec<String> = all.iter().map(|p| p.json_name()).collect();
+                    return Err(Error::Other(format!(
+                        "--fix `{item}`: unknown Chiang parameter `{name}`; use one of sigma_a, {}",
+                        known.join(", ")
+                    )));
+                }
+            }
+        };
+        for p in names {
+            let x = v / p.report_factor();
+            let f = p.fact();
+            if !v.is_finite() || p.bound().clamp(x) != x {
+                return Err(Error::Parameter {
+                    name: p.json_name(),
+                    value: v,
+                    message: format!(
+                        "--fix value is outside the fit's range [{}, {}]",
+                        f.fit_lo, f.fit_hi
+                    ),
+                });
+            }
+            if out.iter().any(|(q, _)| *q == p) {
+                return Err(Error::Other(format!(
+                    "--fix `{item}`: {} is already fixed by an earlier --fix; give each parameter once",
+                    p.json_name()
+                )));
+            }
+            out.push((p, x));
+        }
+    }
+    Ok(out)
+}
+
+/// The Marschner-shaped record of a Chiang fit's lobes (fit.json `model`): its lobes on, no
+/// glints, no eccentricity (the report draws those lobes).
+pub fn lobes_config(effects: &ChiangEffects) -> ModelConfig {
+    ModelConfig {
+        mode: Default::default(),
+        effects: Effects {
+            lobes: Lobes {
+                r: effects.r,
+                tt: effects.tt,
+                trt: effects.trt || effects.residual,
+            },
+            glints: false,
+            eccentricity: false,
+        },
+    }
+}
+
+/// Why the data cannot determine `p`: the geometry that shows it, then its partners.
+fn why_undetermined(
+    p: ChiangParamName,
+    data: &FitData,
+    _params: &ChiangParams<f64>,
+    partners: &[String],
+) -> String {
+    let tail = if partners.is_empty() {
+        String::new()
+    } else {
+        format!("; strongly correlated with {}", partners.join(", "))
+    };
+    match p {
+        ChiangParamName::SigmaA(_) => {
+            let n = data
+                .angles
+                .iter()
+                .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * std::f64::consts::PI)
+                .count();
+            format!(
+                "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
+            )
+        }
+        ChiangParamName::BetaM | ChiangParamName::Alpha => {
+            let th: Vec<f64> = data
+                .angles
+                .iter()
+                .map(|a| 0.5 * (a.theta_i + a.theta_r))
+                .collect();
+            let spread = th.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - th.iter().copied().fold(f64::INFINITY, f64::min);
+            format!(
+                "the samples span theta_h by {:.1} deg only: the longitudinal lobes need a scan across it{tail}",
+                spread.to_degrees()
+            )
+        }
+        _ => format!("the data do not constrain it{tail}"),
+    }
+}
+
+/// Fit the Chiang model (`opts.chiang`: terms and width nodes) to `data`.
+pub fn fit_chiang(
+    data: &FitData,
+    file: &str,
+    load_report: LoadReport,
+    opts: &FitOptions,
+) -> Result<FitOutcome<ChiangParams<f64>>> {
+    let started = Instant::now();
+    let nc = require_samples(data, file)?;
+    // The fit evaluates fixed chunks of consecutive samples, and a chunk pays the width
+    // integral once per exit direction (θ_r, |φ|): fit the samples grouped by that key, then
+    // put curves.csv back in the data's order.
+    let order = exit_direction_order(data);
+    let grouped = data.subset(&order);
+    let data = &grouped;
+    let mut warnings = Vec::new();
+    let effects = opts.chiang.effects;
+    let forward = ChiangForward {
+        model: opts.chiang.clone(),
+        measurement: opts.measurement,
+    };
+    let fixes = parse_fixes(&opts.fix, nc)?;
+    let mut base = reference_params(nc);
+    for &(p, x) in &fixes {
+        p.set(&mut base, x);
+    }
+    let is_fixed = |p: &ChiangParamName| fixes.iter().any(|(f, _)| f == p);
+    let wanted = |p: &ChiangParamName| !p.fact().on_request || opts.free_eta;
+    let free: Vec<ChiangParamName> = effects
+        .parameters(nc)
+        .into_iter()
+        .filter(|p| wanted(p) && !is_fixed(p))
+        .collect();
+    for p in ChiangEffects::default().parameters(nc) {
+        if wanted(&p) && !effects.parameters(nc).contains(&p) && !is_fixed(&p) {
+            warnings.push(format!(
+                "{}: not fitted (the terms in play do not depend on it)",
+                p.json_name()
+            ));
+        }
+    }
+    let terms: Vec<&str> = [
+        (effects.r, "R"),
+        (effects.tt, "TT"),
+        (effects.trt, "TRT"),
+        (effects.residual, "residual"),
+    ]
+    .iter()
+    .filter(|(on, _)| *on)
+    .map(|(_, n)| *n)
+    .collect();
+    let reasons = vec![format!(
+        "Chiang 2016 model, terms {} (--terms), {} width nodes (--width-nodes)",
+        terms.join("+"),
+        opts.chiang.width_nodes()
+    )];
+    let options = |sub: usize, explicit: bool, floored: Floored| {
+        let choice = crate::fit::stages::ModelChoice {
+            config: lobes_config(&effects),
+            effects_choice: "explicit",
+            reasons: reasons.clone(),
+        };
+        let set = crate::fit::stages::FreeSet {
+            fixes: Vec::new(),
+            base: crate::fit::bounds::reference_params(nc),
+            free: Vec::new(),
+        };
+        OptionsRecord {
+            fixed: fixes
+                .iter()
+                .map(|(p, x)| (p.json_name(), x * p.report_factor()))
+                .collect(),
+            free_parameters: free.iter().map(|p| p.json_name()).collect(),
+            ..crate::fit::stages::options_record(opts, &choice, &set, sub, explicit, floored)
+        }
+    };
+    let why = |p: ChiangParamName, params: &ChiangParams<f64>, partners: &[String]| {
+        why_undetermined(p, data, params, partners)
+    };
+    let mut outcome = fit_with(
+        FitRun {
+            data,
+            file,
+            load_report,
+            opts,
+            forward: &forward,
+            base,
+            free: free.clone(),
+            options: &options,
+            config: lobes_config(&effects),
+            chiang: Some(ChiangRecord {
+                effects,
+                width_nodes: opts.chiang.width_nodes(),
+            }),
+            all: all_parameters(nc),
+            why: &why,
+            params_file: |p| FamilyParams::Chiang(ChiangParamFile::from_params(p)),
+            started,
+        },
+        warnings,
+    )?;
+    restore_order(&mut outcome.curves, &order, nc);
+    Ok(outcome)
+}
+
+/// Sample indices sorted by exit direction (θ_r, |φ|), ties in data order.
+fn exit_direction_order(data: &FitData) -> Vec<usize> {
+    let key = |i: usize| {
+        let a = &data.angles[i];
+        (a.theta_r, wrap(a.phi_r - a.phi_i).abs())
+    };
+    let mut order: Vec<usize> = (0..data.len()).collect();
+    order.sort_by(|&i, &j| {
+        let (a, b) = (key(i), key(j));
+        a.0.total_cmp(&b.0)
+            .then(a.1.total_cmp(&b.1))
+            .then(i.cmp(&j))
+    });
+    order
+}
+
+/// Curves of samples fitted in `order` back in the data's order, numbered as the data's.
+fn restore_order(curves: &mut Vec<crate::files::CurveRow>, order: &[usize], nc: usize) {
+    let mut back = vec![Vec::new(); order.len()];
+    for (j, rows) in std::mem::take(curves).chunks(nc).enumerate() {
+        back[order[j]] = rows.to_vec();
+    }
+    for (i, rows) in back.iter_mut().enumerate() {
+        for r in rows.iter_mut() {
+            r.sample = i as u64;
+        }
+    }
+    *curves = back.into_iter().flatten().collect();
+}

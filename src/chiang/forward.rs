@@ -1,0 +1,151 @@
+//! The Chiang model as the fit sees it: [`FitParam`] for [`ChiangParamName`] (bounds and
+//! reporting facts from [`super::PARAMETERS`]) and [`ChiangForward`], whose values and exact
+//! Jacobians come from the batch evaluator, so a chunk pays the width integral once per exit
+//! direction, and whose Jacobian uses stack duals for every realistic parameter count.
+
+use nalgebra::{Dyn, U1};
+use num_dual::DualDVec64;
+
+use super::jacobian::{batch_jacobian_static, seeded};
+use super::{scattering_batch, ChiangModel, ChiangParamName, ChiangParams};
+use crate::fit::bounds::Bound;
+use crate::fit::problem::{FitParam, Forward};
+use crate::model::{Angles, Measurement};
+
+impl ChiangParamName {
+    /// Factor from the model's value to the file's (180/π for α, else 1).
+    pub fn file_factor(self) -> f64 {
+        if self == ChiangParamName::Alpha {
+            180.0 / std::f64::consts::PI
+        } else {
+            1.0
+        }
+    }
+}
+
+impl FitParam for ChiangParamName {
+    type Set = ChiangParams<f64>;
+    fn get(self, p: &ChiangParams<f64>) -> f64 {
+        ChiangParams::get(p, self)
+    }
+    fn set(self, p: &mut ChiangParams<f64>, value: f64) {
+        ChiangParams::set(p, self, value)
+    }
+    fn bound(self) -> Bound {
+        let f = self.fact();
+        Bound::Both(f.fit_lo / self.file_factor(), f.fit_hi / self.file_factor())
+    }
+    fn json_name(self) -> String {
+        ChiangParamName::json_name(&self)
+    }
+    fn report_factor(self) -> f64 {
+        self.file_factor()
+    }
+    fn typical_range(self) -> (f64, f64) {
+        let (a, b) = self.fact().typical;
+        (a / self.file_factor(), b / self.file_factor())
+    }
+}
+
+/// The Chiang model under one configuration, as the data measure it: `S`, or `S · cos θ_i`
+/// for radiance.
+#[derive(Debug, Clone)]
+pub struct ChiangForward {
+    pub model: ChiangModel,
+    pub measurement: Measurement,
+}
+
+impl ChiangForward {
+    /// Multiply each sample's values (and derivative rows) by the measurement factor.
+    fn apply_measurement(&self, angles: &[Angles], nc: usize, out: &mut [f64], grad: &mut [f64]) {
+        if self.measurement == Measurement::S {
+            return;
+        }
+        let per_sample = if out.is_empty() {
+            0
+        } else {
+            grad.len() / angles.len().max(1)
+        };
+        for (k, a) in angles.iter().enumerate() {
+            let f = self.measurement.factor(a);
+            out[k * nc..(k + 1) * nc].iter_mut().for_each(|v| *v *= f);
+            grad[k * per_sample..(k + 1) * per_sample]
+                .iter_mut()
+                .for_each(|v| *v *= f);
+        }
+    }
+}
+
+impl Forward for ChiangForward {
+    fn measurement(&self) -> Measurement {
+        self.measurement
+    }
+    type Param = ChiangParamName;
+
+    fn values(&self, p: &ChiangParams<f64>, angles: &[Angles], out: &mut [f64]) {
+        scattering_batch(p, &self.model, angles, out);
+        let nc = p.sigma_a.len();
+        self.apply_measurement(angles, nc, out, &mut []);
+    }
+
+    fn gradients(
+        &self,
+        p: &ChiangParams<f64>,
+        free: &[ChiangParamName],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        macro_rules! dispatch {
+            ($($n:literal)*) => {
+                match free.len() {
+                    $($n => {
+                        let which: &[ChiangParamName; $n] = free.try_into().expect("length checked");
+                        let mut jac = vec![[0.0; $n]; out.len()];
+                        batch_jacobian_static(p, &self.model, angles, which, out, &mut jac);
+                        for (row, j) in grad.chunks_mut($n).zip(&jac) {
+                            row.copy_from_slice(j);
+                        }
+                    })*
+                    _ => self.gradients_dynamic(p, free, angles, out, grad),
+                }
+            };
+        }
+        // Stack duals: η + 3 σ_a + β_m, β_n, α = 7 for RGB; headroom for more channels.
+        dispatch!(1 2 3 4 5 6 7 8 9 10);
+        let nc = p.sigma_a.len();
+        self.apply_measurement(angles, nc, out, grad);
+    }
+
+    fn by_lobe(&self, p: &ChiangParams<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
+        crate::family::chiang_by_lobe(p, &self.model, angles, out);
+        let f = self.measurement.factor(angles);
+        out.iter_mut().flatten().for_each(|v| *v *= f);
+        true
+    }
+}
+
+impl ChiangForward {
+    /// Heap duals for parameter lists longer than the static dispatch covers.
+    fn gradients_dynamic(
+        &self,
+        p: &ChiangParams<f64>,
+        free: &[ChiangParamName],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        let k = free.len();
+        let dual = seeded(p, free, |v, j| match j {
+            Some(j) => DualDVec64::from_re(v).derivative(k, j),
+            None => DualDVec64::from_re(v),
+        });
+        let mut o = vec![DualDVec64::from_re(0.0); out.len()];
+        scattering_batch(&dual, &self.model, angles, &mut o);
+        for ((d, v), row) in o.into_iter().zip(out.iter_mut()).zip(grad.chunks_mut(k)) {
+            *v = d.re;
+            let e = d.eps.unwrap_generic(Dyn(k), U1);
+            row.copy_from_slice(e.as_slice());
+        }
+    }
+}

@@ -1,0 +1,58 @@
+//! The clap options of `hairfit compare` (the data, the loader's and the fit's options, the
+//! output directory) and the command itself: both families with the same options.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use clap::Args;
+
+use super::fit::FitArgs;
+use crate::compare::CompareOutcome;
+use crate::data::LoadOptions;
+use crate::error::{Error, Result};
+use crate::family::ModelFamily;
+
+/// Everything `hairfit compare` takes. The fit options apply to both fits; `--model` is not
+/// one of them (both families are fitted), `--terms`/`--width-nodes` set the Chiang fit's
+/// model and `--mode`/`--lobes`/`--no-glints`/`--no-eccentricity` the Marschner fit's.
+#[derive(Debug, Clone, Args)]
+pub struct CompareArgs {
+    /// Data file (.csv with a header, .json, or a headerless scan with --columns).
+    pub data: PathBuf,
+    #[command(flatten)]
+    pub load: LoadOptions,
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Output directory: DIR/marschner/, DIR/chiang/, DIR/compare.json, DIR/index.html.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Run `hairfit compare`.
+pub fn compare_command(
+    args: &CompareArgs,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<CompareOutcome> {
+    if args.fit.model.family != ModelFamily::Marschner {
+        return Err(Error::Other(
+            "compare fits both model families: drop --model".into(),
+        ));
+    }
+    // Each family's own options are checked as that family's fit would check them.
+    let mut chiang_args = args.fit.clone();
+    chiang_args.model.family = ModelFamily::Chiang;
+    chiang_args.model.mode = Default::default();
+    chiang_args.model.lobes = "R,TT,TRT".into();
+    chiang_args.model.no_glints = false;
+    chiang_args.model.no_eccentricity = false;
+    let chiang = chiang_args.options(cancel.clone())?.chiang;
+    let mut marschner_args = args.fit.clone();
+    marschner_args.model.terms = None;
+    marschner_args.model.width_nodes = None;
+    let opts = crate::fit::FitOptions {
+        chiang,
+        ..marschner_args.options(cancel)?
+    };
+    crate::compare::compare_command(&args.data, &args.load, &opts, &args.out)
+}

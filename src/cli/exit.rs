@@ -1,0 +1,122 @@
+//! How `hairfit` ends: the exit code of a fit from its verdict (and `--strict`), and the signal
+//! handling that lets an interrupted fit write its best so far and then exit as the signal would
+//! (128 + its number: 130 after SIGINT, 143 after SIGTERM).
+
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use std::sync::Arc;
+
+use crate::files::Verdict;
+
+/// `--help` text of the commands that fit (`fit`, `demo`, `batch`).
+pub const EXIT_CODES_HELP: &str = "Verdicts (fit.json `verdict`, printed first): good (the model describes the data within \
+their noise and every free parameter is determined), poor_fit (a goodness-of-fit test rejects the model: chi2 with a \
+sigma column, else structure along scans, outliers or lack of fit against replicates), undetermined (a free parameter \
+is not determined by the data), failed (the numbers are not a fit), interrupted (stopped by a signal; best so far).
+
+Exit codes: 0 good, poor_fit or undetermined (a usable result with its reasons); 1 failed or an error; 2 poor_fit or \
+undetermined with --strict; 130 after SIGINT (Ctrl-C), 143 after SIGTERM (the best so far is written first). A second \
+Ctrl-C exits at once.";
+
+/// The exit code of a finished fit with `verdict`; `signal` is the signal that stopped it, if
+/// one did.
+pub fn exit_code(verdict: Verdict, strict: bool, signal: Option<i32>) -> u8 {
+    if let Some(sig) = signal {
+        return signal_exit_code(sig);
+    }
+    match verdict {
+        Verdict::Good => 0,
+        Verdict::PoorFit | Verdict::Undetermined if strict => 2,
+        Verdict::PoorFit | Verdict::Undetermined => 0,
+        Verdict::Failed => 1,
+        // Interrupted without a recorded signal (the flag set by a caller): as Ctrl-C.
+        Verdict::Interrupted => 130,
+    }
+}
+
+/// 128 + the signal's number, as a shell reports a process the signal ended.
+pub fn signal_exit_code(signal: i32) -> u8 {
+    u8::try_from(128 + signal).unwrap_or(130)
+}
+
+/// The stop request a fit polls: set by the first SIGINT/SIGTERM/SIGHUP, which is recorded.
+#[derive(Debug, Clone)]
+pub struct StopSignal {
+    /// The flag every parallel solver run checks.
+    pub flag: Arc<AtomicBool>,
+    received: Arc<AtomicI32>,
+}
+
+impl StopSignal {
+    /// The signal received so far, if any.
+    pub fn received(&self) -> Option<i32> {
+        match self.received.load(Ordering::SeqCst) {
+            0 => None,
+            s => Some(s),
+        }
+    }
+}
+
+/// Install the handler of a command that keeps its best so far: the first SIGINT, SIGTERM or
+/// SIGHUP sets the flag (the fit stops at the next iteration and writes its result); a second
+/// one removes partial files and exits at once with 128 + its number. signal-hook, not ctrlc:
+/// ctrlc reports every signal alike, and the exit code must tell SIGINT (130) from SIGTERM (143).
+pub fn stop_on_signal() -> StopSignal {
+    let stop = StopSignal {
+        flag: Arc::new(AtomicBool::new(false)),
+        received: Arc::new(AtomicI32::new(0)),
+    };
+    let (flag, received) = (stop.flag.clone(), stop.received.clone());
+    on_signals(move |sig| {
+        if flag.swap(true, Ordering::SeqCst) {
+            crate::atomic::remove_in_flight();
+            crate::outdir::remove_in_flight();
+            std::process::exit(i32::from(signal_exit_code(sig)));
+        }
+        let _ = received.compare_exchange(0, sig, Ordering::SeqCst, Ordering::SeqCst);
+    });
+    stop
+}
+
+/// Install the handler of a command with no best-so-far to keep: remove the partial output's
+/// temporary file, then exit as the signal would have.
+pub fn exit_on_signal() {
+    on_signals(|sig| {
+        crate::atomic::remove_in_flight();
+        crate::outdir::remove_in_flight();
+        std::process::exit(i32::from(signal_exit_code(sig)));
+    });
+}
+
+/// Run `handle` on a dedicated thread for each SIGINT/SIGTERM/SIGHUP (not inside the signal
+/// handler, so it may take locks and remove files).
+fn on_signals(mut handle: impl FnMut(i32) + Send + 'static) {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    match signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
+        Ok(mut signals) => {
+            std::thread::spawn(move || {
+                for sig in signals.forever() {
+                    handle(sig);
+                }
+            });
+        }
+        Err(e) => eprintln!("hairfit: warning: Ctrl-C will not stop cleanly: {e}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn verdicts_map_to_documented_codes() {
+        assert_eq!(exit_code(Verdict::Good, true, None), 0);
+        assert_eq!(exit_code(Verdict::PoorFit, false, None), 0);
+        assert_eq!(exit_code(Verdict::Undetermined, false, None), 0);
+        assert_eq!(exit_code(Verdict::PoorFit, true, None), 2);
+        assert_eq!(exit_code(Verdict::Undetermined, true, None), 2);
+        assert_eq!(exit_code(Verdict::Failed, false, None), 1);
+        assert_eq!(exit_code(Verdict::Interrupted, false, Some(2)), 130);
+        assert_eq!(exit_code(Verdict::Interrupted, false, Some(15)), 143);
+        assert_eq!(exit_code(Verdict::Good, false, Some(15)), 143);
+    }
+}

@@ -1,0 +1,136 @@
+//! The ledger's Chiang section (`hairfit cost --model chiang`): time per evaluation of the Chiang
+//! `S` against its accuracy, per width-quadrature node count, with and without the cache per exit
+//! direction, on random directions and on a rig; and the Marschner model's time on the same
+//! directions as the yardstick ("evaluations per second per core" = 1 / time_s).
+
+use super::model::{relative_error, representative_angles};
+use super::{time_per_call, CostRow, COST_SEED};
+use crate::chiang::{scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
+use crate::model::{Angles, ModelConfig};
+
+/// Node counts of the ledger (the reference uses [`REFERENCE_NODES`]).
+pub const NODE_LADDER: [usize; 5] = [256, 512, 768, 1024, 2048];
+/// The reference width rule: 4096 nodes (moves by 4e-9 at 8192, docs/chiang.md).
+pub const REFERENCE_NODES: usize = 4096;
+
+/// CHIANG.md's parameter set A as three channels, and the same with narrow lobes
+/// (β_m = β_n = 0.05: the hardest case of the width integral).
+fn parameter_sets() -> [(&'static str, ChiangParams<f64>); 2] {
+    // The labels are the ledger's section names (one Pareto front and one panel each).
+    let a = ChiangParams {
+        eta: 1.55,
+        sigma_a: vec![0.25, 0.45, 0.8],
+        beta_m: 0.3,
+        beta_n: 0.3,
+        alpha: 2f64.to_radians(),
+    };
+    let narrow = ChiangParams {
+        beta_m: 0.05,
+        beta_n: 0.05,
+        ..a.clone()
+    };
+    [("chiang-b0.3", a), ("chiang-b0.05", narrow)]
+}
+
+/// A rig: 5 θ_i × 13 θ_r × 36 φ_r (every θ_i sees each exit direction; 247 distinct (θ_r, |φ|)).
+fn rig_angles() -> Vec<Angles> {
+    let mut v = Vec::new();
+    for tr in (-6..=6).map(|j| j as f64 * 10.0) {
+        for pr in (-17..=18).map(|j| j as f64 * 10.0) {
+            for ti in [-30.0, -15.0, 0.0, 15.0, 30.0] {
+                v.push(Angles::from_degrees(ti, 0.0, tr, pr));
+            }
+        }
+    }
+    v
+}
+
+fn uncached(p: &ChiangParams<f64>, model: &ChiangModel, angles: &[Angles]) -> Vec<f64> {
+    let nc = p.sigma_a.len();
+    let mut out = vec![0.0; angles.len() * nc];
+    for (a, o) in angles.iter().zip(out.chunks_mut(nc)) {
+        scattering(p, model, a, o);
+    }
+    out
+}
+
+fn cached(p: &ChiangParams<f64>, model: &ChiangModel, angles: &[Angles]) -> Vec<f64> {
+    let mut out = vec![0.0; angles.len() * p.sigma_a.len()];
+    scattering_batch(p, model, angles, &mut out);
+    out
+}
+
+/// The Chiang section's rows (one thread; time per sample, all channels).
+pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
+    let min_s = if quick { 0.05 } else { 0.5 };
+    let random = representative_angles(if quick { 64 } else { 256 }, COST_SEED);
+    let rig = rig_angles();
+    let mut rows = Vec::new();
+    // The yardstick: Marschner, every effect, on the same random directions.
+    let marschner = crate::fit::demo::demo_truth();
+    let config = ModelConfig::default();
+    let nc = marschner.sigma_a.len();
+    let t = time_per_call(min_s, || {
+        let mut o = vec![0.0; nc];
+        for a in &random {
+            crate::model::scattering(&marschner, &config, a, &mut o);
+        }
+    });
+    rows.push(CostRow {
+        section: "baseline".into(),
+        knob: "marschner (yardstick)".into(),
+        setting: "marschner cubic, every effect".into(),
+        time_s: t / random.len() as f64,
+        error_max: f64::NAN,
+        error_rms: f64::NAN,
+        worst_at: "not comparable (another model)".into(),
+        pareto: false,
+    });
+    for (label, p) in parameter_sets() {
+        let reference_model = ChiangModel::new(ChiangEffects::default(), REFERENCE_NODES)?;
+        for (dirs_label, angles) in [("random", &random), ("rig", &rig)] {
+            let reference = cached(&p, &reference_model, angles);
+            for nodes in NODE_LADDER {
+                let model = ChiangModel::new(ChiangEffects::default(), nodes)?;
+                let variants: &[(&str, bool)] = if dirs_label == "rig" {
+                    &[("cached", true), ("uncached", false)]
+                } else {
+                    &[("uncached", false)]
+                };
+                for &(how, use_cache) in variants {
+                    if quick && !use_cache && dirs_label == "rig" && nodes != 1024 {
+                        continue;
+                    }
+                    let mut s = Vec::new();
+                    let t = time_per_call(min_s, || {
+                        s = if use_cache {
+                            cached(&p, &model, angles)
+                        } else {
+                            uncached(&p, &model, angles)
+                        }
+                    });
+                    let (max, rms, at) = relative_error(&s, &reference);
+                    let a = &angles[at / nc];
+                    rows.push(CostRow {
+                        section: label.into(),
+                        knob: "width nodes".into(),
+                        setting: format!("{nodes} nodes, {dirs_label}, {how}"),
+                        time_s: t / angles.len() as f64,
+                        error_max: max,
+                        error_rms: rms,
+                        worst_at: format!(
+                            "theta_i {:.1}, phi_i {:.1}, theta_r {:.1}, phi_r {:.1} deg, channel {}",
+                            a.theta_i.to_degrees(),
+                            a.phi_i.to_degrees(),
+                            a.theta_r.to_degrees(),
+                            a.phi_r.to_degrees(),
+                            at % nc
+                        ),
+                        pareto: false,
+                    });
+                }
+            }
+        }
+    }
+    Ok(rows)
+}

@@ -1,0 +1,121 @@
+//! `hairfit export`: from a fit directory, the file a renderer loads — a pbrt-v4
+//! `MakeNamedMaterial` block, a Blender script creating a Principled Hair BSDF (Chiang), a
+//! MaterialX document with a `chiang_hair_bsdf` — with the renderer's own formulation FITTED to
+//! the fit's `S` (never converted by a formula), and the mapping's error in the file's header.
+//!
+//! - [`source`]: what a fit directory holds (model, parameters, quality, measured directions);
+//! - [`mapping`]: the least-squares fit of a renderer's variant to the source `S`;
+//! - [`writers`]: the three file formats.
+
+pub mod mapping;
+pub mod source;
+pub mod writers;
+
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+use crate::chiang::variant::Formulation;
+use crate::error::{Error, Result};
+
+pub use mapping::{dense_sphere, fit_mapping, Mapping};
+pub use source::{SourceFit, SourceModel};
+
+/// A renderer `hairfit export` writes for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Renderer {
+    Pbrt,
+    Blender,
+    Materialx,
+}
+
+impl Renderer {
+    /// How the renderer's `f` differs from pbrt-v4's (CHIANG.md).
+    pub fn formulation(&self) -> Formulation {
+        match self {
+            Renderer::Pbrt => Formulation::PBRT_V4,
+            Renderer::Blender => Formulation::CYCLES,
+            Renderer::Materialx => Formulation::MATERIALX,
+        }
+    }
+
+    /// The model a header names.
+    pub fn model_name(&self) -> &'static str {
+        match self {
+            Renderer::Pbrt => "pbrt-v4 hair (Chiang 2016, tilt on theta_r)",
+            Renderer::Blender => {
+                "Blender Cycles Principled Hair BSDF, model Chiang (tilt on theta_i)"
+            }
+            Renderer::Materialx => "MaterialX chiang_hair_bsdf (tilt on theta_i, f/pi, tints)",
+        }
+    }
+}
+
+impl FromStr for Renderer {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Renderer> {
+        match s.to_ascii_lowercase().as_str() {
+            "pbrt" | "pbrt-v4" => Ok(Renderer::Pbrt),
+            "blender" | "cycles" => Ok(Renderer::Blender),
+            "materialx" | "mtlx" => Ok(Renderer::Materialx),
+            other => Err(Error::Other(format!(
+                "unknown renderer `{other}`: use --to pbrt, blender or materialx"
+            ))),
+        }
+    }
+}
+
+impl fmt::Display for Renderer {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Renderer::Pbrt => "pbrt",
+            Renderer::Blender => "blender",
+            Renderer::Materialx => "materialx",
+        })
+    }
+}
+
+/// One export: the file's text and the mapping it was written from.
+#[derive(Debug, Clone)]
+pub struct Export {
+    pub renderer: Renderer,
+    pub text: String,
+    pub mapping: Mapping,
+    /// One line for stderr: what was fitted and how well.
+    pub summary: String,
+}
+
+/// Export the fit in `dir` for `renderer`.
+pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
+    let source = SourceFit::load(dir)?;
+    let rgb_channels = source.rgb_order()?;
+    let mapping = fit_mapping(&source, renderer.formulation())?;
+    let header = writers::header_lines(&source, renderer, &mapping, &rgb_channels);
+    let name = writers::material_name(&source);
+    let text = match renderer {
+        Renderer::Pbrt => writers::pbrt(&name, &header, &mapping),
+        Renderer::Blender => writers::blender(&name, &header, &mapping),
+        Renderer::Materialx => writers::materialx(&name, &header, &mapping),
+    };
+    let summary = format!(
+        "export to {renderer}: {} from the {} fit in {}: {}",
+        renderer.model_name(),
+        source.model.name(),
+        dir.display(),
+        mapping.quality_text()
+    );
+    Ok(Export {
+        renderer,
+        text,
+        mapping,
+        summary,
+    })
+}
+
+/// Write `export.text` to `path` atomically.
+pub fn write_export(path: &Path, export: &Export) -> Result<()> {
+    crate::atomic::write_atomically(path, |w| {
+        w.write_all(export.text.as_bytes())
+            .map_err(|e| Error::io(path, e))
+    })
+}

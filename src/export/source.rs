@@ -1,0 +1,229 @@
+//! What `hairfit export` reads from a fit directory: the model family and its parameters
+//! (`params.json`, a Chiang file when tagged `"model": "chiang"`), the fit's quality and channel
+//! names (`fit.json`, read loosely so both families' records serve), and the measured directions
+//! (`curves.csv`, one per sample).
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::chiang::{ChiangParamFile, ChiangParams};
+use crate::error::{Error, Result};
+use crate::files::{read_curves_csv, ParameterFile};
+use crate::model::{Angles, ModelConfig, Params};
+use crate::params::ParamFile;
+
+/// At most this many measured directions enter a mapping (a 3-channel, 8-variable Jacobian of
+/// 20 000 directions is ≈ 4 MB); larger fits are thinned evenly and the header says so.
+pub const MAX_MEASURED_DIRECTIONS: usize = 20_000;
+
+/// The fitted model whose `S` a renderer must reproduce.
+#[derive(Debug, Clone)]
+pub enum SourceModel {
+    Chiang(ChiangParams<f64>),
+    Marschner {
+        params: Params<f64>,
+        config: ModelConfig,
+    },
+}
+
+impl SourceModel {
+    /// `"Chiang"` or `"Marschner"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SourceModel::Chiang(_) => "Chiang",
+            SourceModel::Marschner { .. } => "Marschner",
+        }
+    }
+
+    /// Number of colour channels.
+    pub fn n_channels(&self) -> usize {
+        match self {
+            SourceModel::Chiang(p) => p.sigma_a.len(),
+            SourceModel::Marschner { params, .. } => params.sigma_a.len(),
+        }
+    }
+
+    /// `S` at every direction, `out[k·n + c]`.
+    pub fn scattering(&self, angles: &[Angles]) -> Vec<f64> {
+        let n = self.n_channels();
+        let mut out = vec![0.0; angles.len() * n];
+        match self {
+            SourceModel::Chiang(p) => {
+                let model = crate::chiang::ChiangModel::default();
+                crate::chiang::scattering_batch(p, &model, angles, &mut out);
+            }
+            SourceModel::Marschner { params, config } => {
+                for (a, row) in angles.iter().zip(out.chunks_mut(n)) {
+                    crate::model::scattering(params, config, a, row);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// A fit directory as export sees it.
+#[derive(Debug, Clone)]
+pub struct SourceFit {
+    pub dir: PathBuf,
+    pub model: SourceModel,
+    /// Channel names from fit.json (`c0, c1, …` when it has none).
+    pub channels: Vec<String>,
+    /// hairfit version that wrote the fit, when recorded.
+    pub fitted_by: Option<String>,
+    /// The fit's status and residual summary, one line.
+    pub quality: String,
+    /// One direction per measured sample (from curves.csv), in file order, duplicates removed.
+    pub measured: Vec<Angles>,
+    /// Where the measured directions came from, or why there are none.
+    pub measured_from: String,
+}
+
+impl SourceFit {
+    /// Read `dir/params.json`, `dir/fit.json` and (if present) `dir/curves.csv`.
+    pub fn load(dir: &Path) -> Result<SourceFit> {
+        let params_path = dir.join("params.json");
+        let text = std::fs::read_to_string(&params_path).map_err(|e| Error::io(&params_path, e))?;
+        let tag = serde_json::from_str::<Value>(&text)
+            .ok()
+            .and_then(|v| v.get("model").and_then(Value::as_str).map(str::to_owned));
+        let fit_path = dir.join("fit.json");
+        let fit: Value = crate::files::read_json(
+            &fit_path,
+            "fit.json is written by `hairfit fit` — re-run the fit to regenerate it",
+        )?;
+        let model = match tag.as_deref() {
+            Some("chiang") => SourceModel::Chiang(
+                ChiangParamFile::from_json_str(&text, &params_path)?.to_params(),
+            ),
+            None | Some("marschner") => {
+                let mut value: Value = serde_json::from_str(&text).map_err(|e| {
+                    Error::input(
+                        &params_path,
+                        e.line() as u64,
+                        e.column() as u64,
+                        e.to_string(),
+                    )
+                })?;
+                if let Some(map) = value.as_object_mut() {
+                    map.remove("model");
+                }
+                let file = ParamFile::from_json_str(&value.to_string(), &params_path)?;
+                // The fit's model switches (root mode, lobes, glints, eccentricity), so the S
+                // matched is the fitted one; defaults when fit.json does not record them.
+                let config = fit
+                    .get("model")
+                    .and_then(|m| serde_json::from_value::<ModelConfig>(m.clone()).ok())
+                    .unwrap_or_default();
+                SourceModel::Marschner {
+                    params: file.to_params(),
+                    config,
+                }
+            }
+            Some(other) => {
+                return Err(Error::Other(format!(
+                    "{}: model `{other}` is not one export knows (chiang, marschner)",
+                    params_path.display()
+                )))
+            }
+        };
+        let n = model.n_channels();
+        let channels = fit
+            .pointer("/data/channels")
+            .and_then(Value::as_array)
+            .map(|a| {
+                a.iter()
+                    .filter_map(Value::as_str)
+                    .map(str::to_owned)
+                    .collect::<Vec<_>>()
+            })
+            .filter(|c| c.len() == n)
+            .unwrap_or_else(|| (0..n).map(|c| format!("c{c}")).collect());
+        let curves_path = dir.join("curves.csv");
+        let (measured, measured_from) = if curves_path.exists() {
+            let rows = read_curves_csv(&curves_path)?;
+            let mut seen = BTreeSet::new();
+            let mut out = Vec::new();
+            for row in &rows {
+                if seen.insert(row.sample) {
+                    let [ti, pi, tr, pr] = row.angles_deg();
+                    let a = Angles::from_degrees(ti, pi, tr, pr);
+                    if a.validate().is_ok() {
+                        out.push(a);
+                    }
+                }
+            }
+            let total = out.len();
+            // The mapping's Jacobian has a row per direction and channel: thin a huge fit
+            // evenly rather than allocate gigabytes (the sphere is always added in full).
+            if total > MAX_MEASURED_DIRECTIONS {
+                let step = total.div_ceil(MAX_MEASURED_DIRECTIONS);
+                out = out.into_iter().step_by(step).collect();
+            }
+            let from = if out.len() < total {
+                format!(
+                    "{} ({} of {total} samples, every {}th)",
+                    curves_path.display(),
+                    out.len(),
+                    total.div_ceil(MAX_MEASURED_DIRECTIONS)
+                )
+            } else {
+                format!("{} ({total} samples)", curves_path.display())
+            };
+            (out, from)
+        } else {
+            (
+                Vec::new(),
+                format!("none: {} is absent", curves_path.display()),
+            )
+        };
+        Ok(SourceFit {
+            dir: dir.to_path_buf(),
+            model,
+            channels,
+            fitted_by: fit
+                .get("hairfit_version")
+                .and_then(Value::as_str)
+                .map(str::to_owned),
+            quality: quality_line(&fit),
+            measured,
+            measured_from,
+        })
+    }
+
+    /// The channels as renderer RGB: 1 channel is grey, 3 are taken as R, G, B in file order.
+    /// Returns the names in that order; anything else is an error (renderers take RGB).
+    pub fn rgb_order(&self) -> Result<Vec<String>> {
+        match self.channels.len() {
+            1 | 3 => Ok(self.channels.clone()),
+            n => Err(Error::Other(format!(
+                "{}: the fit has {n} channels ({}); renderers take RGB, so export needs a fit \
+                 with 1 channel (grey) or 3 (R, G, B in that order)",
+                self.dir.display(),
+                self.channels.join(", ")
+            ))),
+        }
+    }
+}
+
+/// `status converged, rms 0.0201, reduced chi2 1.02 (log space, dof 2332)` from fit.json.
+fn quality_line(fit: &Value) -> String {
+    let num = |p: &str| fit.pointer(p).and_then(Value::as_f64);
+    let text = |p: &str| fit.pointer(p).and_then(Value::as_str);
+    let mut parts = vec![format!(
+        "status {}",
+        text("/status").unwrap_or("unrecorded")
+    )];
+    if let Some(rms) = num("/residuals/rms") {
+        parts.push(format!("residual rms {rms:.4}"));
+    }
+    if let Some(chi2) = num("/residuals/reduced_chi2") {
+        parts.push(format!("reduced chi2 {chi2:.3}"));
+    }
+    if let Some(space) = text("/residuals/space") {
+        parts.push(format!("{space} space"));
+    }
+    parts.join(", ")
+}

@@ -1,0 +1,130 @@
+//! The profile-likelihood figure: one panel per profiled parameter, Δχ² against the pinned
+//! value (re-minimised over the others), with the 68% and 95% thresholds (Δχ² = 1, 3.84) and the
+//! linearised parabola `((v − v̂)/SE)²` that the standard error stands for. Where the two
+//! differ, the profile interval is the honest one.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::HEADER_H;
+use crate::error::Result;
+use crate::plot::{cartesian, de, fmt_num, header, Axes, Figure, Frame, LABEL_PX};
+
+/// Δχ² of the two thresholds drawn.
+const LEVELS: [f64; 2] = [1.0, crate::fit::profile::CHI2_95];
+/// The vertical axis ends here (a profile rising far beyond the 95% level adds nothing).
+const Y_MAX: f64 = 6.0;
+/// A little room below 0 shows a profile point that found a lower cost than the fit.
+const Y_MIN: f64 = -0.3;
+
+/// One parameter's profile as drawn (reporting units).
+#[derive(Debug, Clone)]
+pub struct ProfilePanel {
+    /// Name with unit, e.g. `w_c_deg (deg)`.
+    pub title: String,
+    pub value: f64,
+    /// Linearised standard error, when there is one.
+    pub std_error: Option<f64>,
+    /// `(value, Δχ²)` ascending in value.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Every profiled parameter, in fit.json's order.
+pub struct ProfileFigure {
+    pub panels: Vec<ProfilePanel>,
+}
+
+impl ProfileFigure {
+    fn grid(&self) -> (usize, usize) {
+        let n = self.panels.len().max(1);
+        let cols = n.min(3);
+        (cols, n.div_ceil(cols))
+    }
+}
+
+impl Figure for ProfileFigure {
+    fn stem(&self) -> &'static str {
+        "profiles"
+    }
+    fn title(&self) -> String {
+        "Profile likelihood: Δχ² against each parameter, the others re-fitted".into()
+    }
+    fn size(&self) -> (u32, u32) {
+        let (cols, rows) = self.grid();
+        (420 * cols as u32 + 40, HEADER_H + 330 * rows as u32)
+    }
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
+        let (_, body) = header(
+            root,
+            HEADER_H,
+            &self.title(),
+            "blue: profile (dots: solved points); dashed grey: Δχ² = 1 (68%) and 3.84 (95%); orange: parabola of the linearised standard error",
+        )?;
+        let (cols, rows) = self.grid();
+        let areas = body.split_evenly((rows, cols));
+        for (panel, area) in self.panels.iter().zip(areas.iter()) {
+            draw_panel(area, panel)?;
+        }
+        Ok(())
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePanel) -> Result<()> {
+    let xs = p.points.iter().map(|q| q.0);
+    let (mut x0, mut x1) = xs.fold((p.value, p.value), |(a, b), x| (a.min(x), b.max(x)));
+    if x1 - x0 <= 0.0 {
+        let pad = p.std_error.unwrap_or(1e-3 * p.value.abs().max(1e-3));
+        (x0, x1) = (p.value - pad, p.value + pad);
+    }
+    let pad = 0.04 * (x1 - x0);
+    let frame = Frame {
+        caption: Some(&p.title),
+        margin: 8,
+        x_label_area: 40,
+        y_label_area: 46,
+    };
+    let mut chart = cartesian(area, frame, (x0 - pad)..(x1 + pad), Y_MIN..Y_MAX)?;
+    let x_fmt = |v: &f64| fmt_num(*v);
+    let y_fmt = |v: &f64| format!("{v:.0}");
+    Axes::new("value", "Δχ²", &x_fmt, &y_fmt)
+        .ticks(5, 7)
+        .text_px(LABEL_PX - 2, LABEL_PX)
+        .draw(&mut chart)?;
+    for level in LEVELS {
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(x0 - pad, level), (x1 + pad, level)],
+                4,
+                4,
+                BLACK.mix(0.45).stroke_width(1),
+            ))
+            .map_err(de)?;
+    }
+    if let Some(se) = p.std_error.filter(|s| s.is_finite() && *s > 0.0) {
+        let n = 80;
+        let parabola: Vec<(f64, f64)> = (0..=n)
+            .map(|i| x0 - pad + (x1 - x0 + 2.0 * pad) * i as f64 / n as f64)
+            .map(|x| (x, ((x - p.value) / se).powi(2)))
+            .filter(|&(_, y)| y <= Y_MAX)
+            .collect();
+        chart
+            .draw_series(LineSeries::new(
+                parabola,
+                RGBColor(230, 120, 0).stroke_width(2),
+            ))
+            .map_err(de)?;
+    }
+    let blue = RGBColor(35, 75, 205);
+    let shown: Vec<(f64, f64)> = p
+        .points
+        .iter()
+        .map(|&(x, y)| (x, y.clamp(Y_MIN, Y_MAX)))
+        .collect();
+    chart
+        .draw_series(LineSeries::new(shown.clone(), blue.stroke_width(2)))
+        .map_err(de)?;
+    chart
+        .draw_series(shown.iter().map(|&q| Circle::new(q, 3, blue.filled())))
+        .map_err(de)?;
+    Ok(())
+}

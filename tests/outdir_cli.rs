@@ -1,0 +1,346 @@
+//! Output directories through the binary: a run locks its `--out` (a second run fails fast and
+//! names the holder), publishes its files as one set (never mixed with another run's, nothing
+//! stale left beside them), refuses directories that are not hairfit results unless `--force`,
+//! and never replaces its own input.
+
+#![cfg(unix)]
+
+mod hard_common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use hard_common::*;
+
+fn shipped(name: &str) -> String {
+    format!("{}/data/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn fit_args<'a>(data: &'a str, out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut a = vec!["fit", data, "--out", out, "--no-progress"];
+    a.extend(extra);
+    a
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Staging directories of a run still in `parent`.
+fn staging_dirs(parent: &Path) -> Vec<String> {
+    names(parent)
+        .into_iter()
+        .filter(|n| n.contains("hairfit-stage"))
+        .collect()
+}
+
+/// Channels of a published fit, read three ways: fit.json, params.json and curves.csv must
+/// agree (files of two runs mixed would not).
+fn channels_of_set(dir: &Path) -> usize {
+    let fit: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("fit.json")).unwrap()).unwrap();
+    let in_fit = fit["data"]["channels"].as_array().unwrap().len();
+    let params: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("params.json")).unwrap()).unwrap();
+    let in_params = params["sigma_a"].as_array().map_or(1, |a| a.len());
+    let mut in_curves: Vec<String> = std::fs::read_to_string(dir.join("curves.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().to_string())
+        .collect();
+    in_curves.sort();
+    in_curves.dedup();
+    assert_eq!(
+        (in_fit, in_params, in_curves.len()),
+        (in_fit, in_fit, in_fit),
+        "fit.json, params.json and curves.csv of {} come from different runs",
+        dir.display()
+    );
+    in_fit
+}
+
+/// Wait (≤ 20 s) until a run has a staging directory in `parent`: it holds the lock.
+fn wait_for_staging(parent: &Path) {
+    let t0 = Instant::now();
+    while staging_dirs(parent).is_empty() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "no run started staging"
+        );
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+#[test]
+fn a_second_fit_into_a_locked_out_fails_fast_naming_the_holder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fit");
+    let (rgb, one) = (shipped("azimuthal_rgb.csv"), shipped("sphere_1ch.csv"));
+    let out_s = out.to_str().unwrap();
+    // Many starts make the first run last seconds, so the second surely starts during it.
+    let first = spawn_hairfit(&fit_args(&rgb, out_s, &["--starts", "400"]), &[]);
+    wait_for_staging(tmp.path());
+    let second = run_hairfit(&fit_args(&one, out_s, &[]), &[], Duration::from_secs(60));
+    assert_eq!(second.status.code(), Some(1), "{}", second.stderr);
+    assert!(
+        second
+            .stderr
+            .contains("another hairfit run is writing there")
+            && second.stderr.contains(&format!("pid {}", first.id())),
+        "{}",
+        second.stderr
+    );
+    // Fails fast: it does not wait for the first run, let alone load or fit.
+    assert!(second.wall < Duration::from_secs(2), "{:?}", second.wall);
+    let first = wait_with_deadline(first, Duration::from_secs(300), "first fit");
+    assert!(first.status.success(), "{}", first.stderr);
+    assert_eq!(channels_of_set(&out), 3, "the set is the first (RGB) run's");
+    check_fit_dir(&out, "after the lock");
+    assert!(staging_dirs(tmp.path()).is_empty());
+}
+
+#[test]
+fn concurrent_fits_into_one_out_never_mix() {
+    // The case, uncoordinated: four runs of two different data sets at once. Each either
+    // publishes a whole set or fails on the lock; the final set is one run's.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fit");
+    let out_s = out.to_str().unwrap().to_string();
+    let data = [shipped("azimuthal_rgb.csv"), shipped("sphere_1ch.csv")];
+    let children: Vec<_> = (0..4)
+        .map(|i| spawn_hairfit(&fit_args(&data[i % 2], &out_s, &[]), &[]))
+        .collect();
+    let mut published = 0;
+    for (i, c) in children.into_iter().enumerate() {
+        let f = wait_with_deadline(c, Duration::from_secs(300), &format!("run {i}"));
+        if f.status.success() {
+            published += 1;
+        } else {
+            assert!(
+                f.stderr.contains("another hairfit run is writing there"),
+                "run {i} failed otherwise: {}",
+                f.stderr
+            );
+        }
+    }
+    assert!(published >= 1, "no run published");
+    channels_of_set(&out);
+    check_fit_dir(&out, "after concurrent runs");
+    assert!(staging_dirs(tmp.path()).is_empty());
+}
+
+#[test]
+fn a_new_fit_removes_the_stale_figures_of_an_earlier_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fit");
+    let out_s = out.to_str().unwrap();
+    let rgb = shipped("azimuthal_rgb.csv");
+    let f = run_hairfit(&fit_args(&rgb, out_s, &[]), &[], Duration::from_secs(120));
+    assert!(f.status.success(), "{}", f.stderr);
+    // An azimuthal RGB fit draws curves and polar figures; a sphere fit draws neither.
+    for stale in ["curves.png", "polar.png"] {
+        assert!(
+            out.join(stale).is_file(),
+            "{stale} not drawn: test is vacuous"
+        );
+    }
+    let one = shipped("sphere_1ch.csv");
+    let f = run_hairfit(&fit_args(&one, out_s, &[]), &[], Duration::from_secs(120));
+    assert!(f.status.success(), "{}", f.stderr);
+    for stale in ["curves.png", "curves.svg", "polar.png", "polar.svg"] {
+        assert!(
+            !out.join(stale).exists(),
+            "stale {stale} left: {:?}",
+            names(&out)
+        );
+    }
+    assert_eq!(channels_of_set(&out), 1);
+    // Nothing beside the set but its lock file.
+    assert_eq!(names(tmp.path()), [".fit.hairfit-lock", "fit"]);
+}
+
+#[test]
+fn the_current_directory_and_foreign_directories_are_refused_without_force() {
+    let tmp = tempfile::tempdir().unwrap();
+    let one = shipped("sphere_1ch.csv");
+    // `--out .`: refused even with --force (the run would replace the user's working directory).
+    std::fs::write(tmp.path().join("index.html"), "mine").unwrap();
+    for force in [false, true] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_hairfit"));
+        cmd.current_dir(tmp.path()).args(fit_args(&one, ".", &[]));
+        if force {
+            cmd.arg("--force");
+        }
+        let o = cmd.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains("current directory"), "{err}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(tmp.path().join("index.html")).unwrap(),
+        "mine"
+    );
+
+    // A directory of the user's files: refused, named, untouched; --force replaces it.
+    let mine = tmp.path().join("mine");
+    std::fs::create_dir(&mine).unwrap();
+    std::fs::write(mine.join("params.json"), "hand-written").unwrap();
+    let mine_s = mine.to_str().unwrap();
+    let f = run_hairfit(&fit_args(&one, mine_s, &[]), &[], Duration::from_secs(60));
+    assert_eq!(f.status.code(), Some(1), "{}", f.stderr);
+    assert!(
+        f.stderr.contains("not a hairfit result") && f.stderr.contains("params.json"),
+        "{}",
+        f.stderr
+    );
+    assert!(f.stderr.contains("--force"), "{}", f.stderr);
+    assert_eq!(names(&mine), ["params.json"]);
+    let f = run_hairfit(
+        &fit_args(&one, mine_s, &["--force"]),
+        &[],
+        Duration::from_secs(120),
+    );
+    assert!(f.status.success(), "{}", f.stderr);
+    check_fit_dir(&mine, "forced");
+    // Once it holds a hairfit result, later runs replace it without --force.
+    let f = run_hairfit(&fit_args(&one, mine_s, &[]), &[], Duration::from_secs(120));
+    assert!(f.status.success(), "{}", f.stderr);
+}
+
+#[test]
+fn the_input_is_never_replaced_even_with_force() {
+    // The case: the data file is named curves.csv inside the output directory.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("work");
+    std::fs::create_dir(&out).unwrap();
+    let input = out.join("curves.csv");
+    std::fs::copy(shipped("sphere_1ch.csv"), &input).unwrap();
+    let before = std::fs::read(&input).unwrap();
+    for extra in [&[][..], &["--force"][..]] {
+        let f = run_hairfit(
+            &fit_args(input.to_str().unwrap(), out.to_str().unwrap(), extra),
+            &[],
+            Duration::from_secs(60),
+        );
+        assert_eq!(f.status.code(), Some(1), "{extra:?}: {}", f.stderr);
+        assert!(std::fs::read(&input).unwrap() == before, "{extra:?}");
+        if !extra.is_empty() {
+            assert!(f.stderr.contains("is inside it"), "{}", f.stderr);
+        }
+    }
+    assert_eq!(names(&out), ["curves.csv"]);
+}
+
+#[test]
+fn report_redraws_its_figures_and_keeps_the_fit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fit");
+    let out_s = out.to_str().unwrap();
+    let f = run_hairfit(
+        &fit_args(&shipped("azimuthal_rgb.csv"), out_s, &[]),
+        &[],
+        Duration::from_secs(120),
+    );
+    assert!(f.status.success(), "{}", f.stderr);
+    let fit_json = std::fs::read(out.join("fit.json")).unwrap();
+    std::fs::write(out.join("stale.png"), "an old figure").unwrap();
+    let f = run_hairfit(
+        &["report", out_s, "--linear"],
+        &[],
+        Duration::from_secs(120),
+    );
+    assert!(f.status.success(), "{}", f.stderr);
+    assert!(!out.join("stale.png").exists());
+    assert!(out.join("index.html").is_file() && out.join("polar.png").is_file());
+    assert_eq!(std::fs::read(out.join("fit.json")).unwrap(), fit_json);
+    check_fit_dir(&out, "after report");
+    // A mistyped directory is "no such file", and leaves no lock file behind.
+    let f = run_hairfit(
+        &["report", tmp.path().join("fti").to_str().unwrap()],
+        &[],
+        Duration::from_secs(60),
+    );
+    assert_eq!(f.status.code(), Some(1));
+    assert!(f.stderr.contains("No such file"), "{}", f.stderr);
+    assert!(!tmp.path().join(".fti.hairfit-lock").exists());
+}
+
+#[test]
+fn a_second_sigint_removes_the_staging_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fit");
+    let rgb = shipped("azimuthal_rgb.csv");
+    let child = spawn_hairfit(
+        &fit_args(
+            &rgb,
+            out.to_str().unwrap(),
+            &["--starts", "2000", "--polish-iters", "3000"],
+        ),
+        &[],
+    );
+    wait_for_staging(tmp.path());
+    std::thread::sleep(Duration::from_millis(300));
+    let kill = |sig: &str| {
+        let ok = Command::new("kill")
+            .args([sig, &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill {sig}");
+    };
+    kill("-INT");
+    std::thread::sleep(Duration::from_millis(50));
+    kill("-INT");
+    let f = wait_with_deadline(child, Duration::from_secs(60), "twice interrupted fit");
+    assert_eq!(f.status.code(), Some(130), "{:?} {}", f.status, f.stderr);
+    assert!(
+        staging_dirs(tmp.path()).is_empty(),
+        "staging left: {:?}",
+        names(tmp.path())
+    );
+    assert!(!out.exists(), "nothing was published");
+}
+
+/// Where `fit`'s batch items go: each item directory is its own locked set.
+#[test]
+fn batch_items_are_published_as_sets() {
+    let tmp = tempfile::tempdir().unwrap();
+    let manifest = tmp.path().join("m.csv");
+    std::fs::write(
+        &manifest,
+        format!(
+            "name,data\nrgb,{}\none,{}\n",
+            shipped("azimuthal_rgb.csv"),
+            shipped("sphere_1ch.csv")
+        ),
+    )
+    .unwrap();
+    let out = tmp.path().join("runs");
+    // A foreign item directory is refused (the others still run), as `fit` would.
+    std::fs::create_dir_all(out.join("one")).unwrap();
+    std::fs::write(out.join("one/notes.txt"), "mine").unwrap();
+    let f = run_hairfit(
+        &[
+            "batch",
+            manifest.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+        Duration::from_secs(300),
+    );
+    assert_eq!(f.status.code(), Some(1), "{}", f.stderr);
+    assert!(f.stderr.contains("not a hairfit result"), "{}", f.stderr);
+    assert_eq!(channels_of_set(&out.join("rgb")), 3);
+    assert!(out.join("rgb/index.html").is_file());
+    assert_eq!(names(&out.join("one")), ["notes.txt"]);
+    let leftovers: Vec<PathBuf> = staging_dirs(&out).into_iter().map(PathBuf::from).collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+}
