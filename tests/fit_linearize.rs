@@ -172,9 +172,9 @@ fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_wi
     assert_eq!(one.matrix.as_slice(), two.matrix.as_slice());
     assert_eq!(one.rhs.as_slice(), two.rhs.as_slice());
     assert_eq!(c1.to_bits(), c2.to_bits());
-    // Each channel keeps one triangle of (local columns + 2) rows, however many samples there are:
+    // Each channel keeps one triangle of (free columns + 2) rows, however many samples there are:
     // memory is linear in channels and independent of samples.
-    let width = one.matrix.ncols() - NC + 1 + 2;
+    let width = one.matrix.ncols() + 2;
     let (small, _) = run(300, 2);
     assert!(
         one.matrix.nrows() <= NC * width,
