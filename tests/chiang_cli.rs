@@ -389,6 +389,6 @@ fn cost_ledger_has_the_chiang_section() {
     assert!(row("chiang-b0.05", "1024 nodes, rig, cached").error_max < 1e-6);
     assert!(row("chiang-b0.05", "256 nodes, random, uncached").error_max > 1e-3);
     for f in ["cost.csv", "cost.json", "cost.svg", "cost.png"] {
-        assert!(dir.path().join(f).exists());
+        assert!(dir.path().join("cost").join(f).exists(), "{f}");
     }
 }

@@ -413,8 +413,19 @@ fn binary_ends_cleanly_on_every_hard_dataset() {
                 Some(0) => {
                     let j = check_fit_dir(&out, &what);
                     assert_honest_status(&j, &what);
+                    // The summary opens with the verdict, then the status line.
                     assert!(
-                        f.stdout.starts_with("hairfit fit: "),
+                        f.stdout.starts_with("verdict: ") && f.stdout.contains("\nhairfit fit: "),
+                        "{what}: {}",
+                        f.stdout
+                    );
+                }
+                // A fit that ran but did not fit: its files are written, its verdict says so.
+                Some(1) if out.join("fit.json").exists() => {
+                    let j = check_fit_dir(&out, &what);
+                    assert_eq!(j["verdict"], "failed", "{what}: exit 1 with a written fit");
+                    assert!(
+                        f.stdout.starts_with("verdict: failed"),
                         "{what}: {}",
                         f.stdout
                     );

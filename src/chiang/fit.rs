@@ -126,23 +126,13 @@ fn why_undetermined(
     };
     match p {
         ChiangParamName::SigmaA(_) => {
-            let n = data
-                .angles
-                .iter()
-                .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * std::f64::consts::PI)
-                .count();
+            let n = crate::fit::diagnostics::tt_region_samples(data);
             format!(
                 "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
             )
         }
         ChiangParamName::BetaM | ChiangParamName::Alpha => {
-            let th: Vec<f64> = data
-                .angles
-                .iter()
-                .map(|a| 0.5 * (a.theta_i + a.theta_r))
-                .collect();
-            let spread = th.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                - th.iter().copied().fold(f64::INFINITY, f64::min);
+            let spread = crate::fit::diagnostics::theta_h_span(data);
             format!(
                 "the samples span theta_h by {:.1} deg only: the longitudinal lobes need a scan across it{tail}",
                 spread.to_degrees()

@@ -90,23 +90,13 @@ pub fn why_undetermined(
             format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
         }
         ParamName::SigmaA(_) => {
-            let n = data
-                .angles
-                .iter()
-                .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * PI)
-                .count();
+            let n = tt_region_samples(data);
             format!(
                 "absorption shows in TT/TRT; {n} sample(s) have |phi| > 135 deg (TT region){tail}"
             )
         }
         ParamName::AlphaR | ParamName::BetaR => {
-            let th: Vec<f64> = data
-                .angles
-                .iter()
-                .map(|a| 0.5 * (a.theta_i + a.theta_r))
-                .collect();
-            let spread = th.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-                - th.iter().copied().fold(f64::INFINITY, f64::min);
+            let spread = theta_h_span(data);
             format!(
                 "the samples span theta_h by {:.1} deg only: the longitudinal lobe shape needs a scan across it{tail}",
                 spread.to_degrees()
@@ -114,4 +104,19 @@ pub fn why_undetermined(
         }
         _ => format!("the data do not constrain it{tail}"),
     }
+}
+
+/// Samples with |φ| > 135° (where TT, and so absorption, shows): any family's
+/// why-undetermined text for σ_a.
+pub fn tt_region_samples(data: &FitData) -> usize {
+    data.angles
+        .iter()
+        .filter(|a| wrap(a.phi_r - a.phi_i).abs() > 0.75 * PI)
+        .count()
+}
+
+/// The span of θ_h = (θ_i + θ_r)/2 over the samples (radians): a longitudinal lobe's shape needs it.
+pub fn theta_h_span(data: &FitData) -> f64 {
+    let th = data.angles.iter().map(|a| 0.5 * (a.theta_i + a.theta_r));
+    th.clone().fold(f64::NEG_INFINITY, f64::max) - th.fold(f64::INFINITY, f64::min)
 }

@@ -535,8 +535,10 @@ pub fn intervals<F: Forward, Q>(
         misfit += (r.fit - r.data).powi(2);
         size += r.data * r.data;
     }
-    if misfit <= 1e-18 * size {
-        record(out, "linear", format!("the fit is exact to {:.1e} relative (noise-free data): no statistical interval to profile", (misfit / size.max(f64::MIN_POSITIVE)).sqrt()));
+    // Both sums overflow on values near 1e300: then the data are not known to be exact.
+    let relative = (misfit / size).sqrt();
+    if relative.is_finite() && relative <= 1e-9 {
+        record(out, "linear", format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile"));
         return Ok(());
     }
     let n_cols = opt.u.len();

@@ -188,7 +188,12 @@ fn failures<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Vec<String> {
     }
     let cost = x.e.cost();
     if !cost.is_finite() {
-        why.push(format!("the cost at the result is not finite ({cost})"));
+        why.push(if cost.is_nan() {
+            "the cost at the result is undefined (0·∞ or ∞−∞ in the residuals)".into()
+        } else {
+            "the cost at the result overflows: the residuals are too large for floating point"
+                .into()
+        });
     }
     let iterations: u64 = x.trace.iter().map(|t| t.iterations).sum();
     if x.ev.n_params() > 0 && iterations == 0 && x.status != FitStatus::Interrupted {
@@ -315,9 +320,13 @@ pub fn goodness_of_fit<F: Forward>(x: &Evidence<'_, '_, '_, F>, slices: &[Slice]
     let nc = x.data.n_channels().max(1);
     let n_fitted = x.n_fitted();
     let sigma_given = x.data.sigma.is_some();
-    let robust_noise = gof::robust_sd(raw).filter(|s| s.is_finite());
+    // Outliers are judged about each channel's median residual: the scale is re-estimated in
+    // the noise model's space after the shape fit, and under l2 outliers drag that mean, which
+    // moves every inlier by the same offset (a robust spread about zero would then hide them).
+    let centred = centre_per_channel(raw, nc);
+    let robust_noise = gof::robust_sd(&centred).filter(|s| s.is_finite());
     let (mut large, mut large_ss, mut total_ss) = (0usize, 0.0, 0.0);
-    for r in raw.iter().filter(|r| r.is_finite()) {
+    for r in centred.iter().filter(|r| r.is_finite()) {
         total_ss += r * r;
         if robust_noise.is_some_and(|s| r.abs() > LARGE_RESIDUAL * s) {
             large += 1;
@@ -588,4 +597,29 @@ fn poisson_upper_tail(k: usize, lambda: f64) -> f64 {
         below += log_term.exp();
     }
     (1.0 - below).max(0.0)
+}
+
+/// `raw` (row-major, `nc` channels) minus each channel's median finite residual.
+fn centre_per_channel(raw: &[f64], nc: usize) -> Vec<f64> {
+    let nc = nc.max(1);
+    let medians: Vec<f64> = (0..nc)
+        .map(|c| {
+            let mut v: Vec<f64> = raw
+                .iter()
+                .skip(c)
+                .step_by(nc)
+                .copied()
+                .filter(|r| r.is_finite())
+                .collect();
+            if v.is_empty() {
+                return 0.0;
+            }
+            let mid = v.len() / 2;
+            *v.select_nth_unstable_by(mid, f64::total_cmp).1
+        })
+        .collect();
+    raw.iter()
+        .enumerate()
+        .map(|(k, r)| r - medians[k % nc])
+        .collect()
 }
