@@ -183,3 +183,62 @@ fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_wi
     );
     assert_eq!(small.matrix.nrows(), one.matrix.nrows());
 }
+
+/// Extra columns reduced alongside (the `--mode exact` evidence projects with them) keep every
+/// inner product: `MᵀE = Jᵀe`, `EᵀE = eᵀe`, `tᵀE = r̃ᵀe`; tolerance as for the Gram matrix.
+#[test]
+fn extra_columns_keep_their_inner_products_with_the_jacobian() {
+    let d = data(700, true);
+    let fwd = forward();
+    let free = free_parameters(&Effects::default(), NC, true);
+    let (ev, _) = Evaluator::new(
+        &fwd,
+        &d,
+        Space::Log,
+        Loss::Cauchy,
+        0.5,
+        reference_params(NC),
+        free,
+    )
+    .unwrap();
+    let p = fit_support::random_params(105, NC);
+    let x: Vec<f64> = ev
+        .free
+        .iter()
+        .map(|&n| hairfit::fit::param(&p, n))
+        .collect();
+    let ones = vec![1.0; x.len()];
+    let scale = [0.7, 1.3, 2.0];
+    let dense = ev.evaluate(&x, &ones, ScaleMode::FixedNatural(&scale), true);
+    let m = dense.residual.len();
+    let e1: Vec<f64> = (0..m)
+        .map(|k| ((k * 37 % 101) as f64 - 50.0) / 7.0)
+        .collect();
+    let e2: Vec<f64> = dense.raw.iter().map(|v| v.clamp(-3.0, 3.0)).collect();
+    let lin = ev
+        .linearize_with(
+            &x,
+            &ones,
+            ScaleMode::FixedNatural(&scale),
+            &[&e1, &e2],
+            None,
+        )
+        .unwrap();
+    let j = DMatrix::from_row_slice(m, dense.n_cols, dense.jacobian.as_deref().unwrap());
+    let mut full = DMatrix::zeros(m, dense.n_cols + 3);
+    full.columns_mut(0, dense.n_cols).copy_from(&j);
+    full.set_column(dense.n_cols, &DVector::from_column_slice(&dense.residual));
+    full.set_column(dense.n_cols + 1, &DVector::from_column_slice(&e1));
+    full.set_column(dense.n_cols + 2, &DVector::from_column_slice(&e2));
+    let mut reduced = DMatrix::zeros(lin.matrix.nrows(), dense.n_cols + 3);
+    reduced.columns_mut(0, dense.n_cols).copy_from(&lin.matrix);
+    reduced.set_column(dense.n_cols, &lin.rhs);
+    reduced
+        .columns_mut(dense.n_cols + 1, 2)
+        .copy_from(&lin.extra);
+    assert_gram_close(
+        &full.tr_mul(&full),
+        &reduced.tr_mul(&reduced),
+        "[J r e1 e2]",
+    );
+}

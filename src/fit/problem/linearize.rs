@@ -3,11 +3,13 @@
 //! linear in samples × channels instead of samples × channels × parameters. Also the cost alone,
 //! in chunks, without storing any residual.
 //!
-//! Block structure: channel `c`'s rows depend on the free parameters and on its own scale `s_c`.
-//! Each chunk's values and exact gradients come from [`Forward::gradients`] (any model family;
-//! memory [`CHUNK`] × channels × free per chunk in flight), and each channel keeps its own
-//! Householder QR of its rows `[∂r/∂scale | ∂r/∂free | r̃]` — never the normal matrix, so the
-//! conditioning of `J` is not squared and the SVD-based LM step and covariance keep their accuracy.
+//! Block structure: channel `c`'s rows depend on the shared parameters, on its own local parameter
+//! (`σ_a[c]`, [`FitParam::channel`]) and on its scale `s_c` only. Each chunk's values and exact
+//! gradients come from [`Forward::gradients_compressed`] (every channel's local parameter in one
+//! column, so the AD cost does not grow with the channel count), and each channel keeps its own
+//! Householder QR of its rows `[∂r/∂scale | ∂r/∂shared, ∂r/∂local | r̃]` — never the normal
+//! matrix, so the conditioning of `J` is not squared and the SVD-based LM step and covariance keep
+//! their accuracy.
 //!
 //! Variable projection: with the scale projected, `J = B + a·dsᵀ` per channel, where `a` is
 //! `∂r/∂scale`, `B` the Jacobian at fixed scale and `ds` the derivative of the optimal scale —
@@ -23,7 +25,7 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 use super::evaluator::{Evaluator, Space};
-use super::forward::{Forward, ParamSet};
+use super::forward::{FitParam, Forward, ParamSet};
 use super::residual::{ScaleMode, CHUNK};
 
 /// Model values below this are floored before taking logarithms (as in the residual pass).
@@ -45,6 +47,54 @@ pub struct Linearization {
     pub rows: usize,
     /// Per-channel scale `s_c` used.
     pub scale: Vec<f64>,
+    /// The extra columns `e` asked of [`Evaluator::linearize_with`], transformed alike: with `Q`
+    /// the orthogonal factor, `[M | t | E] = Qᵀ[J | r̃ | e]`, so every inner product among
+    /// Jacobian columns, residuals and extras is kept.
+    pub extra: DMatrix<f64>,
+}
+
+/// Which solver columns one channel's rows touch.
+struct Layout<P> {
+    /// Indices into `free` of the shared parameters, and the parameters.
+    shared: Vec<usize>,
+    shared_names: Vec<P>,
+    /// Per channel, the index into `free` of its local parameter, and the parameter, if free.
+    local: Vec<Option<usize>>,
+    local_names: Vec<Option<P>>,
+}
+
+impl<P: FitParam> Layout<P> {
+    fn of(free: &[P], nc: usize) -> Layout<P> {
+        let mut layout = Layout {
+            shared: Vec::new(),
+            shared_names: Vec::new(),
+            local: vec![None; nc],
+            local_names: vec![None; nc],
+        };
+        for (j, &name) in free.iter().enumerate() {
+            match name.channel() {
+                Some(c) if c < nc => {
+                    layout.local[c] = Some(j);
+                    layout.local_names[c] = Some(name);
+                }
+                _ => {
+                    layout.shared.push(j);
+                    layout.shared_names.push(name);
+                }
+            }
+        }
+        layout
+    }
+
+    /// Gradient columns per row: shared, then the channel's local one.
+    fn n_cols(&self) -> usize {
+        self.shared.len() + 1
+    }
+
+    /// The index into `free` of local column `l` for channel `c`.
+    fn free_index(&self, c: usize, l: usize) -> Option<usize> {
+        self.shared.get(l).copied().or(self.local[c])
+    }
 }
 
 /// One chunk's reduction: per channel the R factor of its rows, and the projection sums.
@@ -249,6 +299,19 @@ impl<F: Forward> Evaluator<'_, F> {
         mode: ScaleMode<'_>,
         cancel: Option<&AtomicBool>,
     ) -> Option<Linearization> {
+        self.linearize_with(x, col_factor, mode, &[], cancel)
+    }
+
+    /// [`Evaluator::linearize`] with `extra` columns (one value per residual row, sample-major)
+    /// reduced alongside: projections onto the Jacobian's column space without storing `J`.
+    pub fn linearize_with(
+        &self,
+        x: &[f64],
+        col_factor: &[f64],
+        mode: ScaleMode<'_>,
+        extra: &[&[f64]],
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Linearization> {
         let nc = self.n_channels;
         let nf = self.free.len();
         let p = self.params_at(x);
@@ -258,8 +321,11 @@ impl<F: Forward> Evaluator<'_, F> {
         };
         let s = self.natural_scale(&sq);
         let projected = matches!(mode, ScaleMode::Projected);
-        let w = nf + 2;
-        let sum_width = 2 + 2 * nf;
+        let layout = Layout::of(&self.free, nc);
+        let nl = layout.n_cols();
+        let ne = extra.len();
+        let w = nl + 2 + ne;
+        let sum_width = 2 + 2 * nl;
         let n_chunks = self.angles.len().div_ceil(CHUNK);
         let mut tri: Vec<DMatrix<f64>> = vec![DMatrix::zeros(0, w); nc];
         let mut sums = vec![0.0; nc * sum_width];
@@ -270,7 +336,7 @@ impl<F: Forward> Evaluator<'_, F> {
                     if cancelled(cancel) {
                         return None;
                     }
-                    Some(self.chunk_part(&p, ci, col_factor, mode, &sq, &s))
+                    Some(self.chunk_part(&p, &layout, ci, (col_factor, extra), mode, (&sq, &s)))
                 })
                 .collect();
             for part in parts {
@@ -283,10 +349,10 @@ impl<F: Forward> Evaluator<'_, F> {
                 }
             }
         }
-        // Derivative of the projected scale per channel (free columns), as in `project`.
+        // Derivative of the projected scale per channel (local columns), as in `project`.
         let ds = |c: usize| -> Vec<f64> {
             let a = &sums[c * sum_width..(c + 1) * sum_width];
-            let mut d = vec![0.0; nf];
+            let mut d = vec![0.0; nl];
             if !projected {
                 return d;
             }
@@ -294,7 +360,7 @@ impl<F: Forward> Evaluator<'_, F> {
                 Space::Linear if a[1] != 0.0 => {
                     let sc = a[0] / a[1];
                     for (j, dj) in d.iter_mut().enumerate() {
-                        *dj = (a[2 + j] - 2.0 * sc * a[2 + nf + j]) / a[1];
+                        *dj = (a[2 + j] - 2.0 * sc * a[2 + nl + j]) / a[1];
                     }
                 }
                 Space::Log if a[0] != 0.0 => {
@@ -311,18 +377,24 @@ impl<F: Forward> Evaluator<'_, F> {
         let n_rows: usize = tri.iter().map(|t| t.nrows()).sum();
         let mut matrix = DMatrix::zeros(n_rows, n_cols);
         let mut rhs = DVector::zeros(n_rows);
+        let mut extra_out = DMatrix::zeros(n_rows, ne);
         let mut row = 0;
         for (c, t) in tri.iter().enumerate() {
             let dc = ds(c);
             for i in 0..t.nrows() {
                 let ra = t[(i, 0)];
-                for (j, dj) in dc.iter().enumerate() {
-                    matrix[(row, j)] = t[(i, 1 + j)] + ra * dj;
+                for (l, dl) in dc.iter().enumerate() {
+                    if let Some(j) = layout.free_index(c, l) {
+                        matrix[(row, j)] = t[(i, 1 + l)] + ra * dl;
+                    }
                 }
                 if !projected {
                     matrix[(row, nf + c)] = ra;
                 }
-                rhs[row] = t[(i, w - 1)];
+                rhs[row] = t[(i, nl + 1)];
+                for e in 0..ne {
+                    extra_out[(row, e)] = t[(i, nl + 2 + e)];
+                }
                 row += 1;
             }
         }
@@ -331,6 +403,7 @@ impl<F: Forward> Evaluator<'_, F> {
             rhs,
             rows: self.angles.len() * nc,
             scale: s,
+            extra: extra_out,
         })
     }
 
@@ -338,26 +411,40 @@ impl<F: Forward> Evaluator<'_, F> {
     fn chunk_part(
         &self,
         p: &ParamSet<F>,
+        layout: &Layout<F::Param>,
         ci: usize,
-        col_factor: &[f64],
+        (col_factor, extra): (&[f64], &[&[f64]]),
         mode: ScaleMode<'_>,
-        sq: &[f64],
-        s: &[f64],
+        (sq, s): (&[f64], &[f64]),
     ) -> ChunkPart {
         let nc = self.n_channels;
-        let nf = self.free.len();
-        let w = nf + 2;
-        let sum_width = 2 + 2 * nf;
+        let nl = layout.n_cols();
+        let w = nl + 2 + extra.len();
+        let sum_width = 2 + 2 * nl;
         let lo = ci * CHUNK;
         let hi = (lo + CHUNK).min(self.angles.len());
         let n = hi - lo;
         let mut out = vec![0.0; n * nc];
-        let mut grad = vec![0.0; n * nc * nf];
-        self.forward
-            .gradients(p, &self.free, &self.angles[lo..hi], &mut out, &mut grad);
+        let mut grad = vec![0.0; n * nc * nl];
+        self.forward.gradients_compressed(
+            p,
+            &layout.shared_names,
+            &layout.local_names,
+            &self.angles[lo..hi],
+            &mut out,
+            &mut grad,
+        );
+        // Column factors per channel (the solver transform's derivative; 0 for a fixed local).
+        let factors: Vec<Vec<f64>> = (0..nc)
+            .map(|c| {
+                (0..nl)
+                    .map(|l| layout.free_index(c, l).map_or(0.0, |j| col_factor[j]))
+                    .collect()
+            })
+            .collect();
         let mut rows: Vec<DMatrix<f64>> = vec![DMatrix::zeros(n, w); nc];
         let mut sums = vec![0.0; nc * sum_width];
-        let mut g = vec![0.0; nf];
+        let mut g = vec![0.0; nl];
         let log = self.space == Space::Log;
         for i in 0..n {
             for c in 0..nc {
@@ -365,7 +452,7 @@ impl<F: Forward> Evaluator<'_, F> {
                 let k = lo * nc + kl;
                 let mk = out[kl];
                 for (l, gl) in g.iter_mut().enumerate() {
-                    *gl = grad[kl * nf + l] * col_factor[l];
+                    *gl = grad[kl * nl + l] * factors[c][l];
                 }
                 if log {
                     for gl in g.iter_mut() {
@@ -393,10 +480,13 @@ impl<F: Forward> Evaluator<'_, F> {
                 let finite0 = |v: f64| if v.is_finite() { v } else { 0.0 };
                 let mut rm = rows[c].row_mut(i);
                 rm[0] = finite0(f * a);
-                for l in 0..nf {
+                for l in 0..nl {
                     rm[1 + l] = finite0(f * bmul * g[l]);
                 }
-                rm[w - 1] = r;
+                rm[nl + 1] = r;
+                for (e, col) in extra.iter().enumerate() {
+                    rm[nl + 2 + e] = finite0(col[k]);
+                }
                 if matches!(mode, ScaleMode::Projected) && !lin {
                     let acc = &mut sums[c * sum_width..(c + 1) * sum_width];
                     let w2 = wk * wk;
@@ -404,15 +494,15 @@ impl<F: Forward> Evaluator<'_, F> {
                         Space::Linear => {
                             acc[0] += w2 * y * qk;
                             acc[1] += w2 * qk * qk;
-                            for l in 0..nf {
+                            for l in 0..nl {
                                 acc[2 + l] += w2 * y * g[l];
-                                acc[2 + nf + l] += w2 * qk * g[l];
+                                acc[2 + nl + l] += w2 * qk * g[l];
                             }
                         }
                         Space::Log => {
                             acc[0] += w2;
                             acc[1] += w2 * (y - qk);
-                            for l in 0..nf {
+                            for l in 0..nl {
                                 acc[2 + l] += w2 * g[l];
                             }
                         }
