@@ -84,3 +84,39 @@ fn multistart_never_ends_worse_than_a_single_start() {
         "multi-start stuck too often"
     );
 }
+
+/// Over four times the screening subsample (25 × `--subsample`), the polish candidates compete on
+/// that subsample (stage `screen`) and only the winner is polished on all data. It must land where
+/// polishing the multi-start's best on all data lands, or lower: the winner of the screen is at
+/// least as good on all data. Relative 1e-9 is far above LM's convergence noise on these costs
+/// and far below the gap between distinct minima.
+#[test]
+fn screening_the_candidates_never_ends_above_the_best_candidate_polished_alone() {
+    let mut screened = 0;
+    for seed in 0..3 {
+        let truth = fit_support::wide_params(700 + seed, 1);
+        let angles = fit_support::random_sphere(2600, 700 + seed);
+        let data = fit_support::data(&truth, &angles, 0.02, 700 + seed);
+        // Screening subsample 25 × 20 = 500; it runs on over 2000 samples.
+        let opts = FitOptions {
+            subsample: 20,
+            polish: 4,
+            ..base()
+        };
+        let out = fit(&data, "screen", Default::default(), &opts).unwrap();
+        screened += usize::from(out.json.trace.iter().any(|s| s.stage == "screen"));
+        let with = out.json.trace.last().unwrap().cost.unwrap();
+        let alone = final_cost(
+            &data,
+            &FitOptions {
+                polish: 1,
+                ..opts.clone()
+            },
+        );
+        assert!(
+            with <= alone * (1.0 + 1e-9),
+            "seed {seed}: screened {with} vs best candidate alone {alone}"
+        );
+    }
+    assert!(screened > 0, "no data set had two candidates to screen");
+}

@@ -45,6 +45,12 @@ impl FitParam for ChiangParamName {
         let (a, b) = self.fact().typical;
         (a / self.file_factor(), b / self.file_factor())
     }
+    fn channel(self) -> Option<usize> {
+        match self {
+            ChiangParamName::SigmaA(c) => Some(c),
+            _ => None,
+        }
+    }
 }
 
 /// The Chiang model under one configuration, as the data measure it: `S`, or `S · cos θ_i`

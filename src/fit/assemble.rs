@@ -79,11 +79,14 @@ fn uncertainty<F: Forward>(
     warnings: &mut Vec<String>,
 ) -> Uncertainty {
     let col: Vec<f64> = ev.free.iter().map(|&p| 1.0 / p.report_factor()).collect();
-    let ej = ev.evaluate(x, &col, ScaleMode::FixedNatural(scale), true);
-    let m = ej.residual.len();
-    let ncol = ej.n_cols;
-    let jm = nalgebra::DMatrix::from_row_slice(m, ncol, ej.jacobian.as_deref().unwrap_or(&[]));
-    let ss: f64 = ej.residual.iter().map(|r| r * r).sum();
+    // Accumulated in chunks (MᵀM = JᵀJ, ‖t‖ = ‖r̃‖): the same covariance without storing J.
+    let lin = ev
+        .linearize(x, &col, ScaleMode::FixedNatural(scale), None)
+        .expect("no cancel flag: the pass runs to the end");
+    let m = lin.rows;
+    let ncol = lin.matrix.ncols();
+    let jm = lin.matrix;
+    let ss = lin.rhs.norm_squared();
     let dof = m.saturating_sub(ncol);
     let cov = crate::lm::covariance(&jm, ss, dof);
     if cov.is_none() {

@@ -54,6 +54,10 @@ use crate::params::ParamFile;
 /// best subsample cost (25: a 5-standard-error gap along one direction).
 pub const POLISH_CHI2: f64 = 25.0;
 
+/// The screening subsample (when candidates compete before the full-data polish) is this many
+/// times the multi-start's subsample; screening runs only on data over four times its size.
+pub const SCREEN_FACTOR: usize = 25;
+
 /// How the lobes/effects of the fit are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EffectsChoice {
@@ -389,6 +393,15 @@ pub fn fit_with<F: Forward>(
     let (runs, order) = stages::multistart(&ev_sub, &starts, opts, &bar, &mut log);
     let mut candidates = stages::distinct_candidates(&ev_sub, &runs, &order, &ranges, opts.polish);
     stages::global_stage(&ev_sub, &mut candidates, &ranges, opts, &mut log);
+    // Large data: the candidates compete on a screening subsample and only the winner is
+    // polished on all data (a full-data LM run costs seconds per million samples).
+    let screen_size = SCREEN_FACTOR * opts.subsample.max(1);
+    if candidates.len() > 1 && data.len() > 4 * screen_size {
+        let idx = design::subsample(data.len(), screen_size, opts.seed ^ 0x5b5b_0000_0002);
+        let (mut ev_screen, _) = evaluator(&data.subset(&idx), opts.loss, 1.0)?;
+        ev_screen.loss_scale = loss_scale;
+        candidates = vec![stages::screen(&ev_screen, &candidates, opts, &mut log)];
+    }
     let mut best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
     if auto_scale {
         // Refine once from the robust fit's own residuals (outliers no longer bias the shape).

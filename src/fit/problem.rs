@@ -3,17 +3,19 @@
 //! (`forward`), data prepared for a fit space (`evaluator`), the residual vector (`residual`) and
 //! the variable-projected per-channel scale (`projection`).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::model::Angles;
 
 mod evaluator;
 mod forward;
+mod linearize;
 mod projection;
 mod residual;
 
 pub use evaluator::{Evaluator, Floored, Space, LOG_MIN_SNR};
 pub use forward::{gradients, FitParam, Forward, ModelForward, ParamSet};
+pub use linearize::Linearization;
 pub use residual::{chunked_sum, Evaluation, ScaleMode, CHUNK};
 
 /// Samples to fit: angles (radians) and values row-major `i * n_channels + c`.
@@ -68,31 +70,36 @@ impl FitData {
     }
 }
 
-/// The argmin problem over solver parameters `u`.
+/// The argmin problem over solver parameters `u`: trial costs and linearisations accumulated in
+/// chunks (the Jacobian is never stored), abandoned mid-pass when `cancel` is raised.
 pub struct LsqProblem<'e, 'f, F: Forward> {
     pub ev: &'e Evaluator<'f, F>,
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
-impl<F: Forward> argmin::core::Operator for LsqProblem<'_, '_, F> {
-    type Param = DVector<f64>;
-    type Output = DVector<f64>;
-    fn apply(&self, u: &DVector<f64>) -> Result<DVector<f64>, argmin::core::Error> {
-        Ok(DVector::from_vec(
-            self.ev.eval_internal(u.as_slice(), false).residual,
-        ))
+impl<F: Forward> crate::lm::LeastSquares for LsqProblem<'_, '_, F> {
+    type Trial = ();
+
+    /// A cancelled pass is an infinite norm: the step is rejected and the solver stops at the
+    /// iteration boundary with its best point.
+    fn trial(&self, u: &DVector<f64>) -> Result<(f64, ()), argmin::core::Error> {
+        let cost = self.ev.cost_internal(u.as_slice(), self.cancel.as_deref());
+        Ok((cost.map_or(f64::INFINITY, |c| (2.0 * c).sqrt()), ()))
     }
-}
 
-impl<F: Forward> argmin::core::Jacobian for LsqProblem<'_, '_, F> {
-    type Param = DVector<f64>;
-    type Jacobian = DMatrix<f64>;
-    fn jacobian(&self, u: &DVector<f64>) -> Result<DMatrix<f64>, argmin::core::Error> {
-        let e = self.ev.eval_internal(u.as_slice(), true);
-        let m = e.residual.len();
-        Ok(DMatrix::from_row_slice(
-            m,
-            e.n_cols,
-            e.jacobian.as_deref().unwrap_or(&[]),
-        ))
+    fn linearize(
+        &self,
+        u: &DVector<f64>,
+        _: (),
+    ) -> Result<crate::lm::Linearized, argmin::core::Error> {
+        let lin = self
+            .ev
+            .linearize_internal(u.as_slice(), self.cancel.as_deref())
+            .ok_or_else(|| argmin::core::Error::msg("interrupted"))?;
+        Ok(crate::lm::Linearized {
+            matrix: lin.matrix,
+            residuals: lin.rhs,
+            rows: lin.rows,
+        })
     }
 }

@@ -231,9 +231,15 @@ impl<F: Forward> Pinned<'_, '_, F> {
             dof,
             costs: Vec::new(),
         };
-        let result = Executor::new(LsqProblem { ev }, solver)
-            .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
-            .run();
+        let result = Executor::new(
+            LsqProblem {
+                ev,
+                cancel: self.opt.cancel.clone(),
+            },
+            solver,
+        )
+        .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
+        .run();
         let (u, iterations) = match result {
             Ok(res) => {
                 let st = &res.state;

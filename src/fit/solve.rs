@@ -129,16 +129,58 @@ pub fn local_solver() -> crate::lm::LevenbergMarquardt {
         .unwrap_or_default()
 }
 
-/// Run the local solver from `u0` for at most `max_iters` iterations.
+/// Records the parameters after every iteration, so a run stopped by an error mid-iteration
+/// (a cancelled linearisation) still hands back where it was.
+struct ParamTrace(Arc<Mutex<Option<Vec<f64>>>>);
+
+impl Observe<LsqState> for ParamTrace {
+    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+        let best = state.get_best_param().or(state.get_param());
+        if let (Ok(mut slot), Some(p)) = (self.0.lock(), best) {
+            *slot = Some(p.as_slice().to_vec());
+        }
+        Ok(())
+    }
+}
+
+/// Shows a long run's iteration and cost as the progress bar's message.
+struct IterationMessage(indicatif::ProgressBar);
+
+impl Observe<LsqState> for IterationMessage {
+    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+        self.0.set_message(format!(
+            "polish: iteration {}, cost {:.6e}",
+            state.get_iter(),
+            state.get_best_cost()
+        ));
+        Ok(())
+    }
+}
+
+/// Run the local solver from `u0` for at most `max_iters` iterations. A raised `cancel` stops it
+/// within one chunk of samples, with the best point reached so far.
 pub fn run_local<F: Forward>(
     ev: &Evaluator<'_, F>,
     u0: &[f64],
     max_iters: u64,
     cancel: &Option<Arc<AtomicBool>>,
 ) -> LocalRun {
+    run_local_with_progress(ev, u0, max_iters, cancel, None)
+}
+
+/// [`run_local`], showing each iteration and its cost on `progress` (the polish on all data can
+/// take minutes on millions of samples).
+pub fn run_local_with_progress<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    u0: &[f64],
+    max_iters: u64,
+    cancel: &Option<Arc<AtomicBool>>,
+    progress: Option<&indicatif::ProgressBar>,
+) -> LocalRun {
     let t0 = Instant::now();
-    let start_cost = ev.eval_internal(u0, false).cost();
+    let full_cost = |u: &[f64]| ev.cost_internal(u, None).unwrap_or(f64::INFINITY);
     let history = Arc::new(Mutex::new(Vec::new()));
+    let last = Arc::new(Mutex::new(None));
     let solver = Cancellable {
         inner: local_solver(),
         flag: cancel.clone(),
@@ -147,14 +189,30 @@ pub fn run_local<F: Forward>(
             .saturating_sub(ev.n_params() + ev.n_channels),
         costs: Vec::new(),
     };
-    let result = Executor::new(LsqProblem { ev }, solver)
+    let problem = LsqProblem {
+        ev,
+        cancel: cancel.clone(),
+    };
+    let mut executor = Executor::new(problem, solver)
         .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
         .add_observer(CostTrace(history.clone()), ObserverMode::Always)
-        .run();
+        .add_observer(ParamTrace(last.clone()), ObserverMode::Always);
+    if let Some(bar) = progress {
+        executor = executor.add_observer(IterationMessage(bar.clone()), ObserverMode::Always);
+    }
+    let result = executor.run();
     let history = history.lock().map(|h| h.clone()).unwrap_or_default();
+    // The solver's best cost where it has one (its best point is never worse than the start,
+    // which it evaluated first); otherwise one pass each: on millions of samples a pass is
+    // a noticeable share of the polish.
+    let mut solver_cost = None;
     let (u, iterations, status) = match result {
         Ok(res) => {
             let st = &res.state;
+            solver_cost = st
+                .get_best_param()
+                .map(|_| st.get_best_cost())
+                .filter(|c| c.is_finite());
             let u = st
                 .get_best_param()
                 .or(st.get_param())
@@ -169,14 +227,25 @@ pub fn run_local<F: Forward>(
             };
             (u, st.get_iter(), status)
         }
+        // Cancelled inside a linearisation: the last iterate observed.
+        Err(_) if is_cancelled(cancel) => {
+            let u = last.lock().ok().and_then(|l| l.clone());
+            let u = u.unwrap_or_else(|| u0.to_vec());
+            (u, history.len() as u64, RunStatus::Interrupted)
+        }
         Err(_) => (u0.to_vec(), 0, RunStatus::Failed),
     };
-    let cost = ev.eval_internal(&u, false).cost();
-    // Never hand back a point worse than the start (a failed run keeps the start).
-    let (u, cost) = if cost.is_finite() && cost <= start_cost || !start_cost.is_finite() {
-        (u, cost)
-    } else {
-        (u0.to_vec(), start_cost)
+    let (u, cost) = match solver_cost {
+        Some(cost) => (u, cost),
+        None => {
+            let (cost, start_cost) = (full_cost(&u), full_cost(u0));
+            // Never hand back a point worse than the start (a failed run keeps the start).
+            if cost.is_finite() && cost <= start_cost || !start_cost.is_finite() {
+                (u, cost)
+            } else {
+                (u0.to_vec(), start_cost)
+            }
+        }
     };
     LocalRun {
         u,

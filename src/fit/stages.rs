@@ -275,6 +275,28 @@ pub fn global_stage<F: Forward>(
     candidates.insert(0, u);
 }
 
+/// LM polish of every candidate on `ev_screen` (a subsample far larger than the multi-start's):
+/// the best run's end point, the only one then polished on all data.
+pub fn screen<F: Forward>(
+    ev_screen: &Evaluator<'_, F>,
+    candidates: &[Vec<f64>],
+    opts: &FitOptions,
+    log: &mut StageLog,
+) -> Vec<f64> {
+    let t = Instant::now();
+    let runs: Vec<LocalRun> = candidates
+        .iter()
+        .map(|u0| run_local(ev_screen, u0, opts.polish_iters, &opts.cancel))
+        .collect();
+    let iterations = runs.iter().map(|r| r.iterations).sum();
+    let best = runs
+        .into_iter()
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .expect("at least one candidate is screened");
+    log.record("screen", iterations, best.cost, t, best.history.clone());
+    best.u
+}
+
 /// LM polish of every candidate on all data; the best run.
 pub fn polish<F: Forward>(
     ev_full: &Evaluator<'_, F>,
@@ -290,7 +312,8 @@ pub fn polish<F: Forward>(
         if is_cancelled(&opts.cancel) && best.is_some() {
             break;
         }
-        let r = run_local(ev_full, u0, opts.polish_iters, &opts.cancel);
+        let r =
+            solve::run_local_with_progress(ev_full, u0, opts.polish_iters, &opts.cancel, Some(bar));
         iterations += r.iterations;
         bar.inc(1);
         if best.as_ref().is_none_or(|b| r.cost < b.cost) {
@@ -417,7 +440,7 @@ pub fn progress_bar(opts: &FitOptions, len: usize) -> indicatif::ProgressBar {
     }
     let bar = indicatif::ProgressBar::new(len as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("fit {bar:30} {pos}/{len} runs {elapsed}")
+        indicatif::ProgressStyle::with_template("fit {bar:30} {pos}/{len} runs {elapsed} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar

@@ -5,8 +5,6 @@
 
 use rayon::prelude::*;
 
-use nalgebra::{DMatrix, DVector};
-
 use super::gof;
 use super::problem::{FitParam, Forward, ScaleMode, Space, CHUNK};
 use super::verdict::{Evidence, LARGE_RESIDUAL};
@@ -181,20 +179,39 @@ fn exact_mode<F: Forward>(x: &Evidence<'_, '_, '_, F>, g: &GoodnessOfFit) -> Opt
             }
         })
         .collect();
+    let noise = g.robust_noise.filter(|s| *s > 0.0)?;
+    let clip = LARGE_RESIDUAL * noise;
+    // Residuals clipped as the outlier test sees them; rows with a non-finite residual count
+    // for neither sum.
+    let (rc, d): (Vec<f64>, Vec<f64>) =
+        x.e.raw
+            .iter()
+            .zip(d)
+            .map(|(r, dk)| match r.is_finite() {
+                true => (r.clamp(-clip, clip), dk),
+                false => (0.0, 0.0),
+            })
+            .unzip();
     // A refit absorbs the part of that change the free parameters and scales can mimic: keep
-    // the part orthogonal to the Jacobian's columns.
+    // the part orthogonal to the Jacobian's columns. The linearisation carries d and r along
+    // (`[M | E] = Qᵀ[J | d r]`, chunked, J never stored), so the projection runs on its small
+    // triangle with the same inner products.
     let free: Vec<f64> = x.ev.free.iter().map(|&p| p.get(x.params)).collect();
     let ones = vec![1.0; free.len()];
-    let ej =
-        x.ev.evaluate(&free, &ones, ScaleMode::FixedNatural(&x.e.scale), true);
-    let jm = DMatrix::from_row_slice(m, ej.n_cols, ej.jacobian.as_deref()?);
-    if jm.iter().any(|v| !v.is_finite()) {
+    let lin = x.ev.linearize_with(
+        &free,
+        &ones,
+        ScaleMode::FixedNatural(&x.e.scale),
+        &[&d, &rc],
+        None,
+    )?;
+    if lin.matrix.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    let svd = jm.svd(true, false);
+    let svd = lin.matrix.svd(true, false);
     let u = svd.u?;
     let smax = svd.singular_values.max();
-    let mut d_perp = DVector::from_vec(d);
+    let mut d_perp = lin.extra.column(0).into_owned();
     for (j, &sv) in svd.singular_values.iter().enumerate() {
         if sv > 1e-10 * smax {
             let col = u.column(j);
@@ -202,15 +219,8 @@ fn exact_mode<F: Forward>(x: &Evidence<'_, '_, '_, F>, g: &GoodnessOfFit) -> Opt
             d_perp.axpy(-c, &col, 1.0);
         }
     }
-    let noise = g.robust_noise.filter(|s| *s > 0.0)?;
-    let clip = LARGE_RESIDUAL * noise;
-    let (mut rd, mut dd) = (0.0, 0.0);
-    for (r, dk) in x.e.raw.iter().zip(d_perp.iter()) {
-        if r.is_finite() {
-            rd += r.clamp(-clip, clip) * dk;
-            dd += dk * dk;
-        }
-    }
+    let rd = lin.extra.column(1).dot(&d_perp);
+    let dd = d_perp.norm_squared();
     let rr: f64 =
         x.e.raw
             .iter()

@@ -2,11 +2,11 @@
 //! `next_iter` tries one step, accepts or rejects it and updates the trust radius.
 
 use argmin::core::{
-    Error as ArgminError, Jacobian, Operator, Problem, Solver, State, TerminationReason,
-    TerminationStatus, KV,
+    Error as ArgminError, Problem, Solver, State, TerminationReason, TerminationStatus, KV,
 };
 use nalgebra::{DMatrix, DVector};
 
+use super::least_squares::{LeastSquares, Linearized};
 use super::step::{
     all_finite, column_norms, gradient_cosine, scaled_gradient, svd_with_projection,
     trust_region_step,
@@ -14,8 +14,9 @@ use super::step::{
 use super::{LevenbergMarquardt, LmState, LmTermination};
 
 impl LevenbergMarquardt {
-    /// Update the scaling from a new Jacobian, factor it and run the gradient test.
-    fn refresh(&mut self, jacobian: &DMatrix<f64>, residuals: &DVector<f64>) {
+    /// Update the scaling from a new linearisation (`M`, `t`; `‖r‖ = fnorm`), factor it and run
+    /// the gradient test.
+    fn refresh(&mut self, jacobian: &DMatrix<f64>, residuals: &DVector<f64>, fnorm: f64) {
         let n = jacobian.ncols();
         let col_norms = column_norms(jacobian);
         if self.diag.len() != n {
@@ -23,12 +24,11 @@ impl LevenbergMarquardt {
         } else {
             self.diag.zip_apply(&col_norms, |d, c| *d = d.max(c));
         }
-        let fnorm = residuals.norm();
         if fnorm == 0.0 {
             // Also covers m = 0; nothing to factor.
             self.status = Some(LmTermination::ZeroResidual);
             return;
-        } else if gradient_cosine(jacobian, residuals, &col_norms) <= self.gtol {
+        } else if gradient_cosine(jacobian, residuals, &col_norms, fnorm) <= self.gtol {
             self.status = Some(LmTermination::GradientConverged);
         }
         let mut scaled = jacobian.clone();
@@ -39,11 +39,26 @@ impl LevenbergMarquardt {
     }
 }
 
-impl<O> Solver<O, LmState> for LevenbergMarquardt
-where
-    O: Operator<Param = DVector<f64>, Output = DVector<f64>>
-        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
-{
+/// The linearisation at `x` after a trial evaluation there, checked for shape and finiteness.
+fn linearize_checked<O: LeastSquares>(
+    problem: &mut Problem<O>,
+    x: &DVector<f64>,
+    trial: O::Trial,
+) -> Result<Linearized, ArgminError> {
+    let lin = problem.problem("jacobian_count", |p| p.linearize(x, trial))?;
+    if lin.matrix.nrows() != lin.residuals.len() || lin.matrix.ncols() != x.len() {
+        return Err(anyhow_error(&format!(
+            "Jacobian is {}x{} but residuals have {} rows and parameters {} entries",
+            lin.matrix.nrows(),
+            lin.matrix.ncols(),
+            lin.residuals.len(),
+            x.len()
+        )));
+    }
+    Ok(lin)
+}
+
+impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
     fn name(&self) -> &str {
         "Levenberg-Marquardt (Moré)"
     }
@@ -61,43 +76,39 @@ where
                 "LevenbergMarquardt needs at least one parameter",
             ));
         }
-        let r = problem.apply(&x0)?;
-        if r.iter().any(|v| !v.is_finite()) {
+        let (fnorm, trial) = problem.problem("operator_count", |p| p.trial(&x0))?;
+        if !fnorm.is_finite() {
             return Err(anyhow_error(
                 "residuals at the initial parameters are not finite; choose another start",
             ));
         }
-        let j = problem.jacobian(&x0)?;
-        if !all_finite(j.as_slice()) {
+        let lin = linearize_checked(problem, &x0, trial)?;
+        if !all_finite(lin.matrix.as_slice()) {
             return Err(anyhow_error(
                 "Jacobian at the initial parameters is not finite; choose another start",
             ));
-        }
-        if j.nrows() != r.len() || j.ncols() != x0.len() {
-            return Err(anyhow_error(&format!(
-                "Jacobian is {}x{} but residuals have {} rows and parameters {} entries",
-                j.nrows(),
-                j.ncols(),
-                r.len(),
-                x0.len()
-            )));
         }
         self.diag = DVector::zeros(0);
         self.svd = None;
         self.status = None;
         self.first_step = true;
         self.lambda = 0.0;
-        self.refresh(&j, &r);
+        self.rows = lin.rows;
+        self.refresh(&lin.matrix, &lin.residuals, fnorm);
         let xnorm = self.diag.component_mul(&x0).norm();
         self.delta = if xnorm > 0.0 {
             self.radius_factor * xnorm
         } else {
             self.radius_factor
         };
-        let cost = 0.5 * r.norm_squared();
+        let cost = 0.5 * fnorm * fnorm;
         let kv = argmin::kv!("cost" => cost; "delta" => self.delta;);
         Ok((
-            state.param(x0).residuals(r).jacobian(j).cost(cost),
+            state
+                .param(x0)
+                .residuals(lin.residuals)
+                .jacobian(lin.matrix)
+                .cost(cost),
             Some(kv),
         ))
     }
@@ -115,7 +126,7 @@ where
             .ok_or_else(|| anyhow_error("LevenbergMarquardt: param not set"))?
             .clone();
         let fnorm = (2.0 * state.get_cost()).sqrt();
-        let rows = state.get_residuals().map_or(0, |r| r.len());
+        let rows = self.rows;
 
         let step = trust_region_step(svd, self.delta, self.lambda, rows);
         let p = step.z.component_div(&self.diag);
@@ -125,19 +136,14 @@ where
             self.first_step = false;
         }
         let x_new = &x + &p;
-        let r_new = problem.apply(&x_new)?;
-        if r_new.len() != rows {
-            return Err(anyhow_error(&format!(
-                "residual vector changed length from {rows} to {} between evaluations",
-                r_new.len()
-            )));
-        }
         // A step into a region where the model is undefined is a failed step, not an error.
-        let fnorm1 = if r_new.iter().all(|v| v.is_finite()) {
-            r_new.norm()
+        let (fnorm1, trial) = problem.problem("operator_count", |p| p.trial(&x_new))?;
+        let fnorm1 = if fnorm1.is_finite() {
+            fnorm1
         } else {
             f64::INFINITY
         };
+        let mut trial = Some(trial);
 
         let actred = if 0.1 * fnorm1 < fnorm {
             1.0 - (fnorm1 / fnorm).powi(2)
@@ -176,35 +182,47 @@ where
         let mut noise_accepted = false;
         let mut j_new = None;
         if !accepted && fnorm1.is_finite() && prered <= self.noise && actred >= -self.noise {
-            let j = problem.jacobian(&x_new)?;
+            let trial = trial.take().expect("trial is taken once");
+            let lin = linearize_checked(problem, &x_new, trial)?;
             let old = match (state.get_jacobian(), state.get_residuals()) {
                 (Some(jo), Some(ro)) => scaled_gradient(jo, ro, &self.diag),
                 _ => f64::INFINITY,
             };
-            if all_finite(j.as_slice()) && scaled_gradient(&j, &r_new, &self.diag) < old {
+            if all_finite(lin.matrix.as_slice())
+                && scaled_gradient(&lin.matrix, &lin.residuals, &self.diag) < old
+            {
                 accepted = true;
                 noise_accepted = true;
             }
-            j_new = Some(j);
+            j_new = Some(lin);
         }
         if accepted {
-            let j = match j_new {
-                Some(j) => j,
-                None => problem.jacobian(&x_new)?,
+            let lin = match j_new {
+                Some(lin) => lin,
+                None => {
+                    let trial = trial.take().expect("trial is taken once");
+                    linearize_checked(problem, &x_new, trial)?
+                }
             };
-            if !all_finite(j.as_slice()) {
+            if lin.rows != rows {
+                return Err(anyhow_error(&format!(
+                    "residual vector changed length from {rows} to {} between evaluations",
+                    lin.rows
+                )));
+            }
+            if !all_finite(lin.matrix.as_slice()) {
                 return Err(anyhow_error(&format!(
                     "Jacobian is not finite at parameters {:?} where the residuals are finite; \
                      check the model's derivatives",
                     x_new.as_slice()
                 )));
             }
-            self.refresh(&j, &r_new);
+            self.refresh(&lin.matrix, &lin.residuals, fnorm1);
             let cost = 0.5 * fnorm1 * fnorm1;
             state = state
                 .param(x_new.clone())
-                .residuals(r_new)
-                .jacobian(j)
+                .residuals(lin.residuals)
+                .jacobian(lin.matrix)
                 .cost(cost);
         }
         let xnorm = self

@@ -21,11 +21,13 @@ use crate::error::{Error, Result};
 
 pub mod covariance;
 mod iterate;
+mod least_squares;
 mod step;
 
 pub use covariance::{
     correlation, covariance, covariance_with_rcond, null_space_weights, Covariance, DEFAULT_RCOND,
 };
+pub use least_squares::{LeastSquares, Linearized};
 use step::ScaledSvd;
 
 /// The argmin state the solver runs on: param, residuals and Jacobian as nalgebra types.
@@ -63,8 +65,9 @@ impl LmTermination {
 
 /// Moré–MINPACK Levenberg–Marquardt for nonlinear least squares `min ½‖r(x)‖²`.
 ///
-/// Problem: argmin [`Operator`] (residuals `r(x)`, `DVector<f64>`) and [`Jacobian`] (`m×n`
-/// `DMatrix<f64>`). Use it with `Executor::new(problem, LevenbergMarquardt::new())` and
+/// Problem: any [`LeastSquares`] — argmin [`Operator`] (residuals `r(x)`, `DVector<f64>`) and
+/// [`Jacobian`] (`m×n` `DMatrix<f64>`) qualify, or a problem that hands over a reduced
+/// linearisation instead of its Jacobian. Use it with `Executor::new(problem, LevenbergMarquardt::new())` and
 /// `.configure(|s| s.param(x0).max_iters(n))`.
 ///
 /// ```
@@ -114,6 +117,8 @@ pub struct LevenbergMarquardt {
     first_step: bool,
     svd: Option<ScaledSvd>,
     status: Option<LmTermination>,
+    /// Number of residuals of the problem (the linearisation may have fewer rows).
+    rows: usize,
 }
 
 /// Default `xtol`: a few ulps above `f64::EPSILON`, so the solver iterates until its steps are
@@ -159,6 +164,7 @@ impl LevenbergMarquardt {
             first_step: true,
             svd: None,
             status: None,
+            rows: 0,
         }
     }
 

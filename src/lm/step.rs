@@ -63,8 +63,13 @@ pub(super) fn scaled_gradient(j: &DMatrix<f64>, r: &DVector<f64>, diag: &DVector
 
 /// MINPACK's gradient test: `max_j |J_jᵀ r| / (‖J_j‖ ‖r‖)`, the largest cosine between the
 /// residual vector and a Jacobian column.
-pub(super) fn gradient_cosine(j: &DMatrix<f64>, r: &DVector<f64>, col_norms: &DVector<f64>) -> f64 {
-    let rn = r.norm();
+/// `rn` is `‖r‖` (a reduced linearisation's `t` may be shorter than `r`, never longer).
+pub(super) fn gradient_cosine(
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    col_norms: &DVector<f64>,
+    rn: f64,
+) -> f64 {
     j.column_iter()
         .zip(col_norms.iter())
         .filter(|(_, &c)| c > 0.0)

@@ -4,7 +4,7 @@
 //! by forward-mode AD ([`gradients`]). The Chiang model implements it in `crate::chiang::forward`.
 
 use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
-use num_dual::{DualNum, DualVec64};
+use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::fit::bounds::Bound;
 use crate::model::jacobian::seeded;
@@ -28,6 +28,10 @@ pub trait FitParam: Copy + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn report_factor(self) -> f64;
     /// The typical range (natural units): the start design's box.
     fn typical_range(self) -> (f64, f64);
+    /// The one channel this parameter acts on (`σ_a[c]`), `None` when every channel depends on it.
+    fn channel(self) -> Option<usize> {
+        None
+    }
 }
 
 impl FitParam for ParamName {
@@ -50,6 +54,12 @@ impl FitParam for ParamName {
     fn typical_range(self) -> (f64, f64) {
         crate::fit::bounds::typical_range(self)
     }
+    fn channel(self) -> Option<usize> {
+        match self {
+            ParamName::SigmaA(c) => Some(c),
+            _ => None,
+        }
+    }
 }
 
 /// The parameter set of a [`Forward`]'s family.
@@ -71,6 +81,41 @@ pub trait Forward: Sync {
         out: &mut [f64],
         grad: &mut [f64],
     );
+    /// [`Forward::gradients`] with the channel-local parameters ([`FitParam::channel`])
+    /// compressed into one column: `grad[(k * nc + c) * nw + j]` with `nw = shared.len() + 1`,
+    /// column `j < shared.len()` = ∂value/∂`shared[j]`, the last = ∂value_c/∂`local[c]` (0 where
+    /// `local[c]` is `None`). Channel `c`'s value depends on no other channel's local parameter,
+    /// so a family may seed every local parameter in one dual slot (Curtis–Powell–Reid column
+    /// compression: cost independent of the channel count); the default computes every column
+    /// and gathers.
+    fn gradients_compressed(
+        &self,
+        p: &ParamSet<Self>,
+        shared: &[Self::Param],
+        local: &[Option<Self::Param>],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        let ns = shared.len();
+        let nw = ns + 1;
+        let nc = local.len();
+        let mut free = shared.to_vec();
+        let mut column = vec![None; nc];
+        for (c, name) in local.iter().enumerate() {
+            if let Some(name) = name {
+                column[c] = Some(free.len());
+                free.push(*name);
+            }
+        }
+        let nf = free.len();
+        let mut full = vec![0.0; out.len() * nf];
+        self.gradients(p, &free, angles, out, &mut full);
+        for (r, (src, dst)) in full.chunks(nf.max(1)).zip(grad.chunks_mut(nw)).enumerate() {
+            dst[..ns].copy_from_slice(&src[..ns]);
+            dst[ns] = column[r % nc].map_or(0.0, |j| src[j]);
+        }
+    }
     /// Per-lobe values `[R, TT, TRT]` per channel (for curves.csv); `false` when not available.
     fn by_lobe(&self, _p: &ParamSet<Self>, _angles: &Angles, _out: &mut [[f64; 3]]) -> bool {
         false
@@ -122,6 +167,26 @@ impl Forward for ModelForward {
         grad: &mut [f64],
     ) {
         gradients(self, p, free, angles, out, grad)
+    }
+
+    fn gradients_compressed(
+        &self,
+        p: &Params<f64>,
+        shared: &[ParamName],
+        local: &[Option<ParamName>],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        macro_rules! dispatch {
+            ($($n:literal)*) => {
+                match shared.len() + 1 {
+                    $($n => compressed_dim(self, Const::<$n>, p, (shared, local), angles, (out, grad)),)*
+                    nw => compressed_dim(self, Dyn(nw), p, (shared, local), angles, (out, grad)),
+                }
+            };
+        }
+        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12);
     }
 
     fn measurement(&self) -> Measurement {
@@ -184,16 +249,51 @@ fn gradients_dim<D: Dim>(
     DefaultAllocator: Allocator<D>,
     DualVec64<D>: DualNum<f64>,
 {
-    let nf = free.len();
-    let nc = p.sigma_a.len();
-    let pd = seeded(p, free, dim);
+    dual_pass(forward, dim, &seeded(p, free, dim), angles, out, grad)
+}
+
+/// [`Forward::gradients_compressed`] for the Marschner model: `shared[i]` seeded in dual slot
+/// `i`, every free `σ_a[c]` in the last slot (channel `c` depends on `σ_a[c]` alone).
+fn compressed_dim<D: Dim>(
+    forward: &ModelForward,
+    dim: D,
+    p: &Params<f64>,
+    (shared, local): (&[ParamName], &[Option<ParamName>]),
+    angles: &[Angles],
+    (out, grad): (&mut [f64], &mut [f64]),
+) where
+    DefaultAllocator: Allocator<D>,
+    DualVec64<D>: DualNum<f64>,
+{
+    let mut pd = seeded(p, shared, dim);
+    for &name in local.iter().flatten() {
+        let direction = Derivative::derivative_generic(dim, U1, shared.len());
+        pd.set(name, DualVec64::new(p.get(name), direction));
+    }
+    dual_pass(forward, dim, &pd, angles, out, grad)
+}
+
+/// Values and the `dim` derivative parts of the seeded parameters `pd`, per sample and channel.
+fn dual_pass<D: Dim>(
+    forward: &ModelForward,
+    dim: D,
+    pd: &Params<DualVec64<D>>,
+    angles: &[Angles],
+    out: &mut [f64],
+    grad: &mut [f64],
+) where
+    DefaultAllocator: Allocator<D>,
+    DualVec64<D>: DualNum<f64>,
+{
+    let nw = dim.value();
+    let nc = pd.sigma_a.len();
     let mut o: Vec<DualVec64<D>> = vec![DualVec64::from_re(0.0); nc];
     for (k, a) in angles.iter().enumerate() {
-        forward.values_in(&pd, std::slice::from_ref(a), &mut o);
+        forward.values_in(pd, std::slice::from_ref(a), &mut o);
         for (c, v) in o.iter().enumerate() {
             out[k * nc + c] = v.re;
             let e = v.eps.clone().unwrap_generic(dim, U1);
-            let row = &mut grad[(k * nc + c) * nf..(k * nc + c + 1) * nf];
+            let row = &mut grad[(k * nc + c) * nw..(k * nc + c + 1) * nw];
             row.copy_from_slice(e.as_slice());
         }
     }

@@ -1,0 +1,518 @@
+//! The fit's linearisation without its Jacobian: a small matrix `M` and vector `t` with
+//! `MᵀM = JᵀJ`, `Mᵀt = Jᵀr̃` and `‖t‖ = ‖r̃‖`, accumulated over chunks of samples, so memory is
+//! linear in samples × channels instead of samples × channels × parameters. Also the cost alone,
+//! in chunks, without storing any residual.
+//!
+//! Block structure: channel `c`'s rows depend on the shared parameters, on its own local parameter
+//! (`σ_a[c]`, [`FitParam::channel`]) and on its scale `s_c` only. Each chunk's values and exact
+//! gradients come from [`Forward::gradients_compressed`] (every channel's local parameter in one
+//! column, so the AD cost does not grow with the channel count), and each channel keeps its own
+//! Householder QR of its rows `[∂r/∂scale | ∂r/∂shared, ∂r/∂local | r̃]` — never the normal
+//! matrix, so the conditioning of `J` is not squared and the SVD-based LM step and covariance keep
+//! their accuracy.
+//!
+//! Variable projection: with the scale projected, `J = B + a·dsᵀ` per channel, where `a` is
+//! `∂r/∂scale`, `B` the Jacobian at fixed scale and `ds` the derivative of the optimal scale —
+//! known only after all rows are seen. `[a | B | r] = QR` gives `J = Q (R_B + R_a dsᵀ)`, so the
+//! chunks are reduced first and `ds` applied to the small triangle at the end.
+//!
+//! Determinism: chunks of [`CHUNK`] samples are reduced in parallel, in fixed rounds, and merged in
+//! chunk order, so results are bit-identical for any thread count.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+use super::evaluator::{Evaluator, Space};
+use super::forward::{FitParam, Forward, ParamSet};
+use super::residual::{ScaleMode, CHUNK};
+
+/// Model values below this are floored before taking logarithms (as in the residual pass).
+const MODEL_FLOOR: f64 = 1e-300;
+/// Stand-in for a non-finite residual (as in the residual pass).
+const BAD_RESIDUAL: f64 = 1e100;
+/// Chunks reduced in parallel per round before they are merged in order: bounds the partial
+/// triangles held at once while leaving enough work items for every thread.
+const ROUND: usize = 64;
+
+/// The accumulated linearisation of the residuals at one point.
+#[derive(Debug, Clone)]
+pub struct Linearization {
+    /// `M` (rows × parameters): `MᵀM = JᵀJ`.
+    pub matrix: DMatrix<f64>,
+    /// `t`: `Mᵀt = Jᵀr̃`, `‖t‖ = ‖r̃‖`.
+    pub rhs: DVector<f64>,
+    /// Number of residuals `m` that `M` stands for.
+    pub rows: usize,
+    /// Per-channel scale `s_c` used.
+    pub scale: Vec<f64>,
+    /// The extra columns `e` asked of [`Evaluator::linearize_with`], transformed alike: with `Q`
+    /// the orthogonal factor, `[M | t | E] = Qᵀ[J | r̃ | e]`, so every inner product among
+    /// Jacobian columns, residuals and extras is kept.
+    pub extra: DMatrix<f64>,
+}
+
+/// Which solver columns one channel's rows touch.
+struct Layout<P> {
+    /// Indices into `free` of the shared parameters, and the parameters.
+    shared: Vec<usize>,
+    shared_names: Vec<P>,
+    /// Per channel, the index into `free` of its local parameter, and the parameter, if free.
+    local: Vec<Option<usize>>,
+    local_names: Vec<Option<P>>,
+}
+
+impl<P: FitParam> Layout<P> {
+    fn of(free: &[P], nc: usize) -> Layout<P> {
+        let mut layout = Layout {
+            shared: Vec::new(),
+            shared_names: Vec::new(),
+            local: vec![None; nc],
+            local_names: vec![None; nc],
+        };
+        for (j, &name) in free.iter().enumerate() {
+            match name.channel() {
+                Some(c) if c < nc => {
+                    layout.local[c] = Some(j);
+                    layout.local_names[c] = Some(name);
+                }
+                _ => {
+                    layout.shared.push(j);
+                    layout.shared_names.push(name);
+                }
+            }
+        }
+        layout
+    }
+
+    /// Gradient columns per row: shared, then the channel's local one.
+    fn n_cols(&self) -> usize {
+        self.shared.len() + 1
+    }
+
+    /// The index into `free` of local column `l` for channel `c`.
+    fn free_index(&self, c: usize, l: usize) -> Option<usize> {
+        self.shared.get(l).copied().or(self.local[c])
+    }
+}
+
+/// One chunk's reduction: per channel the R factor of its rows, and the projection sums.
+struct ChunkPart {
+    tri: Vec<DMatrix<f64>>,
+    sums: Vec<f64>,
+}
+
+fn cancelled(flag: Option<&AtomicBool>) -> bool {
+    flag.is_some_and(|f| f.load(Ordering::Relaxed))
+}
+
+/// The R factor of `[top; bottom]` (at most `ncols` rows).
+fn stack_r(top: &DMatrix<f64>, bottom: &DMatrix<f64>) -> DMatrix<f64> {
+    if top.nrows() == 0 {
+        return triangle(bottom.clone());
+    }
+    let w = top.ncols();
+    let mut s = DMatrix::zeros(top.nrows() + bottom.nrows(), w);
+    s.rows_mut(0, top.nrows()).copy_from(top);
+    s.rows_mut(top.nrows(), bottom.nrows()).copy_from(bottom);
+    triangle(s)
+}
+
+/// The R factor of `a` (Householder QR), `min(m, n) × n`.
+fn triangle(a: DMatrix<f64>) -> DMatrix<f64> {
+    if a.nrows() == 0 {
+        return a;
+    }
+    a.qr().r()
+}
+
+impl<F: Forward> Evaluator<'_, F> {
+    /// Model values of every row (sample-major), in chunks; `None` when cancelled.
+    fn model_values(&self, p: &ParamSet<F>, cancel: Option<&AtomicBool>) -> Option<Vec<f64>> {
+        let nc = self.n_channels;
+        let mut model = vec![0.0; self.angles.len() * nc];
+        let done: Vec<bool> = model
+            .par_chunks_mut(CHUNK * nc)
+            .zip(self.angles.par_chunks(CHUNK))
+            .map(|(m, a)| {
+                if cancelled(cancel) {
+                    return false;
+                }
+                self.forward.values(p, a, m);
+                true
+            })
+            .collect();
+        done.iter().all(|&d| d).then_some(model)
+    }
+
+    /// Per-channel scale in the fit space (`s` linear, `ln s` log) for `mode`; the projected one
+    /// from the model values `model`, by the same sums in the same order as
+    /// [`Evaluator::evaluate`].
+    fn scale_q(&self, model: &[f64], mode: ScaleMode<'_>) -> Vec<f64> {
+        let nc = self.n_channels;
+        match mode {
+            ScaleMode::ExplicitLog(ls) => match self.space {
+                Space::Linear => ls.iter().map(|v| v.exp()).collect(),
+                Space::Log => ls.to_vec(),
+            },
+            ScaleMode::FixedNatural(s) => match self.space {
+                Space::Linear => s.to_vec(),
+                Space::Log => s.iter().map(|v| v.max(MODEL_FLOOR).ln()).collect(),
+            },
+            ScaleMode::Projected => {
+                let partial: Vec<Vec<f64>> = model
+                    .par_chunks(CHUNK * nc)
+                    .enumerate()
+                    .map(|(ci, m)| {
+                        let mut acc = vec![0.0; nc * 2];
+                        let lo = ci * CHUNK * nc;
+                        for (i, &mk) in m.iter().enumerate() {
+                            let k = lo + i;
+                            if self.lin[k] {
+                                continue;
+                            }
+                            let c = k % nc;
+                            let (w2, y) = (self.w[k] * self.w[k], self.target[k]);
+                            match self.space {
+                                Space::Linear => {
+                                    acc[2 * c] += w2 * y * mk;
+                                    acc[2 * c + 1] += w2 * mk * mk;
+                                }
+                                Space::Log => {
+                                    let qk = mk.max(MODEL_FLOOR).ln();
+                                    acc[2 * c] += w2;
+                                    acc[2 * c + 1] += w2 * (y - qk);
+                                }
+                            }
+                        }
+                        acc
+                    })
+                    .collect();
+                let mut tot = vec![0.0; nc * 2];
+                for part in partial {
+                    for (t, v) in tot.iter_mut().zip(part) {
+                        *t += v;
+                    }
+                }
+                (0..nc)
+                    .map(|c| {
+                        let (a0, a1) = (tot[2 * c], tot[2 * c + 1]);
+                        match self.space {
+                            Space::Linear if a1 != 0.0 => a0 / a1,
+                            Space::Log if a0 != 0.0 => a1 / a0,
+                            _ => 0.0,
+                        }
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    /// The residual `r̃` of row `k` (sample-major) with model value `mk` and fit-space scale `sq`:
+    /// `(r̃, raw residual, loss factor)`; a non-finite `r̃` becomes [`BAD_RESIDUAL`] with factor 0.
+    fn row_residual(&self, k: usize, mk: f64, sq: f64, s: f64) -> (f64, f64) {
+        let (w, y) = (self.w[k], self.target[k]);
+        let res = match self.space {
+            Space::Linear => w * (y - sq * mk),
+            Space::Log if self.lin[k] => w * (y - s * mk),
+            Space::Log => w * (y - sq - mk.max(MODEL_FLOOR).ln()),
+        };
+        let (rt, factor, _) = self.loss.apply(res, self.loss_scale);
+        if rt.is_finite() {
+            (rt, factor)
+        } else {
+            (BAD_RESIDUAL, 0.0)
+        }
+    }
+
+    /// `½‖r̃‖²` at solver parameters `u`, in chunks with nothing stored; `None` when `cancel` is
+    /// raised during the pass. Equal to [`Evaluator::eval_internal`]`(u, false).cost()` up to the
+    /// order of the sum.
+    pub fn cost_internal(&self, u: &[f64], cancel: Option<&AtomicBool>) -> Option<f64> {
+        let nf = self.free.len();
+        let p = self.params_at(&self.natural(&u[..nf]));
+        let mode = if self.explicit_scale {
+            ScaleMode::ExplicitLog(&u[nf..])
+        } else {
+            ScaleMode::Projected
+        };
+        let model = self.model_values(&p, cancel)?;
+        let sq = self.scale_q(&model, mode);
+        let s = self.natural_scale(&sq);
+        let nc = self.n_channels;
+        let partial: Vec<f64> = model
+            .par_chunks(CHUNK * nc)
+            .enumerate()
+            .map(|(ci, m)| {
+                let lo = ci * CHUNK * nc;
+                m.iter()
+                    .enumerate()
+                    .map(|(i, &mk)| {
+                        let c = (lo + i) % nc;
+                        let r = self.row_residual(lo + i, mk, sq[c], s[c]).0;
+                        r * r
+                    })
+                    .sum::<f64>()
+            })
+            .collect();
+        Some(0.5 * partial.iter().sum::<f64>())
+    }
+
+    fn natural_scale(&self, sq: &[f64]) -> Vec<f64> {
+        match self.space {
+            Space::Linear => sq.to_vec(),
+            Space::Log => sq.iter().map(|v| v.exp()).collect(),
+        }
+    }
+
+    /// [`Evaluator::linearize`] at solver parameters `u` (transforms applied; scale projected or
+    /// explicit as in [`Evaluator::eval_internal`]).
+    pub fn linearize_internal(
+        &self,
+        u: &[f64],
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Linearization> {
+        let nf = self.free.len();
+        let x = self.natural(&u[..nf]);
+        let dxdu: Vec<f64> = self
+            .bounds
+            .iter()
+            .zip(u)
+            .map(|(b, &v)| b.derivative(v))
+            .collect();
+        let mode = if self.explicit_scale {
+            ScaleMode::ExplicitLog(&u[nf..])
+        } else {
+            ScaleMode::Projected
+        };
+        self.linearize(&x, &dxdu, mode, cancel)
+    }
+
+    /// The linearisation at natural free values `x`, columns scaled by `col_factor` as in
+    /// [`Evaluator::evaluate`] (with `nc` scale columns appended unless the scale is projected).
+    /// `None` when `cancel` is raised during the pass.
+    pub fn linearize(
+        &self,
+        x: &[f64],
+        col_factor: &[f64],
+        mode: ScaleMode<'_>,
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Linearization> {
+        self.linearize_with(x, col_factor, mode, &[], cancel)
+    }
+
+    /// [`Evaluator::linearize`] with `extra` columns (one value per residual row, sample-major)
+    /// reduced alongside: projections onto the Jacobian's column space without storing `J`.
+    pub fn linearize_with(
+        &self,
+        x: &[f64],
+        col_factor: &[f64],
+        mode: ScaleMode<'_>,
+        extra: &[&[f64]],
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Linearization> {
+        let nc = self.n_channels;
+        let nf = self.free.len();
+        let p = self.params_at(x);
+        let sq = match mode {
+            ScaleMode::Projected => self.scale_q(&self.model_values(&p, cancel)?, mode),
+            _ => self.scale_q(&[], mode),
+        };
+        let s = self.natural_scale(&sq);
+        let projected = matches!(mode, ScaleMode::Projected);
+        let layout = Layout::of(&self.free, nc);
+        let nl = layout.n_cols();
+        let ne = extra.len();
+        let w = nl + 2 + ne;
+        let sum_width = 2 + 2 * nl;
+        let n_chunks = self.angles.len().div_ceil(CHUNK);
+        let mut tri: Vec<DMatrix<f64>> = vec![DMatrix::zeros(0, w); nc];
+        let mut sums = vec![0.0; nc * sum_width];
+        for round in (0..n_chunks).step_by(ROUND) {
+            let parts: Vec<Option<ChunkPart>> = (round..(round + ROUND).min(n_chunks))
+                .into_par_iter()
+                .map(|ci| {
+                    if cancelled(cancel) {
+                        return None;
+                    }
+                    Some(self.chunk_part(&p, &layout, ci, (col_factor, extra), mode, (&sq, &s)))
+                })
+                .collect();
+            for part in parts {
+                let part = part?;
+                for (acc, t) in tri.iter_mut().zip(&part.tri) {
+                    *acc = stack_r(acc, t);
+                }
+                for (a, v) in sums.iter_mut().zip(&part.sums) {
+                    *a += v;
+                }
+            }
+        }
+        // Derivative of the projected scale per channel (local columns), as in `project`.
+        let ds = |c: usize| -> Vec<f64> {
+            let a = &sums[c * sum_width..(c + 1) * sum_width];
+            let mut d = vec![0.0; nl];
+            if !projected {
+                return d;
+            }
+            match self.space {
+                Space::Linear if a[1] != 0.0 => {
+                    let sc = a[0] / a[1];
+                    for (j, dj) in d.iter_mut().enumerate() {
+                        *dj = (a[2 + j] - 2.0 * sc * a[2 + nl + j]) / a[1];
+                    }
+                }
+                Space::Log if a[0] != 0.0 => {
+                    for (j, dj) in d.iter_mut().enumerate() {
+                        *dj = -a[2 + j] / a[0];
+                    }
+                }
+                _ => {}
+            }
+            d
+        };
+        let extra = if projected { 0 } else { nc };
+        let n_cols = nf + extra;
+        let n_rows: usize = tri.iter().map(|t| t.nrows()).sum();
+        let mut matrix = DMatrix::zeros(n_rows, n_cols);
+        let mut rhs = DVector::zeros(n_rows);
+        let mut extra_out = DMatrix::zeros(n_rows, ne);
+        let mut row = 0;
+        for (c, t) in tri.iter().enumerate() {
+            let dc = ds(c);
+            for i in 0..t.nrows() {
+                let ra = t[(i, 0)];
+                for (l, dl) in dc.iter().enumerate() {
+                    if let Some(j) = layout.free_index(c, l) {
+                        matrix[(row, j)] = t[(i, 1 + l)] + ra * dl;
+                    }
+                }
+                if !projected {
+                    matrix[(row, nf + c)] = ra;
+                }
+                rhs[row] = t[(i, nl + 1)];
+                for e in 0..ne {
+                    extra_out[(row, e)] = t[(i, nl + 2 + e)];
+                }
+                row += 1;
+            }
+        }
+        Some(Linearization {
+            matrix,
+            rhs,
+            rows: self.angles.len() * nc,
+            scale: s,
+            extra: extra_out,
+        })
+    }
+
+    /// Rows of chunk `ci`, reduced to one R factor per channel, with the projection sums.
+    fn chunk_part(
+        &self,
+        p: &ParamSet<F>,
+        layout: &Layout<F::Param>,
+        ci: usize,
+        (col_factor, extra): (&[f64], &[&[f64]]),
+        mode: ScaleMode<'_>,
+        (sq, s): (&[f64], &[f64]),
+    ) -> ChunkPart {
+        let nc = self.n_channels;
+        let nl = layout.n_cols();
+        let w = nl + 2 + extra.len();
+        let sum_width = 2 + 2 * nl;
+        let lo = ci * CHUNK;
+        let hi = (lo + CHUNK).min(self.angles.len());
+        let n = hi - lo;
+        let mut out = vec![0.0; n * nc];
+        let mut grad = vec![0.0; n * nc * nl];
+        self.forward.gradients_compressed(
+            p,
+            &layout.shared_names,
+            &layout.local_names,
+            &self.angles[lo..hi],
+            &mut out,
+            &mut grad,
+        );
+        // Column factors per channel (the solver transform's derivative; 0 for a fixed local).
+        let factors: Vec<Vec<f64>> = (0..nc)
+            .map(|c| {
+                (0..nl)
+                    .map(|l| layout.free_index(c, l).map_or(0.0, |j| col_factor[j]))
+                    .collect()
+            })
+            .collect();
+        let mut rows: Vec<DMatrix<f64>> = vec![DMatrix::zeros(n, w); nc];
+        let mut sums = vec![0.0; nc * sum_width];
+        let mut g = vec![0.0; nl];
+        let log = self.space == Space::Log;
+        for i in 0..n {
+            for c in 0..nc {
+                let kl = i * nc + c;
+                let k = lo * nc + kl;
+                let mk = out[kl];
+                for (l, gl) in g.iter_mut().enumerate() {
+                    *gl = grad[kl * nl + l] * factors[c][l];
+                }
+                if log {
+                    for gl in g.iter_mut() {
+                        *gl = if mk > MODEL_FLOOR { *gl / mk } else { 0.0 };
+                    }
+                }
+                let (wk, y, lin) = (self.w[k], self.target[k], self.lin[k]);
+                let qk = if log { mk.max(MODEL_FLOOR).ln() } else { mk };
+                let (r, f) = self.row_residual(k, mk, sq[c], s[c]);
+                // ∂res/∂(fixed-scale shape) = bmul·g; ∂res/∂(scale parameter) = a.
+                let sm = s[c] * mk;
+                let bmul = match self.space {
+                    Space::Linear => -wk * sq[c],
+                    Space::Log if lin => -wk * sm,
+                    Space::Log => -wk,
+                };
+                let a = match (self.space, mode) {
+                    (Space::Linear, ScaleMode::ExplicitLog(_)) => -wk * sq[c] * qk,
+                    (Space::Linear, _) => -wk * qk,
+                    (Space::Log, ScaleMode::FixedNatural(_)) if lin => -wk * mk,
+                    (Space::Log, ScaleMode::FixedNatural(_)) => -wk / s[c],
+                    (Space::Log, _) if lin => -wk * sm,
+                    (Space::Log, _) => -wk,
+                };
+                let finite0 = |v: f64| if v.is_finite() { v } else { 0.0 };
+                let mut rm = rows[c].row_mut(i);
+                rm[0] = finite0(f * a);
+                for l in 0..nl {
+                    rm[1 + l] = finite0(f * bmul * g[l]);
+                }
+                rm[nl + 1] = r;
+                for (e, col) in extra.iter().enumerate() {
+                    rm[nl + 2 + e] = finite0(col[k]);
+                }
+                if matches!(mode, ScaleMode::Projected) && !lin {
+                    let acc = &mut sums[c * sum_width..(c + 1) * sum_width];
+                    let w2 = wk * wk;
+                    match self.space {
+                        Space::Linear => {
+                            acc[0] += w2 * y * qk;
+                            acc[1] += w2 * qk * qk;
+                            for l in 0..nl {
+                                acc[2 + l] += w2 * y * g[l];
+                                acc[2 + nl + l] += w2 * qk * g[l];
+                            }
+                        }
+                        Space::Log => {
+                            acc[0] += w2;
+                            acc[1] += w2 * (y - qk);
+                            for l in 0..nl {
+                                acc[2 + l] += w2 * g[l];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        ChunkPart {
+            tri: rows.into_iter().map(triangle).collect(),
+            sums,
+        }
+    }
+}

@@ -1,0 +1,55 @@
+//! What the LM solver asks of a problem: the residual norm at trial points, and at accepted points
+//! a linearisation `(M, t)` with `MᵀM = JᵀJ`, `Mᵀt = Jᵀr` and `‖t‖ = ‖r‖` — the Jacobian itself
+//! for small problems ([`Operator`] + [`Jacobian`], every such type qualifies), or a reduced form
+//! accumulated in chunks for large ones (the fit's problem), so `J` need never be stored.
+
+use argmin::core::{Error as ArgminError, Jacobian, Operator};
+use nalgebra::{DMatrix, DVector};
+
+/// A linearisation of the residuals at one point.
+#[derive(Debug, Clone)]
+pub struct Linearized {
+    /// `M` with `MᵀM = JᵀJ` (`J` itself for a dense problem).
+    pub matrix: DMatrix<f64>,
+    /// `t` with `Mᵀt = Jᵀr` and `‖t‖ = ‖r‖` (`r` itself for a dense problem).
+    pub residuals: DVector<f64>,
+    /// Number of residuals `m` (sets the rounding-level singular-value cutoff).
+    pub rows: usize,
+}
+
+/// A nonlinear least-squares problem `min ½‖r(x)‖²` as the LM solver runs it.
+pub trait LeastSquares {
+    /// What a trial evaluation keeps for a following [`LeastSquares::linearize`] at the same point.
+    type Trial;
+    /// `‖r(x)‖` (infinite where `r` is not finite), and what the linearisation may reuse.
+    fn trial(&self, x: &DVector<f64>) -> Result<(f64, Self::Trial), ArgminError>;
+    /// The linearisation at `x`, where `trial` was the trial evaluation.
+    fn linearize(&self, x: &DVector<f64>, trial: Self::Trial) -> Result<Linearized, ArgminError>;
+}
+
+impl<O> LeastSquares for O
+where
+    O: Operator<Param = DVector<f64>, Output = DVector<f64>>
+        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+{
+    type Trial = DVector<f64>;
+
+    fn trial(&self, x: &DVector<f64>) -> Result<(f64, DVector<f64>), ArgminError> {
+        let r = self.apply(x)?;
+        let norm = if r.iter().all(|v| v.is_finite()) {
+            r.norm()
+        } else {
+            f64::INFINITY
+        };
+        Ok((norm, r))
+    }
+
+    fn linearize(&self, x: &DVector<f64>, r: DVector<f64>) -> Result<Linearized, ArgminError> {
+        let matrix = self.jacobian(x)?;
+        Ok(Linearized {
+            rows: r.len(),
+            matrix,
+            residuals: r,
+        })
+    }
+}
