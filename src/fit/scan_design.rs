@@ -189,7 +189,7 @@ pub fn caveats(design: &Design, json: &FitJson) -> Caveats {
     } else {
         "these intervals are linearised standard errors only: pass --intervals profile"
     };
-    let assumed: Vec<AssumedAway> = if json.options.effects_choice == "auto" {
+    let assumed: Vec<AssumedAway> = if json.options.effects_choice == crate::files::EffectsSource::Auto {
         json.options
             .effects_reasons
             .iter()
