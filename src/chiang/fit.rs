@@ -5,7 +5,9 @@
 use std::time::Instant;
 
 use super::forward::ChiangForward;
-use super::{ChiangEffects, ChiangParamFile, ChiangParamName, ChiangParams, PARAMETERS};
+use super::{
+    ChiangEffects, ChiangModel, ChiangParamFile, ChiangParamName, ChiangParams, PARAMETERS,
+};
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
 use crate::files::{Floored, LoadReport};
@@ -14,6 +16,11 @@ use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
 use crate::model::angles::wrap;
 use crate::model::{Effects, Lobes, ModelConfig};
+
+/// Width nodes of the multi-start stage (when the fit asks for more): S within 3.5e-2 relative
+/// at the narrowest azimuthal lobes (β_n = 0.05) and to rounding at β_n ≥ 0.3 (docs/chiang.md),
+/// enough to find the basin, a quarter of the default rule's cost.
+pub const SCREENING_WIDTH_NODES: usize = 256;
 
 /// Every Chiang parameter for `nc` channels, in output order (the table's order).
 pub fn all_parameters(nc: usize) -> Vec<ChiangParamName> {
@@ -118,6 +125,16 @@ pub fn fit_chiang(
         model: opts.chiang.clone(),
         measurement: opts.measurement,
     };
+    // The multi-start only looks for basins: a coarser width rule there, the polish at the
+    // requested one (so the result is the requested model's optimum).
+    let screening = (opts.chiang.width_nodes() > SCREENING_WIDTH_NODES)
+        .then(|| -> Result<ChiangForward> {
+            Ok(ChiangForward {
+                model: ChiangModel::new(effects, SCREENING_WIDTH_NODES)?,
+                measurement: opts.measurement,
+            })
+        })
+        .transpose()?;
     let wanted = |p: &ChiangParamName| !p.fact().on_request || opts.free_eta;
     let wanted_of = |e: &ChiangEffects| e.parameters(nc).into_iter().filter(wanted).collect();
     let set = FreeSet::new(
@@ -138,8 +155,12 @@ pub fn fit_chiang(
     .filter(|(on, _)| *on)
     .map(|(_, n)| *n)
     .collect();
+    let screened = match &screening {
+        Some(s) => format!("; the multi-start screens with {}", s.model.width_nodes()),
+        None => String::new(),
+    };
     let reasons = vec![format!(
-        "Chiang 2016 model, terms {} (--terms), {} width nodes (--width-nodes)",
+        "Chiang 2016 model, terms {} (--terms), {} width nodes (--width-nodes{screened})",
         terms.join("+"),
         opts.chiang.width_nodes()
     )];
@@ -161,6 +182,7 @@ pub fn fit_chiang(
             load_report,
             opts,
             forward: &forward,
+            screening: screening.as_ref(),
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,

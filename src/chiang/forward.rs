@@ -1,13 +1,14 @@
 //! The Chiang model as the fit sees it: [`FitParam`] for [`ChiangParamName`] (bounds and
 //! reporting facts from [`super::PARAMETERS`]) and [`ChiangForward`], whose values and exact
-//! Jacobians come from the batch evaluator, so a chunk pays the width integral once per exit
-//! direction, and whose Jacobian uses stack duals for every realistic parameter count.
+//! Jacobians come from the batch evaluators, so a chunk pays the width integral once per exit
+//! direction: with η fixed (the default) the plain-f64 [`fixed_eta`] path, with `--free eta`
+//! stack duals for every realistic parameter count.
 
 use nalgebra::{Dyn, U1};
 use num_dual::DualDVec64;
 
 use super::jacobian::{batch_jacobian_static, seeded};
-use super::{scattering_batch, ChiangModel, ChiangParamName, ChiangParams};
+use super::{fixed_eta, scattering_batch, ChiangModel, ChiangParamName, ChiangParams};
 use crate::fit::bounds::Bound;
 use crate::fit::problem::{FitParam, Forward};
 use crate::model::{Angles, Measurement};
@@ -68,7 +69,8 @@ impl Forward for ChiangForward {
     type Param = ChiangParamName;
 
     fn values(&self, p: &ChiangParams<f64>, angles: &[Angles], out: &mut [f64]) {
-        scattering_batch(p, &self.model, angles, out);
+        // Plain f64 values: the fixed-η path is valid for any η when no derivative is asked.
+        fixed_eta::batch(p, &self.model, angles, &[], out, None);
         let nc = p.sigma_a.len();
         self.measurement
             .apply(angles, &mut out[..angles.len() * nc]);
@@ -82,6 +84,12 @@ impl Forward for ChiangForward {
         out: &mut [f64],
         grad: &mut [f64],
     ) {
+        let nc = p.sigma_a.len();
+        if !free.contains(&ChiangParamName::Eta) {
+            fixed_eta::batch(p, &self.model, angles, free, out, Some(grad));
+            self.apply_measurement(angles, nc, out, grad);
+            return;
+        }
         macro_rules! dispatch {
             ($($n:literal)*) => {
                 match free.len() {
@@ -99,10 +107,7 @@ impl Forward for ChiangForward {
         }
         // Stack duals: η + 3 σ_a + β_m, β_n, α = 7 for RGB; headroom for more channels.
         dispatch!(1 2 3 4 5 6 7 8 9 10);
-        let nc = p.sigma_a.len();
-        self.measurement
-            .apply(angles, &mut out[..angles.len() * nc]);
-        self.measurement.apply(angles, grad);
+        self.apply_measurement(angles, nc, out, grad);
     }
 
     fn by_lobe(&self, p: &ChiangParams<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
@@ -114,6 +119,13 @@ impl Forward for ChiangForward {
 }
 
 impl ChiangForward {
+    /// Values and gradients of S scaled to what the data measure ([`Measurement::apply`]).
+    fn apply_measurement(&self, angles: &[Angles], nc: usize, out: &mut [f64], grad: &mut [f64]) {
+        self.measurement
+            .apply(angles, &mut out[..angles.len() * nc]);
+        self.measurement.apply(angles, grad);
+    }
+
     /// Heap duals for parameter lists longer than the static dispatch covers.
     fn gradients_dynamic(
         &self,

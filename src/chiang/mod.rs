@@ -7,6 +7,7 @@
 //! - [`azimuthal`]: `s`, Fresnel, `T`, `A_p`, `Φ_p`, trimmed logistic `N_p`, the width integral;
 //! - [`quadrature`]: cached Gauss–Legendre rules in γ = asin h;
 //! - [`evaluator`]: batches grouped by exit direction so the width integral is paid once each;
+//! - [`fixed_eta`]: the fit's f64 values and Jacobian with η fixed (hand-written chain rule);
 //! - [`file`]: the Chiang parameter file (JSON names of CHIANG.md);
 //! - [`jacobian`]: seeding dual numbers, Jacobians of a batch;
 //! - [`forward`]: the model as the fit's `Forward` (values and exact Jacobians per batch);
@@ -28,6 +29,7 @@ pub mod bessel;
 pub mod evaluator;
 pub mod file;
 pub mod fit;
+pub mod fixed_eta;
 pub mod forward;
 pub mod jacobian;
 pub mod longitudinal;

@@ -34,14 +34,20 @@ fn parse_renderer(s: &str) -> std::result::Result<Renderer, String> {
 /// stdout.
 pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
     let result = export(&args.dir, args.to)?;
+    // Warnings first, each on its own line (main prefixes the first with `hairfit: `).
+    let warned: String = result
+        .warnings
+        .iter()
+        .map(|w| format!("warning: {w}\nhairfit: "))
+        .collect();
     match &args.output {
         Some(path) => {
             write_export(path, &result)?;
             Ok((
-                format!("{}; wrote {}", result.summary, path.display()),
+                format!("{warned}{}; wrote {}", result.summary, path.display()),
                 None,
             ))
         }
-        None => Ok((result.summary.clone(), Some(result.text))),
+        None => Ok((format!("{warned}{}", result.summary), Some(result.text))),
     }
 }

@@ -49,6 +49,10 @@ pub struct Mapping {
     pub rms_log_measured: Option<f64>,
     pub iterations: u64,
     pub starts: usize,
+    /// A Chiang fit with a term switched off: the rms and max `|d ln S|` of the renderer at the
+    /// fit's own parameters (every term on, the formula conversion's start point) against the
+    /// fit's S — what exporting the parameters unchanged would cost. None otherwise.
+    pub as_fitted: Option<(f64, f64)>,
 }
 
 impl Mapping {
@@ -111,15 +115,19 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
     let floor = channel_floor(&target, n);
     let final_model = ChiangModel::default();
     let (params, exact, iterations, starts) = match (&source.model, formulation.tilt) {
-        (SourceModel::Chiang(p), Tilt::Exit) if formulation == Formulation::PBRT_V4 => (
-            VariantParams {
-                chiang: p.clone(),
-                gain: 1.0,
-            },
-            true,
-            0,
-            1,
-        ),
+        (SourceModel::Chiang { params: p, effects }, Tilt::Exit)
+            if formulation == Formulation::PBRT_V4 && *effects == ChiangEffects::default() =>
+        {
+            (
+                VariantParams {
+                    chiang: p.clone(),
+                    gain: 1.0,
+                },
+                true,
+                0,
+                1,
+            )
+        }
         _ => {
             let problem = MappingProblem {
                 angles: &angles,
@@ -148,14 +156,26 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
             )
         }
     };
-    let mut fitted = vec![0.0; target.len()];
-    variant_scattering_batch(&params, &formulation, &final_model, &angles, &mut fitted);
-    let errors: Vec<f64> = log_floored(&fitted, &floor, n)
-        .iter()
-        .zip(log_floored(&target, &floor, n))
-        .map(|(a, b)| (a - b).abs())
-        .collect();
+    let errors_of = |p: &VariantParams<f64>| -> Vec<f64> {
+        let mut fitted = vec![0.0; target.len()];
+        variant_scattering_batch(p, &formulation, &final_model, &angles, &mut fitted);
+        log_floored(&fitted, &floor, n)
+            .iter()
+            .zip(log_floored(&target, &floor, n))
+            .map(|(a, b)| (a - b).abs())
+            .collect()
+    };
+    let errors = errors_of(&params);
     let rms = |e: &[f64]| (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt();
+    let max = |e: &[f64]| e.iter().copied().fold(0.0, f64::max);
+    let as_fitted = match &source.model {
+        SourceModel::Chiang { effects, .. } if *effects != ChiangEffects::default() => {
+            let start = &start_points(&source.model, &formulation)[0];
+            let e = errors_of(&build::<f64>(start, n, formulation.gain));
+            Some((rms(&e), max(&e)))
+        }
+        _ => None,
+    };
     let n_measured = source.measured.len();
     let mapping = Mapping {
         formulation,
@@ -164,10 +184,11 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
         n_measured,
         n_sphere: sphere.len(),
         rms_log: rms(&errors),
-        max_log: errors.iter().copied().fold(0.0, f64::max),
+        max_log: max(&errors),
         rms_log_measured: (n_measured > 0).then(|| rms(&errors[..n_measured * n])),
         iterations,
         starts,
+        as_fitted,
     };
     if !(mapping.rms_log.is_finite() && mapping.max_log.is_finite()) {
         return Err(Error::Other(
@@ -241,7 +262,7 @@ fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>>
     };
     let gain = 1.0 / formulation.factor;
     let starts: Vec<VariantParams<f64>> = match model {
-        SourceModel::Chiang(p) => vec![VariantParams {
+        SourceModel::Chiang { params: p, .. } => vec![VariantParams {
             chiang: ChiangParams {
                 alpha: sign * p.alpha,
                 ..p.clone()

@@ -83,6 +83,8 @@ pub struct Export {
     pub mapping: Mapping,
     /// One line for stderr: what was fitted and how well.
     pub summary: String,
+    /// What the renderer cannot represent of the fit (also in the file's header).
+    pub warnings: Vec<String>,
 }
 
 /// Export the fit in `dir` for `renderer`.
@@ -90,7 +92,8 @@ pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
     let source = SourceFit::load(dir)?;
     let rgb_channels = source.rgb_order()?;
     let mapping = fit_mapping(&source, renderer.formulation())?;
-    let header = writers::header_lines(&source, renderer, &mapping, &rgb_channels);
+    let warnings = unrepresentable(&source, renderer, &mapping);
+    let header = writers::header_lines(&source, renderer, &mapping, &rgb_channels, &warnings);
     let name = writers::material_name(&source);
     let text = match renderer {
         Renderer::Pbrt => writers::pbrt(&name, &header, &mapping),
@@ -109,7 +112,47 @@ pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
         text,
         mapping,
         summary,
+        warnings,
     })
+}
+
+/// Warnings for what the fit used and `renderer` cannot render: a Chiang fit with a term
+/// switched off (every renderer renders R, TT, TRT and the residual), with the rms cost of
+/// exporting the fit's parameters as they are and of the refitted parameters actually written.
+pub fn unrepresentable(source: &SourceFit, renderer: Renderer, mapping: &Mapping) -> Vec<String> {
+    let SourceModel::Chiang { effects, .. } = &source.model else {
+        return Vec::new();
+    };
+    let Some((rms_as_is, max_as_is)) = mapping.as_fitted else {
+        return Vec::new();
+    };
+    let terms = [
+        (effects.r, "R"),
+        (effects.tt, "TT"),
+        (effects.trt, "TRT"),
+        (effects.residual, "residual"),
+    ];
+    let list = |on: bool| {
+        terms
+            .iter()
+            .filter(|(t, _)| *t == on)
+            .map(|(_, n)| *n)
+            .collect::<Vec<_>>()
+            .join("+")
+    };
+    vec![format!(
+        "the fit ran with terms {} only ({} switched off), but {renderer} always renders all four \
+         (R, TT, TRT, residual) and cannot switch one off: the fit's parameters as they are would \
+         miss the fit's S by rms |d ln S| {rms_as_is:.4} (max {max_as_is:.3}); the exported \
+         parameters were refitted to the fit's S instead and miss it by rms |d ln S| {:.4} \
+         (max {:.3}) over {} measured + {} sphere directions",
+        list(true),
+        list(false),
+        mapping.rms_log,
+        mapping.max_log,
+        mapping.n_measured,
+        mapping.n_sphere
+    )]
 }
 
 /// Write `export.text` to `path` atomically.

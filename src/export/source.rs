@@ -1,15 +1,16 @@
 //! What `hairfit export` reads from a fit directory: the model family and its parameters
-//! (`params.json`, a Chiang file when tagged `"model": "chiang"`), the fit's quality and channel
-//! names (`fit.json`, read loosely so both families' records serve), and the measured directions
-//! (`curves.csv`, one per sample).
+//! (`params.json`, a Chiang file when tagged `"model": "chiang"`), the fit's quality, channel
+//! names, switched-off terms and held parameters (`fit.json`, read loosely so both families'
+//! records serve), and the measured directions (`curves.csv`, one per sample).
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::chiang::{ChiangParamFile, ChiangParams};
+use crate::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
+use crate::family::ChiangRecord;
 use crate::files::{read_curves_csv, ParameterFile};
 use crate::model::{Angles, ModelConfig, Params};
 use crate::params::ParamFile;
@@ -21,7 +22,11 @@ pub const MAX_MEASURED_DIRECTIONS: usize = 20_000;
 /// The fitted model whose `S` a renderer must reproduce.
 #[derive(Debug, Clone)]
 pub enum SourceModel {
-    Chiang(ChiangParams<f64>),
+    /// A Chiang fit and the terms it ran with (a renderer always renders all four).
+    Chiang {
+        params: ChiangParams<f64>,
+        effects: ChiangEffects,
+    },
     Marschner {
         params: Params<f64>,
         config: ModelConfig,
@@ -32,7 +37,7 @@ impl SourceModel {
     /// `"Chiang"` or `"Marschner"`.
     pub fn name(&self) -> &'static str {
         match self {
-            SourceModel::Chiang(_) => "Chiang",
+            SourceModel::Chiang { .. } => "Chiang",
             SourceModel::Marschner { .. } => "Marschner",
         }
     }
@@ -40,7 +45,7 @@ impl SourceModel {
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
         match self {
-            SourceModel::Chiang(p) => p.sigma_a.len(),
+            SourceModel::Chiang { params, .. } => params.sigma_a.len(),
             SourceModel::Marschner { params, .. } => params.sigma_a.len(),
         }
     }
@@ -50,9 +55,13 @@ impl SourceModel {
         let n = self.n_channels();
         let mut out = vec![0.0; angles.len() * n];
         match self {
-            SourceModel::Chiang(p) => {
-                let model = crate::chiang::ChiangModel::default();
-                crate::chiang::scattering_batch(p, &model, angles, &mut out);
+            SourceModel::Chiang { params, effects } => {
+                // The fit's terms (its S), at the default width rule (the renderer's reference).
+                let model = ChiangModel {
+                    effects: *effects,
+                    ..ChiangModel::default()
+                };
+                crate::chiang::scattering_batch(params, &model, angles, &mut out);
             }
             SourceModel::Marschner { params, config } => {
                 for (a, row) in angles.iter().zip(out.chunks_mut(n)) {
@@ -79,6 +88,9 @@ pub struct SourceFit {
     pub measured: Vec<Angles>,
     /// Where the measured directions came from, or why there are none.
     pub measured_from: String,
+    /// Parameters the fit did not vary or the data did not determine, one phrase each
+    /// (`beta_n = 0.3 (held: ...)`): the renderer gets these values all the same.
+    pub held: Vec<String>,
 }
 
 impl SourceFit {
@@ -95,9 +107,15 @@ impl SourceFit {
             "fit.json is written by `hairfit fit` — re-run the fit to regenerate it",
         )?;
         let model = match tag.as_deref() {
-            Some("chiang") => SourceModel::Chiang(
-                ChiangParamFile::from_json_str(&text, &params_path)?.to_params(),
-            ),
+            Some("chiang") => SourceModel::Chiang {
+                params: ChiangParamFile::from_json_str(&text, &params_path)?.to_params(),
+                // A fit.json without the record predates term switches: all four were on.
+                effects: fit
+                    .get("chiang")
+                    .and_then(|r| serde_json::from_value::<ChiangRecord>(r.clone()).ok())
+                    .map(|r| r.effects)
+                    .unwrap_or_default(),
+            },
             None | Some("marschner") => {
                 let mut value: Value = serde_json::from_str(&text).map_err(|e| {
                     Error::input(
@@ -190,6 +208,7 @@ impl SourceFit {
             quality: quality_line(&fit),
             measured,
             measured_from,
+            held: held_parameters(&fit),
         })
     }
 
@@ -206,6 +225,49 @@ impl SourceFit {
             ))),
         }
     }
+}
+
+/// fit.json's parameters that were not free or not determined, with why:
+/// `alpha_deg = -2 (fixed by --fix)`, `eta = 1.55 (not varied: default)`,
+/// `beta_n = 0.3 (not varied: the terms in play do not depend on it)`, `sigma_a[0] = 50 (at a bound)`.
+fn held_parameters(fit: &Value) -> Vec<String> {
+    let Some(entries) = fit.get("parameters").and_then(Value::as_array) else {
+        return Vec::new();
+    };
+    let fixed_by_user = fit.pointer("/options/fixed").and_then(Value::as_object);
+    let not_in_play: Vec<&str> = fit
+        .get("warnings")
+        .and_then(Value::as_array)
+        .map(|w| {
+            w.iter()
+                .filter_map(Value::as_str)
+                .filter(|t| t.contains("not fitted (the terms in play do not depend on it)"))
+                .filter_map(|t| t.split(':').next())
+                .collect()
+        })
+        .unwrap_or_default();
+    entries
+        .iter()
+        .filter_map(|e| {
+            let name = e.get("name")?.as_str()?;
+            let value = e
+                .get("value")
+                .and_then(Value::as_f64)
+                .map_or("null".to_string(), |v| format!("{v}"));
+            let why = match e.get("status")?.as_str()? {
+                "free" => return None,
+                "fixed" if fixed_by_user.is_some_and(|m| m.contains_key(name)) => "fixed by --fix",
+                "fixed" if not_in_play.contains(&name) => {
+                    "not varied: the terms in play do not depend on it"
+                }
+                "fixed" => "not varied by default",
+                "at_bound" => "at a bound of the fit's range",
+                "undetermined" => "not determined by the data",
+                _ => return None,
+            };
+            Some(format!("{name} = {value} ({why})"))
+        })
+        .collect()
 }
 
 /// `status converged, rms 0.0201, reduced chi2 1.02 (log space, dof 2332)` from fit.json.

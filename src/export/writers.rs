@@ -12,8 +12,10 @@ pub fn header_lines(
     renderer: Renderer,
     mapping: &Mapping,
     channels: &[String],
+    warnings: &[String],
 ) -> Vec<String> {
-    let mut lines = vec![
+    let mut lines: Vec<String> = warnings.iter().map(|w| format!("WARNING: {w}")).collect();
+    lines.extend([
         format!("hairfit export: {}", renderer.model_name()),
         format!(
             "source fit: {} ({} model{})",
@@ -29,7 +31,13 @@ pub fn header_lines(
         format!("fit quality: {}", source.quality),
         format!("mapping: {}", mapping.quality_text()),
         format!("measured directions: {}", source.measured_from),
-    ];
+    ]);
+    if matches!(source.model, super::SourceModel::Chiang { .. }) && !source.held.is_empty() {
+        lines.push(format!(
+            "held by the fit, not fitted from the data: {}",
+            source.held.join(", ")
+        ));
+    }
     lines.push(if channels.len() == 1 {
         format!("colour: one channel ({}) written as grey RGB", channels[0])
     } else {

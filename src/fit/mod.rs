@@ -263,6 +263,7 @@ pub fn fit(
             load_report,
             opts,
             forward: &forward,
+            screening: None,
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
@@ -321,6 +322,9 @@ pub struct FitRun<'a, F: Forward> {
     pub load_report: LoadReport,
     pub opts: &'a FitOptions,
     pub forward: &'a F,
+    /// A cheaper forward for the multi-start stages on the subsample, which only look for basins
+    /// (the polish, intervals and everything reported use `forward`); None: `forward`.
+    pub screening: Option<&'a F>,
     /// Fixed values (and start values of the free ones).
     pub base: ParamSet<F>,
     pub free: Vec<F::Param>,
@@ -356,6 +360,18 @@ pub fn fit_with<F: Forward>(
             run.free.clone(),
         )
     };
+    let screening = run.screening.unwrap_or(forward);
+    let sub_evaluator = |d: &FitData, loss: Loss, loss_scale: f64| {
+        Evaluator::new(
+            screening,
+            d,
+            opts.space,
+            loss,
+            loss_scale,
+            run.base.clone(),
+            run.free.clone(),
+        )
+    };
     let (mut ev_full, floored) = evaluator(data, opts.loss, 1.0)?;
     stages::warn_floored(data, &floored, &mut warnings);
     let sub_idx = design::subsample(
@@ -364,7 +380,7 @@ pub fn fit_with<F: Forward>(
         opts.seed ^ 0x5b5b_0000_0001,
     );
     let sub_data = data.subset(&sub_idx);
-    let (mut ev_sub, _) = evaluator(&sub_data, opts.loss, 1.0)?;
+    let (mut ev_sub, _) = sub_evaluator(&sub_data, opts.loss, 1.0)?;
 
     let ranges: Vec<(f64, f64)> = run.free.iter().map(|&p| p.typical_range()).collect();
     let mut starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
@@ -378,7 +394,7 @@ pub fn fit_with<F: Forward>(
         LossScale::Fixed(c) => c,
         LossScale::Auto if !auto_scale => 1.0,
         LossScale::Auto => {
-            let (ev_l2, _) = evaluator(&sub_data, Loss::L2, 1.0)?;
+            let (ev_l2, _) = sub_evaluator(&sub_data, Loss::L2, 1.0)?;
             let (runs, order) =
                 stages::multistart_as("loss-scale-l2", &ev_l2, &starts, opts, &bar, &mut log);
             let e = ev_l2.eval_internal(&runs[order[0]].u, false);
