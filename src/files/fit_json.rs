@@ -298,6 +298,8 @@ pub struct Floored {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OptionsRecord {
+    /// How much of the curves `curves.csv` holds (`--curves`; absent in older files: full).
+    pub curves: super::curves::CurvesMode,
     /// `auto`, `all` or `explicit`: how the effects were chosen.
     pub effects_choice: String,
     /// Why each lobe/effect is on or off.
@@ -430,7 +432,7 @@ mod tests {
         let mut sorted = written.clone();
         sorted.sort();
         assert_eq!(written, sorted);
-        assert_eq!(written.len(), 23);
+        assert_eq!(written.len(), 24);
     }
 
     /// A fit.json written before the load report was typed (the demo's five fields) still reads.

@@ -383,6 +383,7 @@ pub fn options_record(
     floored: Floored,
 ) -> OptionsRecord {
     OptionsRecord {
+        curves: opts.curves,
         effects_choice: choice.effects_choice.into(),
         effects_reasons: choice.reasons.clone(),
         fixed: set

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::files::CurveRow;
+use crate::files::{CurveRow, Curves};
 
 /// Fewest distinct swept values that make a slice worth drawing as a curve.
 pub const MIN_SLICE_POINTS: usize = 3;
@@ -115,6 +115,35 @@ pub fn collect_samples(rows: &[CurveRow]) -> Vec<Sample> {
             samples.len() - 1
         });
         samples[k].rows.push(i);
+    }
+    samples
+}
+
+/// The samples of a curves table, regrouped by sample id in order of first appearance (as
+/// [`collect_samples`]; a fit's table has each sample's rows together, so this is one pass).
+pub fn samples_of(curves: &Curves) -> Vec<Sample> {
+    let mut index: std::collections::HashMap<u64, usize> =
+        std::collections::HashMap::with_capacity(curves.n_samples());
+    let mut samples: Vec<Sample> = Vec::with_capacity(curves.n_samples());
+    let mut last: Option<(usize, usize)> = None;
+    for r in 0..curves.len() {
+        let s = curves.sample_of(r);
+        let k = match last {
+            Some((table, k)) if table == s => k,
+            _ => {
+                let id = curves.sample_id[s];
+                *index.entry(id).or_insert_with(|| {
+                    samples.push(Sample {
+                        id,
+                        angles: curves.sample_angles[s],
+                        rows: Vec::new(),
+                    });
+                    samples.len() - 1
+                })
+            }
+        };
+        last = Some((s, k));
+        samples[k].rows.push(r);
     }
     samples
 }
