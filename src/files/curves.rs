@@ -367,65 +367,50 @@ impl Curves {
             }
         }
         let mut c = Curves::default();
-        let mut record = csv::ByteRecord::new();
+        // Records are read in batches (the csv parser is sequential) and their numbers parsed
+        // in parallel; samples and channels are then assigned in file order.
+        const READ_BATCH: usize = 1 << 15;
+        let mut pool: Vec<csv::ByteRecord> = Vec::new();
+        let mut parsed: Vec<Result<ParsedRow>> = Vec::new();
         let mut last_channel = usize::MAX;
-        while reader
-            .read_byte_record(&mut record)
-            .map_err(|e| csv_error(path, e))?
-        {
-            let line = record.position().map_or(0, |p| p.line());
-            let bad = |col: usize, what: &str| {
-                Error::input(
-                    path,
-                    line,
-                    col as u64 + 1,
-                    format!(
-                        "`{}` in column `{}` is not {what}; curves.csv is written by `hairfit fit` — re-run the fit",
-                        String::from_utf8_lossy(record.get(col).unwrap_or_default()),
-                        CURVES_HEADER[col]
-                    ),
-                )
-            };
-            let text = |col: usize| std::str::from_utf8(record.get(col).unwrap_or_default()).ok();
-            let int = |col: usize| {
-                text(col)
-                    .and_then(|t| t.parse::<u64>().ok())
-                    .ok_or_else(|| bad(col, "an unsigned integer"))
-            };
-            let number = |col: usize| {
-                text(col)
-                    .and_then(|t| t.parse::<f64>().ok())
-                    .ok_or_else(|| bad(col, "a number"))
-            };
-            // Empty cells are numbers the fit could not compute.
-            let optional = |col: usize| match record.get(col) {
-                Some(b"") | None => Ok(f64::NAN),
-                _ => number(col),
-            };
-            let (id, data_line) = (int(0)?, int(1)?);
-            let channel = text(2).ok_or_else(|| bad(2, "UTF-8 text"))?;
-            let ch = if c.channels.get(last_channel).map(String::as_str) == Some(channel) {
-                last_channel
-            } else {
-                c.channel_index(channel)
-            };
-            last_channel = ch;
-            let angles = [number(3)?, number(4)?, number(5)?, number(6)?];
-            let values = CurveValues {
-                data: optional(7)?,
-                sigma: optional(8)?,
-                fit: optional(9)?,
-                fit_r: optional(10)?,
-                fit_tt: optional(11)?,
-                fit_trt: optional(12)?,
-                residual: optional(13)?,
-                weight: optional(14)?,
-            };
-            let s = match c.sample_id.len().checked_sub(1) {
-                Some(s) if c.sample_id[s] == id && c.sample_line[s] == data_line => s,
-                _ => c.push_sample(id, data_line, angles),
-            };
-            c.push_row(s, ch, values);
+        loop {
+            let mut filled = 0;
+            while filled < READ_BATCH {
+                if pool.len() == filled {
+                    pool.push(csv::ByteRecord::new());
+                }
+                if !reader
+                    .read_byte_record(&mut pool[filled])
+                    .map_err(|e| csv_error(path, e))?
+                {
+                    break;
+                }
+                filled += 1;
+            }
+            let records = &pool[..filled];
+            records
+                .par_iter()
+                .map(|r| parse_record(path, r))
+                .collect_into_vec(&mut parsed);
+            for (record, row) in records.iter().zip(parsed.drain(..)) {
+                let row = row?;
+                let channel = std::str::from_utf8(record.get(2).unwrap_or_default())
+                    .map_err(|_| field_error(path, record, 2, "UTF-8 text"))?;
+                let ch = if c.channels.get(last_channel).map(String::as_str) == Some(channel) {
+                    last_channel
+                } else {
+                    c.channel_index(channel)
+                };
+                last_channel = ch;
+                let s = match c.sample_id.len().checked_sub(1) {
+                    Some(s) if c.sample_id[s] == row.id && c.sample_line[s] == row.line => s,
+                    _ => c.push_sample(row.id, row.line, row.angles),
+                };
+                c.push_row(s, ch, row.values);
+            }
+            if filled < READ_BATCH {
+                break;
+            }
         }
         Ok(c)
     }
@@ -500,6 +485,63 @@ impl<'a> IntoIterator for &'a Curves {
     fn into_iter(self) -> Self::IntoIter {
         Box::new(self.iter())
     }
+}
+
+/// The numbers of one record of `curves.csv`.
+struct ParsedRow {
+    id: u64,
+    line: u64,
+    angles: [f64; 4],
+    values: CurveValues,
+}
+
+/// An input error at `record`'s line, column `col` (0-based) not being `what`.
+fn field_error(path: &Path, record: &csv::ByteRecord, col: usize, what: &str) -> Error {
+    Error::input(
+        path,
+        record.position().map_or(0, |p| p.line()),
+        col as u64 + 1,
+        format!(
+            "`{}` in column `{}` is not {what}; curves.csv is written by `hairfit fit` — re-run the fit",
+            String::from_utf8_lossy(record.get(col).unwrap_or_default()),
+            CURVES_HEADER[col]
+        ),
+    )
+}
+
+/// Parse the numbers of one record (angles required; empty value cells are NaN).
+fn parse_record(path: &Path, record: &csv::ByteRecord) -> Result<ParsedRow> {
+    let text = |col: usize| std::str::from_utf8(record.get(col).unwrap_or_default()).ok();
+    let int = |col: usize| {
+        text(col)
+            .and_then(|t| t.parse::<u64>().ok())
+            .ok_or_else(|| field_error(path, record, col, "an unsigned integer"))
+    };
+    let number = |col: usize| {
+        text(col)
+            .and_then(|t| t.parse::<f64>().ok())
+            .ok_or_else(|| field_error(path, record, col, "a number"))
+    };
+    // Empty cells are numbers the fit could not compute.
+    let optional = |col: usize| match record.get(col) {
+        Some(b"") | None => Ok(f64::NAN),
+        _ => number(col),
+    };
+    Ok(ParsedRow {
+        id: int(0)?,
+        line: int(1)?,
+        angles: [number(3)?, number(4)?, number(5)?, number(6)?],
+        values: CurveValues {
+            data: optional(7)?,
+            sigma: optional(8)?,
+            fit: optional(9)?,
+            fit_r: optional(10)?,
+            fit_tt: optional(11)?,
+            fit_trt: optional(12)?,
+            residual: optional(13)?,
+            weight: optional(14)?,
+        },
+    })
 }
 
 /// `text` as the csv writer writes it inside a record (quoted only when it must be).
