@@ -162,7 +162,7 @@ mod tests {
             100.0,
             1e21,
             1e22,
-            9.999999999999999e22,
+            f64::from_bits(0x44b5_2d02_c7e1_4af6), // 1e23, which has no exact double
         ];
         let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
         for _ in 0..1_000_000 {
