@@ -162,6 +162,16 @@ fn curves_io_speed_old_and_new() {
     let new_path = tmp.path().join("new.csv");
     curves.write_csv(&new_path, None).unwrap();
     eprintln!("new write: {:.2} s", t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    let keep = hairfit::report::summary_rows(&curves);
+    let summary_path = tmp.path().join("summary.csv");
+    curves.write_csv(&summary_path, Some(&keep)).unwrap();
+    eprintln!(
+        "summary: {:.2} s, {} rows, {} bytes",
+        t.elapsed().as_secs_f64(),
+        keep.len(),
+        std::fs::metadata(&summary_path).unwrap().len()
+    );
     drop(curves);
     let t = Instant::now();
     let rows: Vec<CurveRow> = csv::Reader::from_path(path)

@@ -190,6 +190,21 @@ impl Curves {
         self.sample_id.len() - 1
     }
 
+    /// The last sample if it is this one (same id, line and angles, as a fit's rows of one
+    /// sample are), else a new sample: a hand-made file's rows keep their own angles.
+    fn sample_for(&mut self, id: u64, line: u64, angles_deg: [f64; 4]) -> usize {
+        match self.sample_id.len().checked_sub(1) {
+            Some(s)
+                if self.sample_id[s] == id
+                    && self.sample_line[s] == line
+                    && self.sample_angles[s].map(f64::to_bits) == angles_deg.map(f64::to_bits) =>
+            {
+                s
+            }
+            _ => self.push_sample(id, line, angles_deg),
+        }
+    }
+
     /// Add a row of sample index `sample` in channel `channel` (an index into `channels`).
     pub fn push_row(&mut self, sample: usize, channel: usize, values: CurveValues) {
         self.row_sample.push(sample as u32);
@@ -269,12 +284,7 @@ impl Curves {
     pub fn from_rows(rows: &[CurveRow]) -> Curves {
         let mut c = Curves::default();
         for row in rows {
-            let s = match c.sample_id.last() {
-                Some(&id) if id == row.sample && c.sample_line.last() == Some(&row.line) => {
-                    c.sample_id.len() - 1
-                }
-                _ => c.push_sample(row.sample, row.line, row.angles_deg()),
-            };
+            let s = c.sample_for(row.sample, row.line, row.angles_deg());
             let ch = c.channel_index(&row.channel);
             c.push_row(
                 s,
@@ -402,10 +412,7 @@ impl Curves {
                     c.channel_index(channel)
                 };
                 last_channel = ch;
-                let s = match c.sample_id.len().checked_sub(1) {
-                    Some(s) if c.sample_id[s] == row.id && c.sample_line[s] == row.line => s,
-                    _ => c.push_sample(row.id, row.line, row.angles),
-                };
+                let s = c.sample_for(row.id, row.line, row.angles);
                 c.push_row(s, ch, row.values);
             }
             if filled < READ_BATCH {
@@ -708,6 +715,6 @@ mod tests {
         assert_eq!(c.len(), rows.len());
         assert_eq!(c.row(0).line, rows[rows.len() - 1].line);
         assert_eq!(c.row(0).sample, 0);
-        assert_eq!(c.row(2).channel, "");
+        assert_eq!(c.row(0).channel, "");
     }
 }

@@ -14,7 +14,17 @@ struct Decimal {
 
 impl Decimal {
     fn of(v: f64, buf: &mut ryu::Buffer) -> Decimal {
-        let text = buf.format_finite(v).as_bytes();
+        let d = Decimal::parse(buf.format_finite(v).as_bytes());
+        // Ryu rounds a tie at the 17th digit to even, `std` away from zero: those values
+        // (whose exact decimal ends right after the 17th digit with a 5) take std's digits.
+        if d.len == 17 && tie_possible(v) {
+            return Decimal::parse(format!("{v:e}").as_bytes());
+        }
+        d
+    }
+
+    /// Digits and exponent of a decimal text (`-1.25e-7`, `123.5`, `0.0`).
+    fn parse(text: &[u8]) -> Decimal {
         let (negative, text) = match text.split_first() {
             Some((b'-', rest)) => (true, rest),
             _ => (false, text),
@@ -66,6 +76,32 @@ impl Decimal {
             d.exp = point - 1 + e;
         }
         d
+    }
+}
+
+/// Whether `v`'s exact decimal expansion can end with a 5 just after a 17th significant
+/// digit (the only place shortest round-trip digits can be a tie): it has exactly 18
+/// significant digits, so `v = m·2^e` with `m·5^-e < 10^18`, or is an integer of 18 or more.
+fn tie_possible(v: f64) -> bool {
+    let bits = v.abs().to_bits();
+    let biased = (bits >> 52) as i32;
+    let fraction = bits & ((1u64 << 52) - 1);
+    let (mut m, mut e) = if biased == 0 {
+        (fraction, -1074)
+    } else {
+        (fraction | (1u64 << 52), biased - 1075)
+    };
+    if m == 0 {
+        return false;
+    }
+    let zeros = m.trailing_zeros();
+    m >>= zeros;
+    e += zeros as i32;
+    if e >= 0 {
+        v.abs() >= 1e17
+    } else {
+        let k = e.unsigned_abs();
+        k <= 26 && u128::from(m) * 5u128.pow(k) < 10u128.pow(18)
     }
 }
 
@@ -163,6 +199,8 @@ mod tests {
             1e21,
             1e22,
             f64::from_bits(0x44b5_2d02_c7e1_4af6), // 1e23, which has no exact double
+            1658206780088562.2,                    // exact ...562.25: a tie at the 17th digit
+            2f64.powi(-25),                        // exact 2.98023223876953125e-8: a tie too
         ];
         let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
         for _ in 0..1_000_000 {
