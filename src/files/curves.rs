@@ -644,14 +644,16 @@ mod tests {
         for (i, &v) in values.iter().enumerate() {
             for (c, name) in ["r", "g,\"b\"", ""].iter().enumerate() {
                 let w = values[(i + c) % values.len()];
+                // Angles are the sample's (finite: the data's); values vary per channel.
+                let finite_or_zero = |x: f64| if x.is_finite() { x } else { 0.0 };
                 rows.push(CurveRow {
                     sample: i as u64,
                     line: 10 * i as u64 + 2,
                     channel: (*name).into(),
-                    theta_i: v,
+                    theta_i: finite_or_zero(v),
                     phi_i: -170.0,
                     theta_r: 1e-7 * i as f64,
-                    phi_r: w,
+                    phi_r: finite_or_zero(values[(i + 1) % values.len()]),
                     data: w,
                     sigma: (c == 1).then_some(v),
                     fit: v * 3.0,
@@ -715,6 +717,7 @@ mod tests {
         assert_eq!(c.len(), rows.len());
         assert_eq!(c.row(0).line, rows[rows.len() - 1].line);
         assert_eq!(c.row(0).sample, 0);
-        assert_eq!(c.row(0).channel, "");
+        assert_eq!(c.row(0).channel, "r");
+        assert_eq!(c.row(2).channel, "");
     }
 }

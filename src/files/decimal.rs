@@ -15,9 +15,9 @@ struct Decimal {
 impl Decimal {
     fn of(v: f64, buf: &mut ryu::Buffer) -> Decimal {
         let d = Decimal::parse(buf.format_finite(v).as_bytes());
-        // Ryu rounds a tie at the 17th digit to even, `std` away from zero: those values
-        // (whose exact decimal ends right after the 17th digit with a 5) take std's digits.
-        if d.len == 17 && tie_possible(v) {
+        // Ryu rounds a tie at the 16th/17th digit to even, `std` away from zero: those values
+        // (whose exact decimal ends with a 5 right after those digits) take std's digits.
+        if d.len >= 16 && tie_possible(v) {
             return Decimal::parse(format!("{v:e}").as_bytes());
         }
         d
@@ -79,9 +79,10 @@ impl Decimal {
     }
 }
 
-/// Whether `v`'s exact decimal expansion can end with a 5 just after a 17th significant
-/// digit (the only place shortest round-trip digits can be a tie): it has exactly 18
-/// significant digits, so `v = m·2^e` with `m·5^-e < 10^18`, or is an integer of 18 or more.
+/// Whether `v`'s exact decimal expansion can end with a 5 just after a 16th or 17th
+/// significant digit (the only places where two shortest candidates are equally near: the
+/// spacing of doubles reaches a unit of the 16th digit): it has at most 18 significant digits,
+/// so `v = m·2^e` with `m·5^-e < 10^18`, or is an integer of 16 digits or more.
 fn tie_possible(v: f64) -> bool {
     let bits = v.abs().to_bits();
     let biased = (bits >> 52) as i32;
@@ -98,7 +99,7 @@ fn tie_possible(v: f64) -> bool {
     m >>= zeros;
     e += zeros as i32;
     if e >= 0 {
-        v.abs() >= 1e17
+        v.abs() >= 1e15
     } else {
         let k = e.unsigned_abs();
         k <= 26 && u128::from(m) * 5u128.pow(k) < 10u128.pow(18)
@@ -199,8 +200,9 @@ mod tests {
             1e21,
             1e22,
             f64::from_bits(0x44b5_2d02_c7e1_4af6), // 1e23, which has no exact double
-            1658206780088562.2,                    // exact ...562.25: a tie at the 17th digit
-            2f64.powi(-25),                        // exact 2.98023223876953125e-8: a tie too
+            6632827120354249.0 / 4.0, // exact 1658206780088562.25: a tie at the 17th digit
+            2651745884931749.0 / 4.0, // exact 662936471232937.25: a tie at the 16th digit
+            2f64.powi(-25),           // exact 2.98023223876953125e-8: a tie too
         ];
         let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
         for _ in 0..1_000_000 {
