@@ -275,13 +275,16 @@ pub fn publish_fit<P>(
 ) -> Result<PublishedFit<P>> {
     let set = OutputSet::begin(out, command, force, inputs)?;
     let outcome = produce(set.staging())?;
-    crate::fit::write_outputs(set.staging(), &outcome)?;
+    // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
+    let curves = crate::fit::written_curves(&outcome);
+    crate::fit::write_outputs_with(set.staging(), &outcome, curves.as_deref())?;
     let drawn = crate::report::write_report_of(
         set.staging(),
         &outcome.json,
-        &outcome.curves,
+        curves.as_deref(),
         &crate::report::ReportOptions::default(),
     );
+    drop(curves);
     // Messages name the directory the user asked for, not the staging one.
     let report_error = drawn.err().map(|e| {
         e.to_string().replace(

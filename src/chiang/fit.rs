@@ -198,7 +198,7 @@ pub fn fit_chiang(
         },
         warnings,
     )?;
-    restore_order(&mut outcome.curves, &order, nc);
+    outcome.curves.restore_sample_order(&order);
     Ok(outcome)
 }
 
@@ -216,18 +216,4 @@ fn exit_direction_order(data: &FitData) -> Vec<usize> {
             .then(i.cmp(&j))
     });
     order
-}
-
-/// Curves of samples fitted in `order` back in the data's order, numbered as the data's.
-fn restore_order(curves: &mut Vec<crate::files::CurveRow>, order: &[usize], nc: usize) {
-    let mut back = vec![Vec::new(); order.len()];
-    for (j, rows) in std::mem::take(curves).chunks(nc).enumerate() {
-        back[order[j]] = rows.to_vec();
-    }
-    for (i, rows) in back.iter_mut().enumerate() {
-        for r in rows.iter_mut() {
-            r.sample = i as u64;
-        }
-    }
-    *curves = back.into_iter().flatten().collect();
 }

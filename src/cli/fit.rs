@@ -12,6 +12,7 @@ use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
 use crate::family::ModelFamily;
+use crate::files::CurvesMode;
 use crate::fit::{
     fit_data, fit_family, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
@@ -68,6 +69,12 @@ pub struct FitArgs {
     /// LM trial steps per polish run.
     #[arg(long, default_value_t = 300)]
     pub polish_iters: u64,
+    /// What curves.csv holds: `full` (every sample and channel), `summary` (the samples the
+    /// report draws, an even spread of a few thousand more, and every sample with a value the
+    /// robust loss down-weighted) or `none` (no curves.csv; the report then shows parameters
+    /// and verdict only). fit.json records the choice (`options.curves`).
+    #[arg(long, default_value = "full")]
+    pub curves: CurvesMode,
     /// Never show a progress bar.
     #[arg(long)]
     pub no_progress: bool,
@@ -167,6 +174,7 @@ impl FitArgs {
             intervals: self.intervals,
             family: self.model.family,
             chiang: self.model.chiang()?,
+            curves: self.curves,
         })
     }
 }

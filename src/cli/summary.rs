@@ -144,10 +144,12 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     }
     s += &format!("wall time {:.2} s", out.timing.wall_time_s);
     if let Some(d) = dir {
-        s += &format!(
-            "; wrote {}/{{fit.json,params.json,curves.csv}}",
-            d.display()
-        );
+        let curves = match j.options.curves {
+            crate::files::CurvesMode::Full => ",curves.csv",
+            crate::files::CurvesMode::Summary => ",curves.csv (summary)",
+            crate::files::CurvesMode::None => "",
+        };
+        s += &format!("; wrote {}/{{fit.json,params.json{curves}}}", d.display());
     }
     s.push('\n');
     s

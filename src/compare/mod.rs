@@ -156,7 +156,7 @@ fn summarise(
 ) -> ModelSummary {
     let j = &outcome.json;
     let k = j.options.free_parameters.len() + j.data.channels.len();
-    let (chi2, aic, bic) = criteria(&outcome.curves, k, sigma_known);
+    let (chi2, aic, bic) = criteria(&outcome.curves.to_rows(), k, sigma_known);
     let verdict = std::fs::read_to_string(dir.join("fit.json"))
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
@@ -279,7 +279,7 @@ pub fn compare(
 ) -> Result<Comparison> {
     let sigma_known = data.sigma.is_some();
     let [(m_out, m_dir), (c_out, c_dir)] = fits;
-    let (m, c) = (&m_out.curves, &c_out.curves);
+    let (m, c) = (&m_out.curves.to_rows(), &c_out.curves.to_rows());
     if m.len() != c.len()
         || m.iter()
             .zip(c)
@@ -374,7 +374,7 @@ pub fn compare_command(
         [(&outcomes[0], &m_dir), (&outcomes[1], &c_dir)],
     )?;
     comparison.save(&out.join("compare.json"))?;
-    let fig = figure::overlay(&outcomes[0].curves, &outcomes[1].curves);
+    let fig = figure::overlay(&outcomes[0].curves.to_rows(), &outcomes[1].curves.to_rows());
     let info = crate::plot::render(out, &fig)?;
     html::write_index(
         out,

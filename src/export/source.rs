@@ -11,7 +11,7 @@ use serde_json::Value;
 use crate::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
 use crate::family::ChiangRecord;
-use crate::files::{read_curves_csv, ParameterFile};
+use crate::files::{Curves, ParameterFile};
 use crate::model::{Angles, ModelConfig, Params};
 use crate::params::ParamFile;
 
@@ -161,12 +161,12 @@ impl SourceFit {
             .unwrap_or_else(|| (0..n).map(|c| format!("c{c}")).collect());
         let curves_path = dir.join("curves.csv");
         let (measured, measured_from) = if curves_path.exists() {
-            let rows = read_curves_csv(&curves_path)?;
+            let curves = Curves::read_csv(&curves_path)?;
             let mut seen = BTreeSet::new();
             let mut out = Vec::new();
-            for row in &rows {
-                if seen.insert(row.sample) {
-                    let [ti, pi, tr, pr] = row.angles_deg();
+            for (&id, angles) in curves.sample_id.iter().zip(&curves.sample_angles) {
+                if seen.insert(id) {
+                    let [ti, pi, tr, pr] = *angles;
                     let a = Angles::from_degrees(ti, pi, tr, pr);
                     if a.validate().is_ok() {
                         out.push(a);

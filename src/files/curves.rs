@@ -1,14 +1,17 @@
-//! `curves.csv`: the fit at every sample, one row per sample and channel ([`CurveRow`]),
-//! written and read with the csv crate (cells quoted when they need it).
+//! `curves.csv`: the fit at every sample, one row per sample and channel. In memory the file is
+//! a [`Curves`] table (columns, channels by index, each sample's angles once), written in
+//! parallel-formatted chunks as it streams to disk and read with byte records; [`CurveRow`] is
+//! one row as a value (and, through serde, the reference definition of every cell's text).
+//! [`CurvesMode`] says how much of the table a fit writes (`--curves`).
 
 use std::path::Path;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::nan_if_missing;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-
 /// One row of `curves.csv`: one sample in one channel, angles in degrees; `fit*` include the
 /// fitted scale (and the measurement's factor); `residual` is normalised in the fit's space;
 /// `weight` the final robust weight. Non-finite numbers are empty cells.
@@ -94,44 +97,481 @@ fn exponent_opt<S: serde::Serializer>(
     exponent(&v.unwrap_or(f64::NAN), s)
 }
 
-/// Read every row of `curves.csv`, checking the header; errors name line and column.
-pub fn read_curves_csv(path: &Path) -> Result<Vec<CurveRow>> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| csv_error(path, e))?;
-    let header = reader.headers().map_err(|e| csv_error(path, e))?.clone();
-    for (col, expected) in CURVES_HEADER.iter().enumerate() {
-        if header.get(col).map(str::trim) != Some(*expected) {
-            return Err(Error::input(
-                path,
-                1,
-                col as u64 + 1,
-                format!(
-                    "expected column `{expected}` here; curves.csv's header is `{}`",
-                    CURVES_HEADER.join(",")
-                ),
-            ));
-        }
-    }
-    let mut rows = Vec::new();
-    for record in reader.deserialize::<CurveRow>() {
-        rows.push(record.map_err(|e| csv_error(path, e))?);
-    }
-    Ok(rows)
+/// How much of the curves a fit writes (`--curves`, recorded in fit.json's options).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CurvesMode {
+    /// Every sample and channel.
+    #[default]
+    Full,
+    /// The samples the report draws, an even spread of the rest and every sample with a
+    /// down-weighted value (all of its channels), at most a few thousand samples plus those.
+    Summary,
+    /// No curves.csv at all.
+    None,
 }
 
-/// Write `curves.csv` atomically: [`CURVES_HEADER`], then one record per row.
-pub fn write_curves_csv(path: &Path, rows: &[CurveRow]) -> Result<()> {
-    write_atomically(path, |w| {
-        let mut writer = csv::WriterBuilder::new().has_headers(false).from_writer(w);
-        writer
-            .write_record(CURVES_HEADER)
-            .map_err(|e| csv_error(path, e))?;
-        for row in rows {
-            writer.serialize(row).map_err(|e| csv_error(path, e))?;
+impl std::fmt::Display for CurvesMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CurvesMode::Full => "full",
+            CurvesMode::Summary => "summary",
+            CurvesMode::None => "none",
+        })
+    }
+}
+
+impl std::str::FromStr for CurvesMode {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "full" => Ok(CurvesMode::Full),
+            "summary" => Ok(CurvesMode::Summary),
+            "none" => Ok(CurvesMode::None),
+            other => Err(Error::Other(format!(
+                "unknown curves mode `{other}`: use full, summary or none"
+            ))),
         }
-        writer.flush().map_err(|e| Error::io(path, e))
+    }
+}
+
+/// The numbers of one row of [`Curves`] (`sigma` NaN when unknown, an empty cell).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveValues {
+    pub data: f64,
+    pub sigma: f64,
+    pub fit: f64,
+    pub fit_r: f64,
+    pub fit_tt: f64,
+    pub fit_trt: f64,
+    pub residual: f64,
+    pub weight: f64,
+}
+
+/// `curves.csv` in memory: the samples (id, data line, angles in degrees) once each, and per
+/// row its sample, its channel (an index into `channels`) and its numbers. About 72 bytes a
+/// row plus 48 a sample, against ~180 for a [`CurveRow`] with its own channel `String`.
+#[derive(Debug, Clone, Default)]
+pub struct Curves {
+    pub channels: Vec<String>,
+    pub sample_id: Vec<u64>,
+    pub sample_line: Vec<u64>,
+    pub sample_angles: Vec<[f64; 4]>,
+    pub row_sample: Vec<u32>,
+    pub row_channel: Vec<u32>,
+    pub values: Vec<CurveValues>,
+}
+
+/// Rows formatted per parallel task, and tasks per batch handed to the writer: a batch is a
+/// few MB of text whatever the file's size.
+const ROWS_PER_CHUNK: usize = 4096;
+const CHUNKS_PER_BATCH: usize = 16;
+
+impl Curves {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+
+    /// Number of samples (runs of rows with one sample id).
+    pub fn n_samples(&self) -> usize {
+        self.sample_id.len()
+    }
+
+    /// Add a sample; returns its index for [`Curves::push_row`].
+    pub fn push_sample(&mut self, id: u64, line: u64, angles_deg: [f64; 4]) -> usize {
+        self.sample_id.push(id);
+        self.sample_line.push(line);
+        self.sample_angles.push(angles_deg);
+        self.sample_id.len() - 1
+    }
+
+    /// The last sample if it is this one (same id, line and angles, as a fit's rows of one
+    /// sample are), else a new sample: a hand-made file's rows keep their own angles.
+    fn sample_for(&mut self, id: u64, line: u64, angles_deg: [f64; 4]) -> usize {
+        match self.sample_id.len().checked_sub(1) {
+            Some(s)
+                if self.sample_id[s] == id
+                    && self.sample_line[s] == line
+                    && self.sample_angles[s].map(f64::to_bits) == angles_deg.map(f64::to_bits) =>
+            {
+                s
+            }
+            _ => self.push_sample(id, line, angles_deg),
+        }
+    }
+
+    /// Add a row of sample index `sample` in channel `channel` (an index into `channels`).
+    pub fn push_row(&mut self, sample: usize, channel: usize, values: CurveValues) {
+        self.row_sample.push(sample as u32);
+        self.row_channel.push(channel as u32);
+        self.values.push(values);
+    }
+
+    /// The index of channel `name`, added when new.
+    pub fn channel_index(&mut self, name: &str) -> usize {
+        match self.channels.iter().position(|c| c == name) {
+            Some(k) => k,
+            None => {
+                self.channels.push(name.to_owned());
+                self.channels.len() - 1
+            }
+        }
+    }
+
+    /// The sample index of row `r`.
+    pub fn sample_of(&self, r: usize) -> usize {
+        self.row_sample[r] as usize
+    }
+
+    /// `[θ_i, φ_i, θ_r, φ_r]` of row `r` in degrees.
+    pub fn angles_deg(&self, r: usize) -> [f64; 4] {
+        self.sample_angles[self.sample_of(r)]
+    }
+
+    pub fn channel_name(&self, r: usize) -> &str {
+        &self.channels[self.row_channel[r] as usize]
+    }
+
+    pub fn sigma(&self, r: usize) -> Option<f64> {
+        let s = self.values[r].sigma;
+        (!s.is_nan()).then_some(s)
+    }
+
+    /// See [`CurveRow::down_weighted`].
+    pub fn down_weighted(&self, r: usize) -> bool {
+        self.values[r].weight < DOWN_WEIGHT
+    }
+
+    /// Row `r` as a value.
+    pub fn row(&self, r: usize) -> CurveRow {
+        let s = self.sample_of(r);
+        let [theta_i, phi_i, theta_r, phi_r] = self.sample_angles[s];
+        let v = &self.values[r];
+        CurveRow {
+            sample: self.sample_id[s],
+            line: self.sample_line[s],
+            channel: self.channel_name(r).to_owned(),
+            theta_i,
+            phi_i,
+            theta_r,
+            phi_r,
+            data: v.data,
+            sigma: self.sigma(r),
+            fit: v.fit,
+            fit_r: v.fit_r,
+            fit_tt: v.fit_tt,
+            fit_trt: v.fit_trt,
+            residual: v.residual,
+            weight: v.weight,
+        }
+    }
+
+    /// Every row as a value, in order (allocates a channel name per row: small tables only).
+    pub fn iter(&self) -> impl Iterator<Item = CurveRow> + '_ {
+        (0..self.len()).map(|r| self.row(r))
+    }
+
+    pub fn to_rows(&self) -> Vec<CurveRow> {
+        self.iter().collect()
+    }
+
+    /// The table of `rows`; consecutive rows with one sample id share the sample.
+    pub fn from_rows(rows: &[CurveRow]) -> Curves {
+        let mut c = Curves::default();
+        for row in rows {
+            let s = c.sample_for(row.sample, row.line, row.angles_deg());
+            let ch = c.channel_index(&row.channel);
+            c.push_row(
+                s,
+                ch,
+                CurveValues {
+                    data: row.data,
+                    sigma: row.sigma.unwrap_or(f64::NAN),
+                    fit: row.fit,
+                    fit_r: row.fit_r,
+                    fit_tt: row.fit_tt,
+                    fit_trt: row.fit_trt,
+                    residual: row.residual,
+                    weight: row.weight,
+                },
+            );
+        }
+        c
+    }
+
+    /// The rows `rows` (indices in order) as a table of their own.
+    pub fn select(&self, rows: &[usize]) -> Curves {
+        let mut c = Curves {
+            channels: self.channels.clone(),
+            ..Curves::default()
+        };
+        let mut last: Option<(usize, usize)> = None;
+        for &r in rows {
+            let s = self.sample_of(r);
+            let new_s = match last {
+                Some((old, new)) if old == s => new,
+                _ => c.push_sample(
+                    self.sample_id[s],
+                    self.sample_line[s],
+                    self.sample_angles[s],
+                ),
+            };
+            last = Some((s, new_s));
+            c.push_row(new_s, self.row_channel[r] as usize, self.values[r]);
+        }
+        c
+    }
+
+    /// Put samples fitted in `order` (sample `j` of the table is sample `order[j]` of the data)
+    /// back in the data's order, numbered as the data's.
+    pub fn restore_sample_order(&mut self, order: &[usize]) {
+        let n = self.n_samples();
+        let mut first = vec![usize::MAX; n];
+        let mut count = vec![0usize; n];
+        for (r, &s) in self.row_sample.iter().enumerate() {
+            let s = s as usize;
+            first[s] = first[s].min(r);
+            count[s] += 1;
+        }
+        let mut back = vec![usize::MAX; order.len()];
+        for (j, &i) in order.iter().enumerate() {
+            back[i] = j;
+        }
+        let mut out = Curves {
+            channels: std::mem::take(&mut self.channels),
+            ..Curves::default()
+        };
+        for (i, &j) in back.iter().enumerate() {
+            if j >= n {
+                continue;
+            }
+            let s = out.push_sample(i as u64, self.sample_line[j], self.sample_angles[j]);
+            let start = first[j];
+            for r in start..start + count[j] {
+                out.push_row(s, self.row_channel[r] as usize, self.values[r]);
+            }
+        }
+        *self = out;
+    }
+
+    /// Read `curves.csv` with byte records, checking the header; errors name line and column.
+    pub fn read_csv(path: &Path) -> Result<Curves> {
+        let mut reader = csv::Reader::from_path(path).map_err(|e| csv_error(path, e))?;
+        let header = reader.headers().map_err(|e| csv_error(path, e))?.clone();
+        for (col, expected) in CURVES_HEADER.iter().enumerate() {
+            if header.get(col).map(str::trim) != Some(*expected) {
+                return Err(Error::input(
+                    path,
+                    1,
+                    col as u64 + 1,
+                    format!(
+                        "expected column `{expected}` here; curves.csv's header is `{}`",
+                        CURVES_HEADER.join(",")
+                    ),
+                ));
+            }
+        }
+        let mut c = Curves::default();
+        // Records are read in batches (the csv parser is sequential) and their numbers parsed
+        // in parallel; samples and channels are then assigned in file order.
+        const READ_BATCH: usize = 1 << 15;
+        let mut pool: Vec<csv::ByteRecord> = Vec::new();
+        let mut parsed: Vec<Result<ParsedRow>> = Vec::new();
+        let mut last_channel = usize::MAX;
+        loop {
+            let mut filled = 0;
+            while filled < READ_BATCH {
+                if pool.len() == filled {
+                    pool.push(csv::ByteRecord::new());
+                }
+                if !reader
+                    .read_byte_record(&mut pool[filled])
+                    .map_err(|e| csv_error(path, e))?
+                {
+                    break;
+                }
+                filled += 1;
+            }
+            let records = &pool[..filled];
+            records
+                .par_iter()
+                .map(|r| parse_record(path, r))
+                .collect_into_vec(&mut parsed);
+            for (record, row) in records.iter().zip(parsed.drain(..)) {
+                let row = row?;
+                let channel = std::str::from_utf8(record.get(2).unwrap_or_default())
+                    .map_err(|_| field_error(path, record, 2, "UTF-8 text"))?;
+                let ch = if c.channels.get(last_channel).map(String::as_str) == Some(channel) {
+                    last_channel
+                } else {
+                    c.channel_index(channel)
+                };
+                last_channel = ch;
+                let s = c.sample_for(row.id, row.line, row.angles);
+                c.push_row(s, ch, row.values);
+            }
+            if filled < READ_BATCH {
+                break;
+            }
+        }
+        Ok(c)
+    }
+
+    /// Write `curves.csv` atomically: [`CURVES_HEADER`], then the rows `only` (indices in
+    /// order) or every row. Rows are formatted in parallel chunks and streamed to the file a
+    /// batch at a time; the text is exactly [`CurveRow`]'s serde form.
+    pub fn write_csv(&self, path: &Path, only: Option<&[usize]>) -> Result<()> {
+        let channels: Vec<Vec<u8>> = self.channels.iter().map(|c| csv_field(c)).collect();
+        let n = only.map_or(self.len(), <[usize]>::len);
+        let row_at = |k: usize| only.map_or(k, |o| o[k]);
+        write_atomically(path, |w| {
+            let mut text = CURVES_HEADER.join(",").into_bytes();
+            text.push(b'\n');
+            w.write_all(&text).map_err(|e| Error::io(path, e))?;
+            let batch = ROWS_PER_CHUNK * CHUNKS_PER_BATCH;
+            for start in (0..n).step_by(batch.max(1)) {
+                let end = (start + batch).min(n);
+                let chunks: Vec<Vec<u8>> = (start..end)
+                    .step_by(ROWS_PER_CHUNK)
+                    .collect::<Vec<_>>()
+                    .into_par_iter()
+                    .map(|from| {
+                        let to = (from + ROWS_PER_CHUNK).min(end);
+                        let mut out = Vec::with_capacity((to - from) * 200);
+                        let mut buf = ryu::Buffer::new();
+                        for k in from..to {
+                            self.format_row(row_at(k), &channels, &mut out, &mut buf);
+                        }
+                        out
+                    })
+                    .collect();
+                for chunk in &chunks {
+                    w.write_all(chunk).map_err(|e| Error::io(path, e))?;
+                }
+            }
+            w.flush().map_err(|e| Error::io(path, e))
+        })
+    }
+
+    /// Append row `r` as one line of text (`channels`: the names as csv fields).
+    fn format_row(&self, r: usize, channels: &[Vec<u8>], out: &mut Vec<u8>, buf: &mut ryu::Buffer) {
+        use super::decimal::{push_display, push_exponent, push_u64};
+        let s = self.sample_of(r);
+        push_u64(out, self.sample_id[s]);
+        out.push(b',');
+        push_u64(out, self.sample_line[s]);
+        out.push(b',');
+        out.extend_from_slice(&channels[self.row_channel[r] as usize]);
+        for &a in &self.sample_angles[s] {
+            out.push(b',');
+            if a.is_finite() {
+                push_display(out, a, buf);
+            }
+        }
+        let v = &self.values[r];
+        for x in [
+            v.data, v.sigma, v.fit, v.fit_r, v.fit_tt, v.fit_trt, v.residual, v.weight,
+        ] {
+            out.push(b',');
+            if x.is_finite() {
+                push_exponent(out, x, buf);
+            }
+        }
+        out.push(b'\n');
+    }
+}
+
+impl<'a> IntoIterator for &'a Curves {
+    type Item = CurveRow;
+    type IntoIter = Box<dyn Iterator<Item = CurveRow> + 'a>;
+    fn into_iter(self) -> Self::IntoIter {
+        Box::new(self.iter())
+    }
+}
+
+/// The numbers of one record of `curves.csv`.
+struct ParsedRow {
+    id: u64,
+    line: u64,
+    angles: [f64; 4],
+    values: CurveValues,
+}
+
+/// An input error at `record`'s line, column `col` (0-based) not being `what`.
+fn field_error(path: &Path, record: &csv::ByteRecord, col: usize, what: &str) -> Error {
+    Error::input(
+        path,
+        record.position().map_or(0, |p| p.line()),
+        col as u64 + 1,
+        format!(
+            "`{}` in column `{}` is not {what}; curves.csv is written by `hairfit fit` — re-run the fit",
+            String::from_utf8_lossy(record.get(col).unwrap_or_default()),
+            CURVES_HEADER[col]
+        ),
+    )
+}
+
+/// Parse the numbers of one record (angles required; empty value cells are NaN).
+fn parse_record(path: &Path, record: &csv::ByteRecord) -> Result<ParsedRow> {
+    let text = |col: usize| std::str::from_utf8(record.get(col).unwrap_or_default()).ok();
+    let int = |col: usize| {
+        text(col)
+            .and_then(|t| t.parse::<u64>().ok())
+            .ok_or_else(|| field_error(path, record, col, "an unsigned integer"))
+    };
+    let number = |col: usize| {
+        text(col)
+            .and_then(|t| t.parse::<f64>().ok())
+            .ok_or_else(|| field_error(path, record, col, "a number"))
+    };
+    // Empty cells are numbers the fit could not compute.
+    let optional = |col: usize| match record.get(col) {
+        Some(b"") | None => Ok(f64::NAN),
+        _ => number(col),
+    };
+    Ok(ParsedRow {
+        id: int(0)?,
+        line: int(1)?,
+        angles: [number(3)?, number(4)?, number(5)?, number(6)?],
+        values: CurveValues {
+            data: optional(7)?,
+            sigma: optional(8)?,
+            fit: optional(9)?,
+            fit_r: optional(10)?,
+            fit_tt: optional(11)?,
+            fit_trt: optional(12)?,
+            residual: optional(13)?,
+            weight: optional(14)?,
+        },
     })
 }
 
+/// `text` as the csv writer writes it inside a record (quoted only when it must be).
+fn csv_field(text: &str) -> Vec<u8> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    // A second field: a lone empty field would be quoted to tell it from an empty record.
+    w.write_record([text, "x"]).expect("writing to memory");
+    let mut bytes = w.into_inner().expect("writing to memory");
+    bytes.truncate(bytes.len() - ",x\n".len());
+    bytes
+}
+
+/// Read every row of `curves.csv`, checking the header; errors name line and column.
+pub fn read_curves_csv(path: &Path) -> Result<Vec<CurveRow>> {
+    Ok(Curves::read_csv(path)?.to_rows())
+}
+
+/// Write `rows` as `curves.csv` atomically (see [`Curves::write_csv`]).
+pub fn write_curves_csv(path: &Path, rows: &[CurveRow]) -> Result<()> {
+    Curves::from_rows(rows).write_csv(path, None)
+}
 /// A csv error as an input error at its 1-based line and column (field).
 fn csv_error(path: &Path, e: csv::Error) -> Error {
     let (line, column) = match e.kind() {
@@ -186,5 +626,98 @@ mod tests {
             lines.next().unwrap(),
             "0,2,\"r,g\",0,-170,1.5,2,1e0,,,5e-1,2.5e-1,2.5e-1,-1e-1,1e0"
         );
+    }
+
+    fn edge_rows() -> Vec<CurveRow> {
+        let mut rows = Vec::new();
+        let values = [
+            1.0,
+            -0.0,
+            2.43e-7,
+            f64::NAN,
+            f64::INFINITY,
+            123456.789,
+            -29.999999999999996,
+            1e300,
+            5e-324,
+        ];
+        for (i, &v) in values.iter().enumerate() {
+            for (c, name) in ["r", "g,\"b\"", ""].iter().enumerate() {
+                let w = values[(i + c) % values.len()];
+                // Angles are the sample's (finite: the data's); values vary per channel.
+                let finite_or_zero = |x: f64| if x.is_finite() { x } else { 0.0 };
+                rows.push(CurveRow {
+                    sample: i as u64,
+                    line: 10 * i as u64 + 2,
+                    channel: (*name).into(),
+                    theta_i: finite_or_zero(v),
+                    phi_i: -170.0,
+                    theta_r: 1e-7 * i as f64,
+                    phi_r: finite_or_zero(values[(i + 1) % values.len()]),
+                    data: w,
+                    sigma: (c == 1).then_some(v),
+                    fit: v * 3.0,
+                    fit_r: w,
+                    fit_tt: 0.25,
+                    fit_trt: -v,
+                    residual: w / 7.0,
+                    weight: if c == 2 { 0.2 } else { 1.0 },
+                });
+            }
+        }
+        rows
+    }
+
+    /// The streamed writer's bytes are exactly the csv crate's serde form of the rows (the
+    /// writer before streaming), including quoted channel names and empty non-finite cells.
+    #[test]
+    fn streamed_writer_is_byte_identical_to_the_serde_form() {
+        let rows = edge_rows();
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for r in &rows {
+            w.serialize(r).unwrap();
+        }
+        let expected = w.into_inner().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("curves.csv");
+        write_curves_csv(&path, &rows).unwrap();
+        assert_eq!(
+            String::from_utf8(std::fs::read(&path).unwrap()).unwrap(),
+            String::from_utf8(expected).unwrap()
+        );
+        // Read back: every finite number exactly, non-finite ones as NaN (empty cells).
+        let back = Curves::read_csv(&path).unwrap();
+        assert_eq!(back.len(), rows.len());
+        for (a, b) in back.iter().zip(&rows) {
+            assert_eq!(
+                (a.sample, a.line, &a.channel),
+                (b.sample, b.line, &b.channel)
+            );
+            let same = |x: f64, y: f64| x == y || (x.is_nan() && !y.is_finite());
+            assert!(same(a.data, b.data) && same(a.fit, b.fit) && same(a.fit_trt, b.fit_trt));
+            assert!(same(a.weight, b.weight) && same(a.residual, b.residual));
+        }
+        // A selection writes those rows only, whole.
+        write_curves_csv(&path, &rows).unwrap();
+        let all = Curves::read_csv(&path).unwrap();
+        all.write_csv(&path, Some(&[1, 5, 6])).unwrap();
+        let some = Curves::read_csv(&path).unwrap();
+        assert_eq!(some.len(), 3);
+        assert_eq!(some.row(1).sample, rows[5].sample);
+        assert_eq!(some.row(2).channel, rows[6].channel);
+    }
+
+    #[test]
+    fn restoring_the_sample_order_moves_whole_samples() {
+        let rows = edge_rows();
+        let mut c = Curves::from_rows(&rows);
+        let n = c.n_samples();
+        let order: Vec<usize> = (0..n).rev().collect();
+        c.restore_sample_order(&order);
+        assert_eq!(c.len(), rows.len());
+        assert_eq!(c.row(0).line, rows[rows.len() - 1].line);
+        assert_eq!(c.row(0).sample, 0);
+        assert_eq!(c.row(0).channel, "r");
+        assert_eq!(c.row(2).channel, "");
     }
 }

@@ -337,6 +337,8 @@ pub enum ScaleMethod {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OptionsRecord {
+    /// How much of the curves `curves.csv` holds (`--curves`; absent in older files: full).
+    pub curves: super::curves::CurvesMode,
     /// `auto`, `all` or `explicit`: how the effects were chosen.
     pub effects_choice: EffectsSource,
     /// Why each lobe/effect is on or off.
@@ -469,7 +471,7 @@ mod tests {
         let mut sorted = written.clone();
         sorted.sort();
         assert_eq!(written, sorted);
-        assert_eq!(written.len(), 23);
+        assert_eq!(written.len(), 24);
     }
 
     /// Every fit.json shipped under `fits/` reads into the typed options and writes them back

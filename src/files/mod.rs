@@ -6,6 +6,7 @@
 //! only, never on `fit` or `report` (both use it).
 
 pub mod curves;
+pub mod decimal;
 pub mod fit_json;
 pub mod load_report;
 pub mod timing;
@@ -20,7 +21,10 @@ use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 pub use crate::params::ParamFile;
 
-pub use curves::{read_curves_csv, write_curves_csv, CurveRow, CURVES_HEADER, DOWN_WEIGHT};
+pub use curves::{
+    read_curves_csv, write_curves_csv, CurveRow, CurveValues, Curves, CurvesMode, CURVES_HEADER,
+    DOWN_WEIGHT,
+};
 pub use fit_json::{
     ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource, FitJson, FitStatus,
     Floored, GofThresholds, GoodnessOfFit, Interval, OptionsRecord, ParamStatus, ParameterEntry,
@@ -102,18 +106,21 @@ fn json_error(path: &Path, e: serde_json::Error, hint: &str) -> Error {
 }
 
 /// Write the fit's files into `dir` (each atomically): `fit.json`, `params.json` (the fitted
-/// parameters as a parameter file), `curves.csv`, and the run's wall-clock `timing.json` (kept
-/// apart so rerunning a fit leaves the other files byte-identical).
+/// parameters as a parameter file), `curves.csv` (unless `curves` is `None`: `--curves none`),
+/// and the run's wall-clock `timing.json` (kept apart so rerunning a fit leaves the other
+/// files byte-identical).
 pub fn write_fit_dir(
     dir: &Path,
     fit: &FitJson,
-    curves: &[CurveRow],
+    curves: Option<&Curves>,
     timing: &Timing,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     write_json(&dir.join("fit.json"), fit)?;
     write_json(&dir.join("params.json"), &fit.params)?;
-    write_curves_csv(&dir.join("curves.csv"), curves)?;
+    if let Some(curves) = curves {
+        curves.write_csv(&dir.join("curves.csv"), None)?;
+    }
     write_json(&dir.join(timing::TIMING_FILE), timing)
 }
 

@@ -13,8 +13,8 @@ use super::FitOutcome;
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
 use crate::files::{
-    finite, ChannelResiduals, Correlation, CurveRow, DataInfo, DownWeighted, FitJson, FitStatus,
-    LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
+    finite, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo, DownWeighted, FitJson,
+    FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
     StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
 use crate::model::ModelConfig;
@@ -277,53 +277,75 @@ fn down_weighted<F: Forward>(
 }
 
 /// One row per sample and channel: the data, the fit and its lobes (with the evaluator's
-/// measurement factor and the fitted scale), the residual and the robust weight.
-fn curve_rows<F: Forward>(
+/// measurement factor and the fitted scale), the residual and the robust weight, computed in
+/// parallel straight into the table's columns (no row values, no channel name per row).
+fn curves_of<F: Forward>(
     ev: &Evaluator<'_, F>,
     data: &FitData,
     params: &ParamSet<F>,
     e: &Evaluation,
-) -> Vec<CurveRow> {
+) -> Curves {
     let nc = data.n_channels();
     let fwd = ev.forward;
-    // Per-lobe values in parallel, one Vec per sample, collected in sample order.
-    let lobes_all: Vec<Option<Vec<[f64; 3]>>> = data
-        .angles
-        .par_iter()
-        .map(|ang| {
-            let mut lobes = vec![[0.0; 3]; nc];
-            fwd.by_lobe(params, ang, &mut lobes).then_some(lobes)
-        })
-        .collect();
-    let mut curves = Vec::with_capacity(data.len() * nc);
-    for (i, ang) in data.angles.iter().enumerate() {
-        for c in 0..nc {
-            let k = i * nc + c;
-            let s = e.scale[c];
-            let (fr, ft, ftrt) = match &lobes_all[i] {
-                Some(l) => (s * l[c][0], s * l[c][1], s * l[c][2]),
-                None => (f64::NAN, f64::NAN, f64::NAN),
-            };
-            curves.push(CurveRow {
-                sample: i as u64,
-                line: data.line.get(i).copied().unwrap_or(i as u64 + 1),
-                channel: data.channels[c].clone(),
-                theta_i: ang.theta_i.to_degrees(),
-                phi_i: ang.phi_i.to_degrees(),
-                theta_r: ang.theta_r.to_degrees(),
-                phi_r: ang.phi_r.to_degrees(),
-                data: data.values[k],
-                sigma: data.sigma.as_ref().map(|s| s[k]),
-                fit: s * e.model[k],
-                fit_r: fr,
-                fit_tt: ft,
-                fit_trt: ftrt,
-                residual: e.raw[k],
-                weight: e.robust_weight[k],
-            });
-        }
+    let nan = CurveValues {
+        data: f64::NAN,
+        sigma: f64::NAN,
+        fit: f64::NAN,
+        fit_r: f64::NAN,
+        fit_tt: f64::NAN,
+        fit_trt: f64::NAN,
+        residual: f64::NAN,
+        weight: f64::NAN,
+    };
+    let mut values = vec![nan; data.len() * nc];
+    values
+        .par_chunks_mut(nc.max(1))
+        .zip(data.angles.par_iter())
+        .enumerate()
+        .for_each_init(
+            || vec![[0.0; 3]; nc],
+            |lobes, (i, (row, ang))| {
+                let ok = fwd.by_lobe(params, ang, lobes);
+                for (c, v) in row.iter_mut().enumerate() {
+                    let k = i * nc + c;
+                    let s = e.scale[c];
+                    let l = if ok { lobes[c] } else { [f64::NAN; 3] };
+                    *v = CurveValues {
+                        data: data.values[k],
+                        sigma: data.sigma.as_ref().map_or(f64::NAN, |s| s[k]),
+                        fit: s * e.model[k],
+                        fit_r: s * l[0],
+                        fit_tt: s * l[1],
+                        fit_trt: s * l[2],
+                        residual: e.raw[k],
+                        weight: e.robust_weight[k],
+                    };
+                }
+            },
+        );
+    let n = data.len();
+    Curves {
+        channels: data.channels.clone(),
+        sample_id: (0..n as u64).collect(),
+        sample_line: (0..n)
+            .map(|i| data.line.get(i).copied().unwrap_or(i as u64 + 1))
+            .collect(),
+        sample_angles: data
+            .angles
+            .iter()
+            .map(|a| {
+                [
+                    a.theta_i.to_degrees(),
+                    a.phi_i.to_degrees(),
+                    a.theta_r.to_degrees(),
+                    a.phi_r.to_degrees(),
+                ]
+            })
+            .collect(),
+        row_sample: (0..n * nc).map(|k| (k / nc.max(1)) as u32).collect(),
+        row_channel: (0..n * nc).map(|k| (k % nc.max(1)) as u32).collect(),
+        values,
     }
-    curves
 }
 
 /// Build the outcome (fit.json content, parameters, curves, timing) at solver parameters `u`.
@@ -403,8 +425,8 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings: &warnings,
         dof: unc.dof,
     });
-    let curves = curve_rows(ev, data, &params, &e);
-    if curves.iter().any(|r| {
+    let curves = curves_of(ev, data, &params, &e);
+    if curves.values.iter().any(|r| {
         ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
             .iter()
             .all(|v| v.is_finite())

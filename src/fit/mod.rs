@@ -46,7 +46,7 @@ use crate::chiang::ChiangModel;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::family::{FamilyParams, ModelFamily};
-use crate::files::{CurveRow, FitJson, Floored, LoadReport, OptionsRecord, Timing};
+use crate::files::{Curves, CurvesMode, FitJson, Floored, LoadReport, OptionsRecord, Timing};
 use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
 use crate::params::ParamFile;
 
@@ -141,6 +141,8 @@ pub struct FitOptions {
     pub family: ModelFamily,
     /// The Chiang model's terms and width nodes (`--terms`, `--width-nodes`), for `--model chiang`.
     pub chiang: ChiangModel,
+    /// How much of the curves the fit's directory gets (`--curves`).
+    pub curves: CurvesMode,
 }
 
 impl Default for FitOptions {
@@ -166,6 +168,7 @@ impl Default for FitOptions {
             intervals: Intervals::Auto,
             family: ModelFamily::Marschner,
             chiang: ChiangModel::default(),
+            curves: CurvesMode::Full,
         }
     }
 }
@@ -206,13 +209,13 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>>
 }
 
 /// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,
-/// or a parameter file of either family from [`fit_family`]), curves.csv's rows and the run's
-/// wall-clock times (timing.json).
+/// or a parameter file of either family from [`fit_family`]), the curves at every sample (all
+/// of them, whatever `--curves` writes) and the run's wall-clock times (timing.json).
 #[derive(Debug, Clone)]
 pub struct FitOutcome<P = Params<f64>> {
     pub json: FitJson,
     pub params: P,
-    pub curves: Vec<CurveRow>,
+    pub curves: Curves,
     pub timing: Timing,
 }
 
@@ -228,9 +231,32 @@ impl<P> FitOutcome<P> {
     }
 }
 
-/// Write the outcome's files into `dir` (fit.json, params.json, curves.csv, timing.json).
+/// Write the outcome's files into `dir` (fit.json, params.json, curves.csv as fit.json's
+/// `options.curves` asks, timing.json).
 pub fn write_outputs<P>(dir: &Path, out: &FitOutcome<P>) -> Result<()> {
-    crate::files::write_fit_dir(dir, &out.json, &out.curves, &out.timing)
+    write_outputs_with(dir, out, written_curves(out).as_deref())
+}
+
+/// [`write_outputs`] with the curves [`written_curves`] chose (so a caller that also reports
+/// them selects them once).
+pub fn write_outputs_with<P>(
+    dir: &Path,
+    out: &FitOutcome<P>,
+    curves: Option<&Curves>,
+) -> Result<()> {
+    crate::files::write_fit_dir(dir, &out.json, curves, &out.timing)
+}
+
+/// The curves `curves.csv` gets under fit.json's `options.curves`: all of them, the summary's
+/// rows ([`crate::report::summary_rows`]), or none.
+pub fn written_curves<P>(out: &FitOutcome<P>) -> Option<std::borrow::Cow<'_, Curves>> {
+    match out.json.options.curves {
+        CurvesMode::Full => Some(std::borrow::Cow::Borrowed(&out.curves)),
+        CurvesMode::Summary => Some(std::borrow::Cow::Owned(
+            out.curves.select(&crate::report::summary_rows(&out.curves)),
+        )),
+        CurvesMode::None => None,
+    }
 }
 
 /// Fit `data` (from file `file`, loader report `load_report`) with `opts`, the Marschner model

@@ -392,6 +392,7 @@ pub fn options_record<P: FitParam>(
     floored: Floored,
 ) -> OptionsRecord {
     OptionsRecord {
+        curves: opts.curves,
         effects_choice: choice.effects_choice,
         effects_reasons: choice.reasons.clone(),
         fixed: set

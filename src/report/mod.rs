@@ -3,15 +3,18 @@
 //! densely, data against fit, residuals, a polar view, the correlation heatmap, convergence) and
 //! one offline `index.html` that shows them with the summary numbers and the parameter table.
 //!
-//! The fit's result arrives typed ([`FitJson`], [`CurveRow`] from [`crate::files`]): straight
+//! The fit's result arrives typed ([`FitJson`], [`Curves`] from [`crate::files`]): straight
 //! from the fit ([`write_report_of`]) or read back from its files ([`write_report_with`]). The
 //! model configuration, measurement, scale and weights are the fit's; none is re-derived here.
+//! Without curves (`--curves none`) the report shows parameters and verdict only; with a
+//! summary (`--curves summary`) it draws the rows the summary kept ([`summary_rows`]).
 
 pub mod decimate;
 pub mod figures;
 mod html;
 mod panels;
 pub mod slices;
+mod summary;
 
 use std::path::Path;
 
@@ -20,7 +23,7 @@ use plotters::prelude::*;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 use crate::family::FamilyModel;
-use crate::files::{read_curves_csv, CurveRow, FitJson};
+use crate::files::{CurveRow, Curves, CurvesMode, FitJson};
 use crate::model::Angles;
 
 use crate::plot::{render, YScale};
@@ -30,7 +33,8 @@ use figures::{
     ProfilePanel, SlicePanel,
 };
 use panels::Ctx;
-use slices::{collect_samples, find_slices, Slice, SliceKind};
+use slices::{find_slices, samples_of, Slice, SliceKind};
+pub use summary::{summary_rows, SUMMARY_SAMPLES};
 
 /// Points of the dense model curve per slice (the curve is never decimated).
 pub const DENSE_POINTS: usize = 721;
@@ -82,19 +86,24 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
     std::fs::metadata(dir).map_err(|e| crate::Error::io(dir, e))?;
     let set = crate::outdir::OutputSet::begin(dir, "hairfit report", false, &[])?;
     let fit = FitJson::load(&dir.join("fit.json"))?;
-    let rows = read_curves_csv(&dir.join("curves.csv"))?;
+    let curves_path = dir.join("curves.csv");
+    let curves = match std::fs::metadata(&curves_path) {
+        Ok(_) => Some(Curves::read_csv(&curves_path)?),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+        Err(e) => return Err(Error::io(&curves_path, e)),
+    };
     set.keep_all_but(crate::outdir::is_report_file)?;
-    let summary = write_report_of(set.staging(), &fit, &rows, options)?;
+    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)?;
     set.publish()?;
     Ok(summary)
 }
 
-/// Report the fit `fit` with curves `rows` into `dir`: the dense curves evaluate the fit's
-/// model family, configuration and measurement with its fitted parameters.
+/// Report the fit `fit` with its `curves` (`None`: no curves.csv) into `dir`: the dense curves
+/// evaluate the fit's model family, configuration and measurement with its fitted parameters.
 pub fn write_report_of(
     dir: &Path,
     fit: &FitJson,
-    rows: &[CurveRow],
+    curves: Option<&Curves>,
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
     let chiang_model = match &fit.chiang {
@@ -120,13 +129,12 @@ pub fn write_report_of(
     };
     let n_model = fit.params.n_channels();
     let model_ref: Option<&LobeModel> = if usable { Some(&model) } else { None };
-    let mut summary = render_report(dir, fit, rows, model_ref, n_model, options)?;
+    let mut summary = render_curves_report(dir, fit, curves, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
 }
 
-/// Render the report of `fit` and its `rows` into `dir`, evaluating `model` (with `n_model`
-/// channels) for the dense curves; `None` draws the fit column at the samples instead.
+/// [`render_curves_report`] of curves given as rows.
 pub fn render_report(
     dir: &Path,
     fit: &FitJson,
@@ -135,27 +143,86 @@ pub fn render_report(
     n_model: usize,
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
+    let curves = Curves::from_rows(rows);
+    render_curves_report(dir, fit, Some(&curves), model, n_model, options)
+}
+
+/// Render the report of `fit` and its `curves` into `dir`, evaluating `model` (with `n_model`
+/// channels) for the dense curves; `None` draws the fit column at the samples instead.
+/// Without curves only the parameter figures and the page are written.
+pub fn render_curves_report(
+    dir: &Path,
+    fit: &FitJson,
+    curves: Option<&Curves>,
+    model: Option<&LobeModel>,
+    n_model: usize,
+    options: &ReportOptions,
+) -> Result<ReportSummary> {
+    let mut summary = ReportSummary::default();
+    match curves {
+        Some(curves) => {
+            if fit.options.curves == CurvesMode::Summary {
+                summary.notes.push(format!(
+                    "curves.csv is a summary (`--curves summary`): {} rows of {} samples, the slices drawn, an even spread and every down-weighted sample; figures of the data show those rows only",
+                    curves.len(),
+                    curves.n_samples()
+                ));
+            }
+            data_figures(dir, fit, curves, model, n_model, options, &mut summary)?;
+        }
+        None => summary.notes.push(match fit.options.curves {
+            CurvesMode::None => "no curves.csv: the fit ran with `--curves none`, so only the parameters and the verdict are shown (rerun with `--curves summary` or `full` for figures of the data)".to_string(),
+            _ => "no curves.csv in the fit's directory (removed?): only the parameters and the verdict are shown; rerun the fit for figures of the data".to_string(),
+        }),
+    }
+    parameter_figures(dir, fit, &mut summary)?;
+    for f in &summary.figures {
+        summary.files.push(format!("{}.svg", f.stem));
+        summary.files.push(format!("{}.png", f.stem));
+    }
+    let page = html::index_html(fit, &summary, options);
+    let path = dir.join("index.html");
+    write_atomically(&path, |w| {
+        w.write_all(page.as_bytes())
+            .map_err(|e| Error::io(&path, e))
+    })?;
+    summary.files.push("index.html".into());
+    Ok(summary)
+}
+
+/// The figures of the data: slice curves, the polar view, data against fit, residuals.
+fn data_figures(
+    dir: &Path,
+    fit: &FitJson,
+    curves: &Curves,
+    model: Option<&LobeModel>,
+    n_model: usize,
+    options: &ReportOptions,
+    summary: &mut ReportSummary,
+) -> Result<()> {
     let scale = if options.linear {
         YScale::Linear
     } else {
         YScale::Log
     };
-    let mut summary = ReportSummary::default();
-    let channels = channel_list(fit, rows);
-    let channel_of_row: Vec<usize> = rows
+    let channels = channel_list(fit, curves);
+    // The report's channel index of each of the table's channels.
+    let channel_of: Vec<usize> = curves
+        .channels
         .iter()
-        .map(|r| channels.iter().position(|c| *c == r.channel).unwrap_or(0))
+        .map(|name| channels.iter().position(|c| c == name).unwrap_or(0))
         .collect();
     let colours: Vec<(String, RGBColor)> = channels
         .iter()
         .enumerate()
         .map(|(i, c)| (c.clone(), channel_color(c, i)))
         .collect();
-    let samples = collect_samples(rows);
+    let samples = samples_of(curves);
     let (slices, scattered) = find_slices(&samples);
     summary.slices = slices.len();
     if scale == YScale::Log {
-        let hidden = rows
+        let hidden = curves
+            .values
             .iter()
             .filter(|r| YScale::Log.map(r.data).is_none())
             .count();
@@ -167,9 +234,9 @@ pub fn render_report(
     }
     let ctx = Ctx {
         fit,
-        rows,
+        curves,
         samples: &samples,
-        channel_of_row: &channel_of_row,
+        channel_of: &channel_of,
         colours: &colours,
         model,
         n_model: n_model.max(1),
@@ -180,7 +247,7 @@ pub fn render_report(
         let shown = stride_indices(slices.len(), MAX_PANELS);
         let panels: Vec<SlicePanel> = shown
             .iter()
-            .map(|&i| ctx.slice_panel(&slices[i], &mut summary))
+            .map(|&i| ctx.slice_panel(&slices[i], summary))
             .collect();
         summary.panels = panels.len();
         summary.drawn_points += panels.iter().map(panel_points).sum::<usize>();
@@ -218,7 +285,7 @@ pub fn render_report(
                 ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
             })
         {
-            let panel = ctx.slice_panel(best, &mut summary);
+            let panel = ctx.slice_panel(best, summary);
             summary.drawn_points += panel_points(&panel);
             let subtitle = match scale {
                 YScale::Log => "radius: value on a log scale (rings labelled), angle: φ = φr − φi",
@@ -245,10 +312,15 @@ pub fn render_report(
     summary.drawn_points += fig.points.len();
     summary.figures.push(render(dir, &fig)?);
 
-    let fig = ctx.residuals(&mut summary);
+    let fig = ctx.residuals(summary);
     summary.drawn_points += fig.points.len();
     summary.figures.push(render(dir, &fig)?);
 
+    Ok(())
+}
+
+/// The figures of fit.json alone: correlations, profiles, convergence.
+fn parameter_figures(dir: &Path, fit: &FitJson, summary: &mut ReportSummary) -> Result<()> {
     if !fit.correlation.names.is_empty() {
         let fig = CorrelationFigure {
             names: fit.correlation.names.clone(),
@@ -280,19 +352,7 @@ pub fn render_report(
             .figures
             .push(render(dir, &ConvergenceFigure { stages })?);
     }
-
-    for f in &summary.figures {
-        summary.files.push(format!("{}.svg", f.stem));
-        summary.files.push(format!("{}.png", f.stem));
-    }
-    let page = html::index_html(fit, &summary, options);
-    let path = dir.join("index.html");
-    write_atomically(&path, |w| {
-        w.write_all(page.as_bytes())
-            .map_err(|e| Error::io(&path, e))
-    })?;
-    summary.files.push("index.html".into());
-    Ok(summary)
+    Ok(())
 }
 
 /// The profiled parameters' panels (fit.json stores the points, so nothing is refitted).
@@ -319,11 +379,11 @@ fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
 }
 
 /// Channels in fit.json's order, then any other channel named in curves.csv.
-fn channel_list(fit: &FitJson, rows: &[CurveRow]) -> Vec<String> {
+fn channel_list(fit: &FitJson, curves: &Curves) -> Vec<String> {
     let mut channels = fit.data.channels.clone();
-    for r in rows {
-        if !channels.contains(&r.channel) {
-            channels.push(r.channel.clone());
+    for c in &curves.channels {
+        if !channels.contains(c) {
+            channels.push(c.clone());
         }
     }
     if channels.is_empty() {

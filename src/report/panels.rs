@@ -8,7 +8,7 @@ use super::decimate::{envelope_indices, stride_indices};
 use super::figures::{ChannelSeries, DataVsFitFigure, Point, ResidualsFigure, SlicePanel};
 use super::slices::{theta_h_deg, wrap_deg, Sample, Slice};
 use super::{LobeModel, ReportSummary, DENSE_POINTS, MAX_SCATTER_POINTS, MAX_SLICE_POINTS};
-use crate::files::{CurveRow, FitJson};
+use crate::files::{Curves, FitJson};
 use crate::model::Angles;
 use crate::plot::{fmt_num, YScale};
 
@@ -22,15 +22,21 @@ const CHECK_TOLERANCE: f64 = 1e-6;
 /// Everything the figure builders share.
 pub(super) struct Ctx<'a> {
     pub fit: &'a FitJson,
-    pub rows: &'a [CurveRow],
+    pub curves: &'a Curves,
     pub samples: &'a [Sample],
-    pub channel_of_row: &'a [usize],
+    /// The report's channel index of each of the table's channels.
+    pub channel_of: &'a [usize],
     pub colours: &'a [(String, RGBColor)],
     pub model: Option<&'a LobeModel<'a>>,
     pub n_model: usize,
 }
 
 impl Ctx<'_> {
+    /// The report's channel index of row `r`.
+    fn channel(&self, r: usize) -> usize {
+        self.channel_of[self.curves.row_channel[r] as usize]
+    }
+
     /// The model's R, TT, TRT for `channel` at angles in degrees (`None` without a model).
     fn lobes_at(&self, deg: &[f64; 4], channel: usize) -> Option<[f64; 3]> {
         let model = self.model?;
@@ -69,7 +75,7 @@ impl Ctx<'_> {
                     self.samples[s]
                         .rows
                         .iter()
-                        .filter(move |&&r| self.channel_of_row[r] == c)
+                        .filter(move |&&r| self.channel(r) == c)
                         .map(move |&r| (x, r))
                 })
                 .collect();
@@ -83,12 +89,11 @@ impl Ctx<'_> {
                 .into_iter()
                 .map(|k| {
                     let (x, r) = members[k];
-                    let row = &self.rows[r];
                     Point {
                         x,
-                        y: row.data,
-                        sigma: row.sigma,
-                        outlier: row.down_weighted(),
+                        y: self.curves.values[r].data,
+                        sigma: self.curves.sigma(r),
+                        outlier: self.curves.down_weighted(r),
                     }
                 })
                 .collect();
@@ -124,7 +129,7 @@ impl Ctx<'_> {
                 None => {
                     series.fit_at_points = stride_indices(members.len(), DENSE_POINTS)
                         .into_iter()
-                        .map(|k| (members[k].0, self.rows[members[k].1].fit))
+                        .map(|k| (members[k].0, self.curves.values[members[k].1].fit))
                         .collect();
                 }
             }
@@ -154,9 +159,9 @@ impl Ctx<'_> {
         let worst = stride_indices(members.len(), CHECK_SAMPLES)
             .into_iter()
             .filter_map(|i| {
-                let row = &self.rows[members[i].1];
-                let l = self.lobes_at(&row.angles_deg(), channel)?;
-                let d = (k * (l[0] + l[1] + l[2]) / row.fit - 1.0).abs();
+                let r = members[i].1;
+                let l = self.lobes_at(&self.curves.angles_deg(r), channel)?;
+                let d = (k * (l[0] + l[1] + l[2]) / self.curves.values[r].fit - 1.0).abs();
                 d.is_finite().then_some(d)
             })
             .fold(0.0, f64::max);
@@ -177,7 +182,7 @@ impl Ctx<'_> {
         scattered: usize,
     ) -> DataVsFitFigure {
         let (out, keep): (Vec<usize>, Vec<usize>) =
-            (0..self.rows.len()).partition(|&r| self.rows[r].down_weighted());
+            (0..self.curves.len()).partition(|&r| self.curves.down_weighted(r));
         let mut chosen: Vec<usize> = stride_indices(out.len(), MAX_SCATTER_POINTS / 4)
             .into_iter()
             .map(|k| out[k])
@@ -191,13 +196,8 @@ impl Ctx<'_> {
         let points = chosen
             .into_iter()
             .map(|r| {
-                let row = &self.rows[r];
-                (
-                    row.fit,
-                    row.data,
-                    self.channel_of_row[r],
-                    row.down_weighted(),
-                )
+                let v = &self.curves.values[r];
+                (v.fit, v.data, self.channel(r), self.curves.down_weighted(r))
             })
             .collect::<Vec<_>>();
         let what = if only_view {
@@ -206,7 +206,11 @@ impl Ctx<'_> {
             format!("{scattered} samples outside any slice")
         };
         DataVsFitFigure {
-            subtitle: format!("{} of {} rows drawn; {what}", points.len(), self.rows.len()),
+            subtitle: format!(
+                "{} of {} rows drawn; {what}",
+                points.len(),
+                self.curves.len()
+            ),
             points,
             channels: self.colours.to_vec(),
             scale,
@@ -216,7 +220,7 @@ impl Ctx<'_> {
     /// Residuals against φ and θ_h (envelope-decimated so outliers survive) and the histogram
     /// of all finite residuals.
     pub(super) fn residuals(&self, summary: &mut ReportSummary) -> ResidualsFigure {
-        let res: Vec<f64> = self.rows.iter().map(|r| r.residual).collect();
+        let res: Vec<f64> = self.curves.values.iter().map(|v| v.residual).collect();
         let mut abs: Vec<f64> = res
             .iter()
             .filter(|v| v.is_finite())
@@ -267,19 +271,20 @@ impl Ctx<'_> {
                 (lo, lo + width, c)
             })
             .collect();
-        let n_outliers = self.rows.iter().filter(|r| r.down_weighted()).count();
+        let n_outliers = (0..self.curves.len())
+            .filter(|&r| self.curves.down_weighted(r))
+            .count();
         let idx = envelope_indices(&res, MAX_SCATTER_POINTS);
         let points = idx
             .into_iter()
             .map(|r| {
-                let row = &self.rows[r];
-                let deg = row.angles_deg();
+                let deg = self.curves.angles_deg(r);
                 (
-                    wrap_deg(row.phi_r - row.phi_i),
+                    wrap_deg(deg[3] - deg[1]),
                     theta_h_deg(&deg),
-                    row.residual,
-                    self.channel_of_row[r],
-                    row.down_weighted(),
+                    self.curves.values[r].residual,
+                    self.channel(r),
+                    self.curves.down_weighted(r),
                 )
             })
             .collect::<Vec<_>>();

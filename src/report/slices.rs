@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::files::CurveRow;
+use crate::files::{CurveRow, Curves};
 
 /// Fewest distinct swept values that make a slice worth drawing as a curve.
 pub const MIN_SLICE_POINTS: usize = 3;
@@ -119,6 +119,54 @@ pub fn collect_samples(rows: &[CurveRow]) -> Vec<Sample> {
     samples
 }
 
+/// The samples of a curves table, regrouped by sample id in order of first appearance (as
+/// [`collect_samples`]; a fit's table has each sample's rows together, so this is one pass).
+pub fn samples_of(curves: &Curves) -> Vec<Sample> {
+    let mut index: std::collections::HashMap<u64, usize> =
+        std::collections::HashMap::with_capacity(curves.n_samples());
+    let mut samples: Vec<Sample> = Vec::with_capacity(curves.n_samples());
+    // A fit's table numbers its samples in increasing order: each is new, no lookup needed.
+    let increasing = curves.sample_id.windows(2).all(|w| w[0] < w[1]);
+    if increasing {
+        samples.extend(
+            curves
+                .sample_id
+                .iter()
+                .zip(&curves.sample_angles)
+                .map(|(&id, &angles)| Sample {
+                    id,
+                    angles,
+                    rows: Vec::new(),
+                }),
+        );
+        for r in 0..curves.len() {
+            samples[curves.sample_of(r)].rows.push(r);
+        }
+        return samples;
+    }
+    let mut last: Option<(usize, usize)> = None;
+    for r in 0..curves.len() {
+        let s = curves.sample_of(r);
+        let k = match last {
+            Some((table, k)) if table == s => k,
+            _ => {
+                let id = curves.sample_id[s];
+                *index.entry(id).or_insert_with(|| {
+                    samples.push(Sample {
+                        id,
+                        angles: curves.sample_angles[s],
+                        rows: Vec::new(),
+                    });
+                    samples.len() - 1
+                })
+            }
+        };
+        last = Some((s, k));
+        samples[k].rows.push(r);
+    }
+    samples
+}
+
 /// A grouping key for an angle in degrees: equal to 1e-6° count as the same setting.
 fn key(v: f64) -> i64 {
     (v * 1e6).round() as i64
@@ -127,15 +175,15 @@ fn key(v: f64) -> i64 {
 /// Group samples into slices; returns the slices (sorted by kind and fixed angles) and the
 /// indices of samples in no slice.
 pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
-    let mut incidences: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
-    for (i, s) in samples.iter().enumerate() {
-        if s.angles.iter().all(|a| a.is_finite()) {
-            incidences
-                .entry((key(s.angles[0]), key(s.angles[1])))
-                .or_default()
-                .push(i);
-        }
-    }
+    // Incidence groups by one sort (in key order, members in sample order, as a map would
+    // give them) rather than a map of a Vec per group: scattered data has a group per sample.
+    let mut keyed: Vec<(i64, i64, usize)> = samples
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.angles.iter().all(|a| a.is_finite()))
+        .map(|(i, s)| (key(s.angles[0]), key(s.angles[1]), i))
+        .collect();
+    keyed.sort_unstable();
     let mut slices = Vec::new();
     let mut scattered: Vec<usize> = samples
         .iter()
@@ -146,7 +194,16 @@ pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
     // Incidence groups are disjoint, so one mark array serves them all (allocating it per
     // group made scattered directions, one group per sample, quadratic).
     let mut in_slice = vec![false; samples.len()];
-    for members in incidences.values() {
+    let mut members: Vec<usize> = Vec::new();
+    for group in keyed.chunk_by(|a, b| (a.0, a.1) == (b.0, b.1)) {
+        // Too few samples for any slice: all scattered, no sub-grouping needed.
+        if group.len() < MIN_SLICE_POINTS {
+            scattered.extend(group.iter().map(|g| g.2));
+            continue;
+        }
+        members.clear();
+        members.extend(group.iter().map(|g| g.2));
+        let members = &members;
         let first = samples[members[0]].angles;
         // Azimuthal candidates share θ_r and sweep φ_r; longitudinal ones share φ_r and sweep θ_r.
         let azimuthal = sub_slices(samples, members, 2, 3);

@@ -1,0 +1,41 @@
+//! Which rows `--curves summary` keeps: the report's view of the data in a few thousand samples.
+//! Deterministic (no randomness, only the table's order), so the same fit writes the same file.
+
+use super::decimate::stride_indices;
+use super::slices::{find_slices, samples_of};
+use super::{MAX_PANELS, MAX_SLICE_POINTS};
+use crate::files::Curves;
+
+/// Samples of the even spread over the whole table (beyond the slices and outliers).
+pub const SUMMARY_SAMPLES: usize = 2000;
+
+/// Row indices (in order) of every sample that is in a slice the report draws (decimated as
+/// its panel is), in an even spread of [`SUMMARY_SAMPLES`] samples, or has any value the robust
+/// loss down-weighted. A kept sample keeps all its rows, so every outlier row is kept.
+pub fn summary_rows(curves: &Curves) -> Vec<usize> {
+    let samples = samples_of(curves);
+    let (slices, _) = find_slices(&samples);
+    let mut keep = vec![false; samples.len()];
+    for i in stride_indices(slices.len(), MAX_PANELS) {
+        let members = &slices[i].samples;
+        for k in stride_indices(members.len(), MAX_SLICE_POINTS) {
+            keep[members[k]] = true;
+        }
+    }
+    for k in stride_indices(samples.len(), SUMMARY_SAMPLES) {
+        keep[k] = true;
+    }
+    for (k, s) in samples.iter().enumerate() {
+        if s.rows.iter().any(|&r| curves.down_weighted(r)) {
+            keep[k] = true;
+        }
+    }
+    let mut rows: Vec<usize> = samples
+        .iter()
+        .zip(&keep)
+        .filter(|&(_, &kept)| kept)
+        .flat_map(|(s, _)| s.rows.iter().copied())
+        .collect();
+    rows.sort_unstable();
+    rows
+}
