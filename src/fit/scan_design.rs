@@ -189,15 +189,16 @@ pub fn caveats(design: &Design, json: &FitJson) -> Caveats {
     } else {
         "these intervals are linearised standard errors only: pass --intervals profile"
     };
-    let assumed: Vec<AssumedAway> = if json.options.effects_choice == crate::files::EffectsSource::Auto {
-        json.options
-            .effects_reasons
-            .iter()
-            .filter_map(|l| assumed_away(l))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let assumed: Vec<AssumedAway> =
+        if json.options.effects_choice == crate::files::EffectsSource::Auto {
+            json.options
+                .effects_reasons
+                .iter()
+                .filter_map(|l| assumed_away(l))
+                .collect()
+        } else {
+            Vec::new()
+        };
     match design.single_scan() {
         Some(SingleScan::Azimuthal { theta_i, theta_h }) => {
             let weak = free_of(&["alpha_r_deg", "beta_r_deg"]);
