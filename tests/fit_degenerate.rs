@@ -156,6 +156,33 @@ fn cancelled_fit_returns_the_best_so_far_as_interrupted() {
     let out = fit(&data, "cancelled", Default::default(), &opts).expect("fit returns");
     assert_eq!(out.json.status.as_str(), "interrupted");
     assert_clean(&out);
+    // Small: the full curves are cheap, so they are kept.
+    assert_eq!(out.json.options.curves, hairfit::files::CurvesMode::Full);
+}
+
+#[test]
+fn a_large_interrupted_fit_writes_the_summary_curves_and_says_so() {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let truth = fit_support::random_params(6, 3);
+    // Just over the threshold in rows (samples × 3 channels).
+    let n = hairfit::fit::INTERRUPTED_FULL_CURVES_ROWS / 3 + 1000;
+    let data = fit_support::data(&truth, &fit_support::random_sphere(n, 6), 0.02, 6);
+    let opts = FitOptions {
+        cancel: Some(Arc::new(AtomicBool::new(true))),
+        ..FitOptions::default()
+    };
+    let out = fit(&data, "cancelled", Default::default(), &opts).expect("fit returns");
+    assert_eq!(out.json.status.as_str(), "interrupted");
+    assert_eq!(out.json.options.curves, hairfit::files::CurvesMode::Summary);
+    assert!(
+        out.json
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("interrupted: curves.csv holds the summary rows")),
+        "{:?}",
+        out.json.warnings
+    );
 }
 
 #[test]

@@ -46,7 +46,9 @@ use crate::chiang::ChiangModel;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::family::{FamilyParams, ModelFamily};
-use crate::files::{Curves, CurvesMode, FitJson, Floored, LoadReport, OptionsRecord, Timing};
+use crate::files::{
+    Curves, CurvesMode, FitJson, FitStatus, Floored, LoadReport, OptionsRecord, Timing,
+};
 use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
 use crate::params::ParamFile;
 
@@ -57,6 +59,9 @@ pub const POLISH_CHI2: f64 = 25.0;
 /// The screening subsample (when candidates compete before the full-data polish) is this many
 /// times the multi-start's subsample; screening runs only on data over four times its size.
 pub const SCREEN_FACTOR: usize = 25;
+
+/// Above this many rows (samples × channels) an interrupted fit writes the summary curves.
+pub const INTERRUPTED_FULL_CURVES_ROWS: usize = 300_000;
 
 /// How the lobes/effects of the fit are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -453,6 +458,18 @@ pub fn fit_with<F: Forward>(
 
     let mut options = (run.options)(sub_idx.len(), ev_full.explicit_scale, floored);
     options.loss_scale = ev_full.loss_scale;
+    // After Ctrl-C the user wants the best parameters now: a large fit writes the summary
+    // curves (what the report draws) instead of spending seconds per million rows on the rest.
+    let rows = data.len() * data.n_channels();
+    if status == FitStatus::Interrupted
+        && options.curves == CurvesMode::Full
+        && rows > INTERRUPTED_FULL_CURVES_ROWS
+    {
+        options.curves = CurvesMode::Summary;
+        warnings.push(format!(
+            "interrupted: curves.csv holds the summary rows only ({rows} rows in full); rerun to completion for all of them"
+        ));
+    }
     let x_best = ev_full.natural(&best.u[..run.free.len()]);
     let mut out = assemble::assemble(assemble::Assembly {
         data,
