@@ -211,8 +211,9 @@ impl<'f, F: Forward> Evaluator<'f, F> {
         p
     }
 
-    /// Evaluate at solver parameters `u` (transforms applied; scale per `explicit_scale`).
-    pub fn eval_internal(&self, u: &[f64], jac: bool) -> Evaluation {
+    /// Solver parameters `u` as the passes take them: natural free values, the transforms'
+    /// derivatives `dx/du` (the column factors) and the scale (projected, or `u`'s tail).
+    pub fn solver_point<'u>(&self, u: &'u [f64]) -> (Vec<f64>, Vec<f64>, ScaleMode<'u>) {
         let nf = self.free.len();
         let x = self.natural(&u[..nf]);
         let dxdu: Vec<f64> = self
@@ -226,6 +227,12 @@ impl<'f, F: Forward> Evaluator<'f, F> {
         } else {
             ScaleMode::Projected
         };
+        (x, dxdu, mode)
+    }
+
+    /// Evaluate at solver parameters `u` (transforms applied; scale per `explicit_scale`).
+    pub fn eval_internal(&self, u: &[f64], jac: bool) -> Evaluation {
+        let (x, dxdu, mode) = self.solver_point(u);
         self.evaluate(&x, &dxdu, mode, jac)
     }
 }

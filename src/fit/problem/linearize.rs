@@ -230,13 +230,8 @@ impl<F: Forward> Evaluator<'_, F> {
     /// raised during the pass. Equal to [`Evaluator::eval_internal`]`(u, false).cost()` up to the
     /// order of the sum.
     pub fn cost_internal(&self, u: &[f64], cancel: Option<&AtomicBool>) -> Option<f64> {
-        let nf = self.free.len();
-        let p = self.params_at(&self.natural(&u[..nf]));
-        let mode = if self.explicit_scale {
-            ScaleMode::ExplicitLog(&u[nf..])
-        } else {
-            ScaleMode::Projected
-        };
+        let (x, _, mode) = self.solver_point(u);
+        let p = self.params_at(&x);
         let model = self.model_values(&p, cancel)?;
         let sq = self.scale_q(&model, mode);
         let s = self.natural_scale(&sq);
@@ -273,19 +268,7 @@ impl<F: Forward> Evaluator<'_, F> {
         u: &[f64],
         cancel: Option<&AtomicBool>,
     ) -> Option<Linearization> {
-        let nf = self.free.len();
-        let x = self.natural(&u[..nf]);
-        let dxdu: Vec<f64> = self
-            .bounds
-            .iter()
-            .zip(u)
-            .map(|(b, &v)| b.derivative(v))
-            .collect();
-        let mode = if self.explicit_scale {
-            ScaleMode::ExplicitLog(&u[nf..])
-        } else {
-            ScaleMode::Projected
-        };
+        let (x, dxdu, mode) = self.solver_point(u);
         self.linearize(&x, &dxdu, mode, cancel)
     }
 
