@@ -5,33 +5,20 @@
 
 #[path = "support/cli.rs"]
 mod cli;
+mod model_common;
 
 use cli::{hairfit_ok, root, s, stderr, stdout};
 use hairfit::files::{FitJson, Verdict};
 use hairfit::fit::scan_design::{caveats, Design, SingleScan};
 use hairfit::fit::{fit, fit_data, FitOptions, FitOutcome, Intervals};
-use hairfit::model::{Measurement, ModelConfig, Params};
+use hairfit::model::{Measurement, ModelConfig};
 use hairfit::synth::{synthesize, Noise, Rig};
-
-/// MODEL.md's example hair, one channel (data/true_1ch.json).
-fn truth() -> Params<f64> {
-    Params {
-        eta: 1.55,
-        sigma_a: vec![0.4],
-        alpha_r: (-7.0f64).to_radians(),
-        beta_r: 8.0f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15.0f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
-    }
-}
 
 /// A fit of `rig` at 10% relative noise with default options (linearised intervals: fast).
 fn fitted(rig: &str, seed: u64) -> (hairfit::fit::FitData, FitOutcome) {
     let (ds, _) = synthesize(
-        &truth(),
+        // MODEL.md's example hair, one channel (data/true_1ch.json).
+        &model_common::table_params(),
         &ModelConfig::default(),
         &Rig::parse(rig).unwrap(),
         &Noise::parse("relative:0.1").unwrap(),

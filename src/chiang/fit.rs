@@ -81,11 +81,7 @@ fn why_undetermined(
     _params: &ChiangParams<f64>,
     partners: &[String],
 ) -> String {
-    let tail = if partners.is_empty() {
-        String::new()
-    } else {
-        format!("; strongly correlated with {}", partners.join(", "))
-    };
+    let tail = crate::fit::diagnostics::correlated_tail(partners);
     match p {
         ChiangParamName::SigmaA(_) => {
             let n = crate::fit::diagnostics::tt_region_samples(data);

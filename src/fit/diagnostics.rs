@@ -58,6 +58,15 @@ fn samples_near_glint(data: &FitData, mode: RootMode, eta: f64, w_c: f64) -> (us
     (near.len(), if near.is_empty() { 0.0 } else { span })
 }
 
+/// The why-undetermined text's ending naming the strongly correlated partners (empty if none).
+pub fn correlated_tail(partners: &[String]) -> String {
+    if partners.is_empty() {
+        String::new()
+    } else {
+        format!("; strongly correlated with {}", partners.join(", "))
+    }
+}
+
 /// Why the data cannot determine `p` (geometry first, else the correlated partners).
 pub fn why_undetermined(
     p: ParamName,
@@ -66,11 +75,7 @@ pub fn why_undetermined(
     params: &Params<f64>,
     partners: &[String],
 ) -> String {
-    let tail = if partners.is_empty() {
-        String::new()
-    } else {
-        format!("; strongly correlated with {}", partners.join(", "))
-    };
+    let tail = correlated_tail(partners);
     match p {
         ParamName::KG | ParamName::WC => {
             let (n, span) = samples_near_glint(data, mode, params.eta, params.w_c);
