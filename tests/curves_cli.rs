@@ -86,6 +86,18 @@ fn curves_modes_write_what_they_say_and_report_and_export_cope() {
     let full_lines: HashSet<&str> = full_text.lines().collect();
     let summary_text = std::fs::read_to_string(&summary_path).unwrap();
     assert!(summary_text.lines().all(|l| full_lines.contains(l)));
+    // The fit builds only the summary's rows; they are exactly the rows `summary_rows` picks
+    // from the whole table (the report's own selection).
+    let table = hairfit::files::Curves::from_rows(&full);
+    let picked: Vec<(u64, String)> = hairfit::report::summary_rows(&table)
+        .into_iter()
+        .map(|r| (full[r].sample, full[r].channel.clone()))
+        .collect();
+    let written: Vec<(u64, String)> = summary
+        .iter()
+        .map(|r| (r.sample, r.channel.clone()))
+        .collect();
+    assert_eq!(written, picked);
     let kept: HashSet<(u64, String)> = summary
         .iter()
         .map(|r| (r.sample, r.channel.clone()))
@@ -195,4 +207,75 @@ fn curves_io_speed_old_and_new() {
         std::fs::read(&old_path).unwrap() == std::fs::read(&new_path).unwrap(),
         "the new writer's bytes differ from the old writer's"
     );
+}
+
+/// `--curves auto` (the default) writes every row up to `AUTO_FULL_CURVES_ROWS` rows and the
+/// summary above, and says so in fit.json, on the command line and in the report.
+#[test]
+fn curves_auto_switches_to_the_summary_above_the_row_limit() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    // Just over the limit: 3 channels × (limit / 3 + 100) samples.
+    let n = hairfit::fit::AUTO_FULL_CURVES_ROWS / 3 + 100;
+    let data = dir.join("big.csv");
+    hairfit_ok(&[
+        "synth",
+        "--params",
+        "data/true_rgb.json",
+        "--rig",
+        &format!("sphere:n={n}:max=60"),
+        "--noise",
+        "relative:0.05",
+        "--seed",
+        "4",
+        "--output",
+        s(&data),
+    ]);
+    let out = dir.join("fit");
+    let printed = cli::stdout(&hairfit_ok(&[
+        "fit",
+        s(&data),
+        "--starts",
+        "2",
+        "--intervals",
+        "linear",
+        "--no-progress",
+        "--out",
+        s(&out),
+    ]));
+    let fit = FitJson::load(&out.join("fit.json")).unwrap();
+    assert_eq!(fit.options.curves.to_string(), "summary");
+    assert!(fit.options.curves_reason.starts_with("auto:"));
+    assert!(printed.contains("curves.csv (summary: over"), "{printed}");
+    let curves = read_curves_csv(&out.join("curves.csv")).unwrap();
+    assert!(curves.len() < 3 * n / 10, "{} rows", curves.len());
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("--curves auto:"));
+    // Below the limit the default stays full.
+    let small = dir.join("small.csv");
+    hairfit_ok(&[
+        "synth",
+        "--params",
+        "data/true_rgb.json",
+        "--rig",
+        "sphere:n=3000:max=60",
+        "--seed",
+        "4",
+        "--output",
+        s(&small),
+    ]);
+    hairfit_ok(&[
+        "fit",
+        s(&small),
+        "--starts",
+        "2",
+        "--intervals",
+        "linear",
+        "--no-progress",
+        "--out",
+        s(&dir.join("small_fit")),
+    ]);
+    let fit = FitJson::load(&dir.join("small_fit/fit.json")).unwrap();
+    assert_eq!(fit.options.curves.to_string(), "full");
+    assert!(fit.options.curves_reason.is_empty());
 }

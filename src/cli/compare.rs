@@ -50,8 +50,20 @@ pub fn compare_command(
     let mut marschner_args = args.fit.clone();
     marschner_args.model.terms = None;
     marschner_args.model.width_nodes = None;
+    // The comparison bins every residual of both fits, so both keep their whole curves.
+    if let Some(mode) = args
+        .fit
+        .curves
+        .0
+        .filter(|&m| m != crate::files::CurvesMode::Full)
+    {
+        return Err(Error::Other(format!(
+            "compare compares every residual of the two fits, so it always writes their full curves: drop --curves {mode}"
+        )));
+    }
     let opts = crate::fit::FitOptions {
         chiang,
+        curves: Some(crate::files::CurvesMode::Full),
         ..marschner_args.options(cancel)?
     };
     crate::compare::compare_command(&args.data, &args.load, &opts, &args.out)

@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::family::ModelFamily;
 use crate::files::CurvesMode;
 use crate::fit::{
-    fit_data, fit_family, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
+    fit_family, into_fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
 use crate::outdir::{publish_fit, PublishedFit};
 
@@ -71,10 +71,11 @@ pub struct FitArgs {
     pub polish_iters: u64,
     /// What curves.csv holds: `full` (every sample and channel), `summary` (the samples the
     /// report draws, an even spread of a few thousand more, and every sample with a value the
-    /// robust loss down-weighted) or `none` (no curves.csv; the report then shows parameters
-    /// and verdict only). fit.json records the choice (`options.curves`).
-    #[arg(long, default_value = "full")]
-    pub curves: CurvesMode,
+    /// robust loss down-weighted), `none` (no curves.csv; the report then shows parameters
+    /// and verdict only) or `auto` (full up to 1,000,000 rows of samples × channels, the
+    /// summary above). fit.json records the mode written (`options.curves`) and why.
+    #[arg(long, default_value = "auto")]
+    pub curves: CurvesChoice,
     /// Never show a progress bar.
     #[arg(long)]
     pub no_progress: bool,
@@ -174,7 +175,26 @@ impl FitArgs {
             intervals: self.intervals,
             family: self.model.family,
             chiang: self.model.chiang()?,
-            curves: self.curves,
+            curves: self.curves.0,
+        })
+    }
+}
+
+/// `--curves`: a mode, or `auto` (`None`: the fit chooses by the data's size).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CurvesChoice(pub Option<CurvesMode>);
+
+impl std::str::FromStr for CurvesChoice {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        if s.trim().eq_ignore_ascii_case("auto") {
+            return Ok(CurvesChoice(None));
+        }
+        s.parse().map(|m| CurvesChoice(Some(m))).map_err(|_| {
+            Error::Other(format!(
+                "unknown curves mode `{}`: use auto, full, summary or none",
+                s.trim()
+            ))
         })
     }
 }
@@ -206,7 +226,7 @@ pub fn fit_command(
                 )));
             }
         }
-        let data = fit_data(&ds);
+        let data = into_fit_data(ds);
         let mut outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
         // The loader's settings are options of this fit too, and its warnings the fit's.
         outcome.json.options.load = Some(format!("{load_options:?}"));

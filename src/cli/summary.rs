@@ -145,9 +145,15 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     s += &format!("wall time {:.2} s", out.timing.wall_time_s);
     if let Some(d) = dir {
         let curves = match j.options.curves {
-            crate::files::CurvesMode::Full => ",curves.csv",
-            crate::files::CurvesMode::Summary => ",curves.csv (summary)",
-            crate::files::CurvesMode::None => "",
+            crate::files::CurvesMode::Full => ",curves.csv".to_string(),
+            crate::files::CurvesMode::Summary if j.options.curves_reason.is_empty() => {
+                ",curves.csv (summary)".to_string()
+            }
+            crate::files::CurvesMode::Summary => format!(
+                ",curves.csv (summary: over {} rows; --curves full writes all)",
+                crate::fit::AUTO_FULL_CURVES_ROWS
+            ),
+            crate::files::CurvesMode::None => String::new(),
         };
         s += &format!("; wrote {}/{{fit.json,params.json{curves}}}", d.display());
     }

@@ -339,6 +339,9 @@ pub enum ScaleMethod {
 pub struct OptionsRecord {
     /// How much of the curves `curves.csv` holds (`--curves`; absent in older files: full).
     pub curves: super::curves::CurvesMode,
+    /// Why `--curves auto` chose the summary (empty when the mode was given or is full).
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub curves_reason: String,
     /// `auto`, `all` or `explicit`: how the effects were chosen.
     pub effects_choice: EffectsSource,
     /// Why each lobe/effect is on or off.

@@ -12,6 +12,7 @@ use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet
 use super::FitOutcome;
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
+use crate::files::CurvesMode;
 use crate::files::{
     finite, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo, DownWeighted, FitJson,
     FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
@@ -276,14 +277,16 @@ fn down_weighted<F: Forward>(
     })
 }
 
-/// One row per sample and channel: the data, the fit and its lobes (with the evaluator's
-/// measurement factor and the fitted scale), the residual and the robust weight, computed in
-/// parallel straight into the table's columns (no row values, no channel name per row).
+/// One row per channel of each sample in `samples` (indices into `data`, in order): the data,
+/// the fit and its lobes (with the evaluator's measurement factor and the fitted scale), the
+/// residual and the robust weight, computed in parallel straight into the table's columns (no
+/// row values, no channel name per row).
 fn curves_of<F: Forward>(
     ev: &Evaluator<'_, F>,
     data: &FitData,
     params: &ParamSet<F>,
     e: &Evaluation,
+    samples: &[usize],
 ) -> Curves {
     let nc = data.n_channels();
     let fwd = ev.forward;
@@ -297,15 +300,14 @@ fn curves_of<F: Forward>(
         residual: f64::NAN,
         weight: f64::NAN,
     };
-    let mut values = vec![nan; data.len() * nc];
+    let mut values = vec![nan; samples.len() * nc];
     values
         .par_chunks_mut(nc.max(1))
-        .zip(data.angles.par_iter())
-        .enumerate()
+        .zip(samples.par_iter())
         .for_each_init(
             || vec![[0.0; 3]; nc],
-            |lobes, (i, (row, ang))| {
-                let ok = fwd.by_lobe(params, ang, lobes);
+            |lobes, (row, &i)| {
+                let ok = fwd.by_lobe(params, &data.angles[i], lobes);
                 for (c, v) in row.iter_mut().enumerate() {
                     let k = i * nc + c;
                     let s = e.scale[c];
@@ -323,28 +325,56 @@ fn curves_of<F: Forward>(
                 }
             },
         );
-    let n = data.len();
+    let n = samples.len();
     Curves {
         channels: data.channels.clone(),
-        sample_id: (0..n as u64).collect(),
-        sample_line: (0..n)
-            .map(|i| data.line.get(i).copied().unwrap_or(i as u64 + 1))
-            .collect(),
-        sample_angles: data
-            .angles
+        sample_id: samples.iter().map(|&i| i as u64).collect(),
+        sample_line: samples
             .iter()
-            .map(|a| {
-                [
-                    a.theta_i.to_degrees(),
-                    a.phi_i.to_degrees(),
-                    a.theta_r.to_degrees(),
-                    a.phi_r.to_degrees(),
-                ]
-            })
+            .map(|&i| data.line.get(i).copied().unwrap_or(i as u64 + 1))
+            .collect(),
+        sample_angles: samples
+            .iter()
+            .map(|&i| angles_deg(&data.angles[i]))
             .collect(),
         row_sample: (0..n * nc).map(|k| (k / nc.max(1)) as u32).collect(),
         row_channel: (0..n * nc).map(|k| (k % nc.max(1)) as u32).collect(),
         values,
+    }
+}
+
+/// ‖fit − data‖ / ‖data‖ over every row. Both sums overflow on values near 1e300: then the
+/// ratio is NaN and the data are not known to be exact.
+fn relative_misfit(data: &FitData, e: &Evaluation) -> f64 {
+    let nc = data.n_channels().max(1);
+    let (misfit, size) = data
+        .values
+        .iter()
+        .enumerate()
+        .fold((0.0, 0.0), |(m, s), (k, &d)| {
+            (m + (e.scale[k % nc] * e.model[k] - d).powi(2), s + d * d)
+        });
+    (misfit / size).sqrt()
+}
+
+fn angles_deg(a: &crate::model::Angles) -> [f64; 4] {
+    [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees)
+}
+
+/// The samples whose rows curves.csv gets under `mode`: all, the summary's, or none.
+fn written_samples(mode: CurvesMode, data: &FitData, e: &Evaluation) -> Vec<usize> {
+    let nc = data.n_channels().max(1);
+    match mode {
+        CurvesMode::Full => (0..data.len()).collect(),
+        CurvesMode::Summary => {
+            let angles: Vec<[f64; 4]> = data.angles.iter().map(angles_deg).collect();
+            crate::report::summary_samples(&angles, |i| {
+                e.robust_weight[i * nc..(i + 1) * nc]
+                    .iter()
+                    .any(|&w| w < DOWN_WEIGHT)
+            })
+        }
+        CurvesMode::None => Vec::new(),
     }
 }
 
@@ -425,7 +455,13 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings: &warnings,
         dof: unc.dof,
     });
-    let curves = curves_of(ev, data, &params, &e);
+    let curves = curves_of(
+        ev,
+        data,
+        &params,
+        &e,
+        &written_samples(options.curves, data, &e),
+    );
     if curves.values.iter().any(|r| {
         ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
             .iter()
@@ -463,6 +499,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         json,
         params,
         curves,
+        relative_misfit: relative_misfit(data, &e),
         timing: Timing {
             wall_time_s: started.elapsed().as_secs_f64(),
             stages: stage_times,

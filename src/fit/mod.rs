@@ -63,6 +63,11 @@ pub const SCREEN_FACTOR: usize = 25;
 /// Above this many rows (samples × channels) an interrupted fit writes the summary curves.
 pub const INTERRUPTED_FULL_CURVES_ROWS: usize = 300_000;
 
+/// `--curves auto` writes every row up to this many rows (samples × channels; ~240 MB of
+/// curves.csv) and the summary above: a million-sample capture's full table is larger than its
+/// data and takes longer to write than the fit takes.
+pub const AUTO_FULL_CURVES_ROWS: usize = 1_000_000;
+
 /// How the lobes/effects of the fit are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EffectsChoice {
@@ -146,8 +151,9 @@ pub struct FitOptions {
     pub family: ModelFamily,
     /// The Chiang model's terms and width nodes (`--terms`, `--width-nodes`), for `--model chiang`.
     pub chiang: ChiangModel,
-    /// How much of the curves the fit's directory gets (`--curves`).
-    pub curves: CurvesMode,
+    /// How much of the curves the fit's directory gets (`--curves`); `None`: auto (full up to
+    /// [`AUTO_FULL_CURVES_ROWS`] rows, the summary above).
+    pub curves: Option<CurvesMode>,
 }
 
 impl Default for FitOptions {
@@ -173,29 +179,39 @@ impl Default for FitOptions {
             intervals: Intervals::Auto,
             family: ModelFamily::Marschner,
             chiang: ChiangModel::default(),
-            curves: CurvesMode::Full,
+            curves: None,
         }
     }
 }
 
 /// Samples of a loaded [`Dataset`].
 pub fn fit_data(ds: &Dataset) -> FitData {
-    let angles = (0..ds.len())
+    into_fit_data(ds.clone())
+}
+
+/// [`fit_data`] that takes the dataset, so its values are moved rather than copied (a million
+/// samples × 3 channels hold ~100 MB that would otherwise live twice through the fit).
+pub fn into_fit_data(ds: Dataset) -> FitData {
+    let angles = angles_of(&ds);
+    FitData {
+        channels: ds.channels,
+        angles,
+        values: ds.radiance,
+        sigma: ds.sigma,
+        weight: ds.weight,
+        line: ds.source_line,
+    }
+}
+
+fn angles_of(ds: &Dataset) -> Vec<crate::model::Angles> {
+    (0..ds.len())
         .map(|i| crate::model::Angles {
             theta_i: ds.theta_i[i],
             phi_i: ds.phi_i[i],
             theta_r: ds.theta_r[i],
             phi_r: ds.phi_r[i],
         })
-        .collect();
-    FitData {
-        channels: ds.channels.clone(),
-        angles,
-        values: ds.radiance.clone(),
-        sigma: ds.sigma.clone(),
-        weight: ds.weight.clone(),
-        line: ds.source_line.clone(),
-    }
+        .collect()
 }
 
 /// Every parameter name in output order (the parameter table's order).
@@ -214,14 +230,18 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>>
 }
 
 /// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,
-/// or a parameter file of either family from [`fit_family`]), the curves at every sample (all
-/// of them, whatever `--curves` writes) and the run's wall-clock times (timing.json).
+/// or a parameter file of either family from [`fit_family`]), the curves curves.csv gets (all
+/// rows, the summary's, or none, as fit.json's `options.curves` says) and the run's wall-clock
+/// times (timing.json).
 #[derive(Debug, Clone)]
 pub struct FitOutcome<P = Params<f64>> {
     pub json: FitJson,
     pub params: P,
     pub curves: Curves,
     pub timing: Timing,
+    /// ‖fit − data‖ / ‖data‖ over every row (NaN when a value is missing): near rounding for
+    /// noise-free data.
+    pub relative_misfit: f64,
 }
 
 impl<P> FitOutcome<P> {
@@ -232,6 +252,7 @@ impl<P> FitOutcome<P> {
             json: self.json,
             curves: self.curves,
             timing: self.timing,
+            relative_misfit: self.relative_misfit,
         }
     }
 }
@@ -252,14 +273,11 @@ pub fn write_outputs_with<P>(
     crate::files::write_fit_dir(dir, &out.json, curves, &out.timing)
 }
 
-/// The curves `curves.csv` gets under fit.json's `options.curves`: all of them, the summary's
-/// rows ([`crate::report::summary_rows`]), or none.
+/// The curves `curves.csv` gets under fit.json's `options.curves`: the outcome's (all rows, or
+/// the summary's rows the fit built), or none.
 pub fn written_curves<P>(out: &FitOutcome<P>) -> Option<std::borrow::Cow<'_, Curves>> {
     match out.json.options.curves {
-        CurvesMode::Full => Some(std::borrow::Cow::Borrowed(&out.curves)),
-        CurvesMode::Summary => Some(std::borrow::Cow::Owned(
-            out.curves.select(&crate::report::summary_rows(&out.curves)),
-        )),
+        CurvesMode::Full | CurvesMode::Summary => Some(std::borrow::Cow::Borrowed(&out.curves)),
         CurvesMode::None => None,
     }
 }
@@ -461,6 +479,12 @@ pub fn fit_with<F: Forward>(
     // After Ctrl-C the user wants the best parameters now: a large fit writes the summary
     // curves (what the report draws) instead of spending seconds per million rows on the rest.
     let rows = data.len() * data.n_channels();
+    if opts.curves.is_none() && rows > AUTO_FULL_CURVES_ROWS {
+        options.curves = CurvesMode::Summary;
+        options.curves_reason = format!(
+            "auto: {rows} rows (samples × channels) > {AUTO_FULL_CURVES_ROWS}; --curves full writes every row"
+        );
+    }
     if status == FitStatus::Interrupted
         && options.curves == CurvesMode::Full
         && rows > INTERRUPTED_FULL_CURVES_ROWS

@@ -530,13 +530,7 @@ pub fn intervals<F: Forward, Q>(
         return Ok(());
     }
     // Noise-free data: the cost is rounding, so Δχ² (and every interval) would be rounding noise.
-    let (mut misfit, mut size) = (0.0, 0.0);
-    for r in &out.curves {
-        misfit += (r.fit - r.data).powi(2);
-        size += r.data * r.data;
-    }
-    // Both sums overflow on values near 1e300: then the data are not known to be exact.
-    let relative = (misfit / size).sqrt();
+    let relative = out.relative_misfit;
     if relative.is_finite() && relative <= 1e-9 {
         record(out, "linear", format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile"));
         return Ok(());

@@ -392,7 +392,8 @@ pub fn options_record<P: FitParam>(
     floored: Floored,
 ) -> OptionsRecord {
     OptionsRecord {
-        curves: opts.curves,
+        curves: opts.curves.unwrap_or_default(),
+        curves_reason: String::new(),
         effects_choice: choice.effects_choice,
         effects_reasons: choice.reasons.clone(),
         fixed: set

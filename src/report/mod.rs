@@ -34,7 +34,7 @@ use figures::{
 };
 use panels::Ctx;
 use slices::{find_slices, samples_of, Slice, SliceKind};
-pub use summary::{summary_rows, SUMMARY_SAMPLES};
+pub use summary::{summary_rows, summary_samples, SUMMARY_SAMPLES};
 
 /// Points of the dense model curve per slice (the curve is never decimated).
 pub const DENSE_POINTS: usize = 721;
@@ -162,8 +162,13 @@ pub fn render_curves_report(
     match curves {
         Some(curves) => {
             if fit.options.curves == CurvesMode::Summary {
+                let why = if fit.options.curves_reason.is_empty() {
+                    "`--curves summary`".to_string()
+                } else {
+                    format!("`--curves {}`", fit.options.curves_reason)
+                };
                 summary.notes.push(format!(
-                    "curves.csv is a summary (`--curves summary`): {} rows of {} samples, the slices drawn, an even spread and every down-weighted sample; figures of the data show those rows only",
+                    "curves.csv is a summary ({why}): {} rows of {} samples, the slices drawn, an even spread and every down-weighted sample; figures of the data show those rows only",
                     curves.len(),
                     curves.n_samples()
                 ));
