@@ -333,10 +333,7 @@ fn curves_of<F: Forward>(
             .iter()
             .map(|&i| data.line.get(i).copied().unwrap_or(i as u64 + 1))
             .collect(),
-        sample_angles: samples
-            .iter()
-            .map(|&i| angles_deg(&data.angles[i]))
-            .collect(),
+        sample_angles: samples.iter().map(|&i| data.angles_deg(i)).collect(),
         row_sample: (0..n * nc).map(|k| (k / nc.max(1)) as u32).collect(),
         row_channel: (0..n * nc).map(|k| (k % nc.max(1)) as u32).collect(),
         values,
@@ -357,23 +354,20 @@ fn relative_misfit(data: &FitData, e: &Evaluation) -> f64 {
     (misfit / size).sqrt()
 }
 
-fn angles_deg(a: &crate::model::Angles) -> [f64; 4] {
-    [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees)
-}
-
 /// The samples whose rows curves.csv gets under `mode`: all, the summary's, or none.
 fn written_samples(mode: CurvesMode, data: &FitData, e: &Evaluation) -> Vec<usize> {
     let nc = data.n_channels().max(1);
     match mode {
         CurvesMode::Full => (0..data.len()).collect(),
-        CurvesMode::Summary => {
-            let angles: Vec<[f64; 4]> = data.angles.iter().map(angles_deg).collect();
-            crate::report::summary_samples(&angles, |i| {
+        CurvesMode::Summary => crate::report::summary_samples(
+            data.len(),
+            |i| data.angles_deg(i),
+            |i| {
                 e.robust_weight[i * nc..(i + 1) * nc]
                     .iter()
                     .any(|&w| w < DOWN_WEIGHT)
-            })
-        }
+            },
+        ),
         CurvesMode::None => Vec::new(),
     }
 }

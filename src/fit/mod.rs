@@ -398,30 +398,9 @@ pub fn fit_with<F: Forward>(
         forward,
         ..
     } = run;
-    let evaluator = |d: &FitData, loss: Loss, loss_scale: f64| {
-        Evaluator::new(
-            forward,
-            d,
-            opts.space,
-            loss,
-            loss_scale,
-            run.base.clone(),
-            run.free.clone(),
-        )
-    };
     let screening = run.screening.unwrap_or(forward);
-    let sub_evaluator = |d: &FitData, loss: Loss, loss_scale: f64| {
-        Evaluator::new(
-            screening,
-            d,
-            opts.space,
-            loss,
-            loss_scale,
-            run.base.clone(),
-            run.free.clone(),
-        )
-    };
-    let (mut ev_full, floored) = evaluator(data, opts.loss, 1.0)?;
+    let (mut ev_full, floored) =
+        evaluator_for(forward, data, opts.space, opts.loss, &run.base, &run.free)?;
     stages::warn_floored(data, &floored, &mut warnings);
     let sub_idx = design::subsample(
         data.len(),
@@ -429,7 +408,9 @@ pub fn fit_with<F: Forward>(
         opts.seed ^ 0x5b5b_0000_0001,
     );
     let sub_data = data.subset(&sub_idx);
-    let (mut ev_sub, _) = sub_evaluator(&sub_data, opts.loss, 1.0)?;
+    let (mut ev_sub, _) = evaluator_for(
+        screening, &sub_data, opts.space, opts.loss, &run.base, &run.free,
+    )?;
 
     let ranges: Vec<(f64, f64)> = run.free.iter().map(|&p| p.typical_range()).collect();
     let mut starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
@@ -443,7 +424,14 @@ pub fn fit_with<F: Forward>(
         LossScale::Fixed(c) => c,
         LossScale::Auto if !auto_scale => 1.0,
         LossScale::Auto => {
-            let (ev_l2, _) = sub_evaluator(&sub_data, Loss::L2, 1.0)?;
+            let (ev_l2, _) = evaluator_for(
+                screening,
+                &sub_data,
+                opts.space,
+                Loss::L2,
+                &run.base,
+                &run.free,
+            )?;
             let (runs, order) =
                 stages::multistart_as("loss-scale-l2", &ev_l2, &starts, opts, &bar, &mut log);
             let e = ev_l2.eval_internal(&runs[order[0]].u, false);
@@ -463,7 +451,15 @@ pub fn fit_with<F: Forward>(
     let screen_size = SCREEN_FACTOR * opts.subsample.max(1);
     if candidates.len() > 1 && data.len() > 4 * screen_size {
         let idx = design::subsample(data.len(), screen_size, opts.seed ^ 0x5b5b_0000_0002);
-        let (mut ev_screen, _) = evaluator(&data.subset(&idx), opts.loss, 1.0)?;
+        let screen_data = data.subset(&idx);
+        let (mut ev_screen, _) = evaluator_for(
+            forward,
+            &screen_data,
+            opts.space,
+            opts.loss,
+            &run.base,
+            &run.free,
+        )?;
         ev_screen.loss_scale = loss_scale;
         candidates = vec![stages::screen(&ev_screen, &candidates, opts, &mut log)];
     }
@@ -531,6 +527,19 @@ pub fn fit_with<F: Forward>(
     profile::intervals(&mut out, optimum, &best, opts, run.started)?;
     verdict::after_profiles(&mut out.json, data);
     Ok(out)
+}
+
+/// An evaluator of `d` with the run's fixed values and free parameters (loss scale 1 until the
+/// run sets it); a function rather than a closure so each call borrows its own data.
+fn evaluator_for<'e, F: Forward>(
+    forward: &'e F,
+    d: &'e FitData,
+    space: Space,
+    loss: Loss,
+    base: &ParamSet<F>,
+    free: &[F::Param],
+) -> Result<(Evaluator<'e, F>, Floored)> {
+    Evaluator::new(forward, d, space, loss, 1.0, base.clone(), free.to_vec())
 }
 
 /// `get` re-exported for callers that index parameters by name.

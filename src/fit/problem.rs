@@ -43,6 +43,12 @@ impl FitData {
         self.angles.is_empty()
     }
 
+    /// Sample `i`'s angles in degrees, `[θ_i, φ_i, θ_r, φ_r]` (the order reports use).
+    pub fn angles_deg(&self, i: usize) -> [f64; 4] {
+        let a = &self.angles[i];
+        [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees)
+    }
+
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
         self.channels.len()

@@ -17,7 +17,7 @@ use crate::files::{
 };
 use crate::fit::Loss;
 use crate::model::ModelConfig;
-use crate::report::slices::{find_slices, Sample, Slice};
+use crate::report::slices::{find_slices_by, Slice};
 
 /// A test rejects the model when its p-value is below 1e-3: with the handful of tests applied
 /// to one fit, a model that does describe its data is called poor about once in 300–1000 fits,
@@ -301,17 +301,7 @@ fn loss_scale_failure<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<String>
 /// The data's scan slices (fixed incidence and one outgoing angle, swept in order), found as the
 /// report finds them.
 pub fn scan_slices(data: &FitData) -> Vec<Slice> {
-    let samples: Vec<Sample> = data
-        .angles
-        .iter()
-        .enumerate()
-        .map(|(i, a)| Sample {
-            id: i as u64,
-            angles: [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees),
-            rows: Vec::new(),
-        })
-        .collect();
-    find_slices(&samples).0
+    find_slices_by(data.len(), |i| data.angles_deg(i)).0
 }
 
 /// Goodness-of-fit statistics of the final residuals.
@@ -593,25 +583,28 @@ fn poisson_upper_tail(k: usize, lambda: f64) -> f64 {
 /// million samples group in a parallel sort, where a map of (direction, channel) keys took
 /// seconds and ~200 MB.
 fn direction_groups(angles: &[crate::model::Angles]) -> (Vec<usize>, Vec<usize>) {
-    let key = |v: f64| (crate::model::angles::wrap_deg(v.to_degrees()) * 1e6).round() as i64;
-    let mut keyed: Vec<([i64; 4], usize)> = angles
+    // |wrap(φ)| ≤ 180° is at most 1.8e8 units of 1e-6°: an i32 (20 bytes per sample with its
+    // index, 200 MB at 10M samples where (i64 × 4, usize) took 400 MB).
+    let key = |v: f64| (crate::model::angles::wrap_deg(v.to_degrees()) * 1e6).round() as i32;
+    // Sample indices fit u32: the curves table numbers samples in u32 too.
+    let mut keyed: Vec<([i32; 4], u32)> = angles
         .par_iter()
         .enumerate()
-        .map(|(i, a)| ([a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(key), i))
+        .map(|(i, a)| ([a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(key), i as u32))
         .collect();
     keyed.par_sort_unstable();
     // The first (smallest) sample index of each sample's run of equal keys.
-    let mut first = vec![0usize; angles.len()];
+    let mut first = vec![0u32; angles.len()];
     for run in keyed.chunk_by(|a, b| a.0 == b.0) {
         for &(_, i) in run {
-            first[i] = run[0].1;
+            first[i as usize] = run[0].1;
         }
     }
     drop(keyed);
     let mut group = vec![usize::MAX; angles.len()];
     let mut counts = Vec::new();
     for i in 0..angles.len() {
-        let f = first[i];
+        let f = first[i] as usize;
         if f == i {
             group[i] = counts.len();
             counts.push(0);

@@ -175,25 +175,28 @@ fn key(v: f64) -> i64 {
 /// Group samples into slices; returns the slices (sorted by kind and fixed angles) and the
 /// indices of samples in no slice.
 pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
+    find_slices_by(samples.len(), |i| samples[i].angles)
+}
+
+/// [`find_slices`] of `n` samples whose angles (degrees) `angles(i)` gives, so a caller with
+/// the angles at hand (a fit's data) needs no [`Sample`] per sample.
+pub fn find_slices_by(n: usize, angles: impl Fn(usize) -> [f64; 4]) -> (Vec<Slice>, Vec<usize>) {
     // Incidence groups by one sort (in key order, members in sample order, as a map would
     // give them) rather than a map of a Vec per group: scattered data has a group per sample.
-    let mut keyed: Vec<(i64, i64, usize)> = samples
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| s.angles.iter().all(|a| a.is_finite()))
-        .map(|(i, s)| (key(s.angles[0]), key(s.angles[1]), i))
+    let finite = |i: usize| angles(i).iter().all(|a| a.is_finite());
+    let mut keyed: Vec<(i64, i64, usize)> = (0..n)
+        .filter(|&i| finite(i))
+        .map(|i| {
+            let a = angles(i);
+            (key(a[0]), key(a[1]), i)
+        })
         .collect();
     keyed.sort_unstable();
     let mut slices = Vec::new();
-    let mut scattered: Vec<usize> = samples
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| !s.angles.iter().all(|a| a.is_finite()))
-        .map(|(i, _)| i)
-        .collect();
+    let mut scattered: Vec<usize> = (0..n).filter(|&i| !finite(i)).collect();
     // Incidence groups are disjoint, so one mark array serves them all (allocating it per
     // group made scattered directions, one group per sample, quadratic).
-    let mut in_slice = vec![false; samples.len()];
+    let mut in_slice = vec![false; n];
     let mut members: Vec<usize> = Vec::new();
     for group in keyed.chunk_by(|a, b| (a.0, a.1) == (b.0, b.1)) {
         // Too few samples for any slice: all scattered, no sub-grouping needed.
@@ -204,10 +207,10 @@ pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
         members.clear();
         members.extend(group.iter().map(|g| g.2));
         let members = &members;
-        let first = samples[members[0]].angles;
+        let first = angles(members[0]);
         // Azimuthal candidates share θ_r and sweep φ_r; longitudinal ones share φ_r and sweep θ_r.
-        let azimuthal = sub_slices(samples, members, 2, 3);
-        let longitudinal = sub_slices(samples, members, 3, 2);
+        let azimuthal = sub_slices(&angles, members, 2, 3);
+        let longitudinal = sub_slices(&angles, members, 3, 2);
         let covered = |c: &Vec<(f64, Vec<usize>)>| c.iter().map(|(_, m)| m.len()).sum::<usize>();
         let (chosen, is_azimuthal) = if covered(&azimuthal) >= covered(&longitudinal) {
             (azimuthal, true)
@@ -226,11 +229,7 @@ pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
                 phi_i: first[1],
                 samples: Vec::new(),
             };
-            m.sort_by(|&a, &b| {
-                slice
-                    .x_of(&samples[a].angles)
-                    .total_cmp(&slice.x_of(&samples[b].angles))
-            });
+            m.sort_by(|&a, &b| slice.x_of(&angles(a)).total_cmp(&slice.x_of(&angles(b))));
             m.iter().for_each(|&i| in_slice[i] = true);
             slices.push(Slice {
                 samples: m,
@@ -258,27 +257,24 @@ pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
 /// Sub-groups of `members` sharing angle `fixed` whose angle `swept` takes at least
 /// [`MIN_SLICE_POINTS`] distinct values: (fixed value, members).
 fn sub_slices(
-    samples: &[Sample],
+    angles: &impl Fn(usize) -> [f64; 4],
     members: &[usize],
     fixed: usize,
     swept: usize,
 ) -> Vec<(f64, Vec<usize>)> {
     let mut groups: BTreeMap<i64, Vec<usize>> = BTreeMap::new();
     for &i in members {
-        groups
-            .entry(key(samples[i].angles[fixed]))
-            .or_default()
-            .push(i);
+        groups.entry(key(angles(i)[fixed])).or_default().push(i);
     }
     groups
         .into_values()
         .filter(|m| {
-            let mut values: Vec<i64> = m.iter().map(|&i| key(samples[i].angles[swept])).collect();
+            let mut values: Vec<i64> = m.iter().map(|&i| key(angles(i)[swept])).collect();
             values.sort_unstable();
             values.dedup();
             values.len() >= MIN_SLICE_POINTS
         })
-        .map(|m| (samples[m[0]].angles[fixed], m))
+        .map(|m| (angles(m[0])[fixed], m))
         .collect()
 }
 

@@ -2,7 +2,7 @@
 //! Deterministic (no randomness, only the table's order), so the same fit writes the same file.
 
 use super::decimate::stride_indices;
-use super::slices::{find_slices, samples_of, Sample};
+use super::slices::{find_slices_by, samples_of};
 use super::{MAX_PANELS, MAX_SLICE_POINTS};
 use crate::files::Curves;
 
@@ -14,9 +14,11 @@ pub const SUMMARY_SAMPLES: usize = 2000;
 /// loss down-weighted. A kept sample keeps all its rows, so every outlier row is kept.
 pub fn summary_rows(curves: &Curves) -> Vec<usize> {
     let samples = samples_of(curves);
-    let keep = kept_samples(&samples, |k| {
-        samples[k].rows.iter().any(|&r| curves.down_weighted(r))
-    });
+    let keep = kept_samples(
+        samples.len(),
+        |k| samples[k].angles,
+        |k| samples[k].rows.iter().any(|&r| curves.down_weighted(r)),
+    );
     let mut rows: Vec<usize> = samples
         .iter()
         .zip(&keep)
@@ -28,37 +30,34 @@ pub fn summary_rows(curves: &Curves) -> Vec<usize> {
 }
 
 /// The samples (in order) whose rows [`summary_rows`] keeps, for a fit's own table before it
-/// is built (sample `i` holds rows `i·nc .. (i+1)·nc`): from the samples' angles in degrees and
-/// whether any of sample `i`'s values was down-weighted. A fit writing the summary builds only
+/// is built (sample `i` holds rows `i·nc .. (i+1)·nc`): from the `n` samples' angles in degrees
+/// and whether any of sample `i`'s values was down-weighted. A fit writing the summary builds only
 /// these rows instead of the whole table.
 pub fn summary_samples(
-    angles_deg: &[[f64; 4]],
+    n: usize,
+    angles_deg: impl Fn(usize) -> [f64; 4],
     down_weighted: impl Fn(usize) -> bool,
 ) -> Vec<usize> {
-    let samples: Vec<Sample> = angles_deg
-        .iter()
-        .enumerate()
-        .map(|(i, &angles)| Sample {
-            id: i as u64,
-            angles,
-            rows: Vec::new(),
-        })
-        .collect();
-    let keep = kept_samples(&samples, down_weighted);
-    (0..samples.len()).filter(|&k| keep[k]).collect()
+    let keep = kept_samples(n, angles_deg, down_weighted);
+    (0..n).filter(|&k| keep[k]).collect()
 }
 
-/// Which samples the summary keeps: slice members as drawn, the even spread, the down-weighted.
-fn kept_samples(samples: &[Sample], down_weighted: impl Fn(usize) -> bool) -> Vec<bool> {
-    let (slices, _) = find_slices(samples);
-    let mut keep = vec![false; samples.len()];
+/// Which of `n` samples the summary keeps: slice members as drawn, the even spread, the
+/// down-weighted.
+fn kept_samples(
+    n: usize,
+    angles_deg: impl Fn(usize) -> [f64; 4],
+    down_weighted: impl Fn(usize) -> bool,
+) -> Vec<bool> {
+    let (slices, _) = find_slices_by(n, angles_deg);
+    let mut keep = vec![false; n];
     for i in stride_indices(slices.len(), MAX_PANELS) {
         let members = &slices[i].samples;
         for k in stride_indices(members.len(), MAX_SLICE_POINTS) {
             keep[members[k]] = true;
         }
     }
-    for k in stride_indices(samples.len(), SUMMARY_SAMPLES) {
+    for k in stride_indices(n, SUMMARY_SAMPLES) {
         keep[k] = true;
     }
     for (k, kept) in keep.iter_mut().enumerate() {
