@@ -26,7 +26,7 @@ pub use curves::{
     DOWN_WEIGHT,
 };
 pub use fit_json::{
-    ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource, FitJson, FitStatus,
+    ChannelCorrelation, ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource, FitJson, FitStatus,
     Floored, GofThresholds, GoodnessOfFit, Interval, OptionsRecord, ParamStatus, ParameterEntry,
     ResidualSummary, ScaleEntry, ScaleMethod, Suggestion, TraceStage, Verdict,
 };
