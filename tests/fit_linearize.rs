@@ -90,7 +90,11 @@ fn check(space: Space, loss: Loss, fixed: bool) {
     let r = DVector::from_column_slice(&dense.residual);
     let what = format!("{space} {loss} fixed={fixed}");
     assert_eq!(lin.rows, m);
-    assert_gram_close(&(j.tr_mul(&j)), &(lin.matrix().tr_mul(&lin.matrix())), &what);
+    assert_gram_close(
+        &(j.tr_mul(&j)),
+        &(lin.matrix().tr_mul(&lin.matrix())),
+        &what,
+    );
     let (g, gl) = (j.tr_mul(&r), lin.matrix().tr_mul(&lin.rhs()));
     let jn = j.tr_mul(&j);
     for k in 0..g.len() {
@@ -231,7 +235,9 @@ fn extra_columns_keep_their_inner_products_with_the_jacobian() {
     full.set_column(dense.n_cols + 1, &DVector::from_column_slice(&e1));
     full.set_column(dense.n_cols + 2, &DVector::from_column_slice(&e2));
     let mut reduced = DMatrix::zeros(lin.matrix().nrows(), dense.n_cols + 3);
-    reduced.columns_mut(0, dense.n_cols).copy_from(&lin.matrix());
+    reduced
+        .columns_mut(0, dense.n_cols)
+        .copy_from(&lin.matrix());
     reduced.set_column(dense.n_cols, &lin.rhs());
     reduced
         .columns_mut(dense.n_cols + 1, 2)

@@ -13,9 +13,9 @@ use super::FitOutcome;
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
 use crate::files::{
-    finite, ChannelCorrelation, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo, DownWeighted, FitJson,
-    FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
-    StageTiming, Timing, TraceStage, DOWN_WEIGHT,
+    finite, ChannelCorrelation, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo,
+    DownWeighted, FitJson, FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry,
+    ResidualSummary, ScaleEntry, StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
 use crate::model::ModelConfig;
 
@@ -112,8 +112,8 @@ fn correlation_record<F: Forward>(
     let nf = ev.free.len();
     let corr = |i: usize, j: usize| unc.cov.as_ref().and_then(|c| finite(c.correlation(i, j)));
     let full = nf <= Correlation::FULL_MAX;
-    let (shared, own): (Vec<usize>, Vec<usize>) = (0..nf)
-        .partition(|&j| full || ev.free[j].channel().is_none_or(|c| c >= nc));
+    let (shared, own): (Vec<usize>, Vec<usize>) =
+        (0..nf).partition(|&j| full || ev.free[j].channel().is_none_or(|c| c >= nc));
     Correlation {
         names: shared.iter().map(|&j| ev.free[j].json_name()).collect(),
         matrix: shared

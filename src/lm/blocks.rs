@@ -44,9 +44,9 @@ impl BlockSystem {
 
     /// Whether every entry of `M` and `t` is finite.
     pub fn all_finite(&self) -> bool {
-        self.blocks.iter().all(|b| {
-            b.matrix.iter().all(|v| v.is_finite()) && b.rhs.iter().all(|v| v.is_finite())
-        })
+        self.blocks
+            .iter()
+            .all(|b| b.matrix.iter().all(|v| v.is_finite()) && b.rhs.iter().all(|v| v.is_finite()))
     }
 
     /// Solver index of column `k` of block `b`'s matrix.
@@ -163,11 +163,7 @@ struct Factor {
 /// last column is a right-hand side).
 fn triangle(a: DMatrix<f64>, min_rows: usize) -> DMatrix<f64> {
     let w = a.ncols();
-    let r = if a.nrows() == 0 {
-        a
-    } else {
-        a.qr().r()
-    };
+    let r = if a.nrows() == 0 { a } else { a.qr().r() };
     if r.nrows() >= min_rows {
         return r;
     }
@@ -455,16 +451,16 @@ pub fn block_covariance(
     if dof == 0 || n == 0 || sys.nrows() == 0 || !residual_ss.is_finite() || !sys.all_finite() {
         return None;
     }
-    let norms = sys
-        .column_norms()
-        .map(|c| if c > 0.0 { c } else { 1.0 });
+    let norms = sys.column_norms().map(|c| if c > 0.0 { c } else { 1.0 });
     let scaled = sys.scale_columns(&norms);
     let f = Factor::of(&scaled, 0.0);
     let (mut smax, mut smin) = sv_range(&f.rs);
     for pv in &f.pivots {
         let mut whole = DMatrix::zeros(pv.p.nrows(), pv.p.ncols() + pv.b.ncols());
         whole.columns_mut(0, pv.p.ncols()).copy_from(&pv.p);
-        whole.columns_mut(pv.p.ncols(), pv.b.ncols()).copy_from(&pv.b);
+        whole
+            .columns_mut(pv.p.ncols(), pv.b.ncols())
+            .copy_from(&pv.b);
         if whole.nrows() > 0 {
             smax = smax.max(whole.singular_values().max());
             smin = smin.min(sv_range(&pv.p).1);
@@ -663,14 +659,19 @@ mod tests {
             let h = m.tr_mul(&m) + DMatrix::identity(sys.ncols, sys.ncols) * lambda;
             let expect = -h.clone().lu().solve(&m.tr_mul(&t)).unwrap();
             // A well-conditioned 12-column system: both solves are accurate to ~1e-14.
-            assert!((&z - &expect).norm() < 1e-10 * expect.norm(), "λ = {lambda}");
+            assert!(
+                (&z - &expect).norm() < 1e-10 * expect.norm(),
+                "λ = {lambda}"
+            );
             let slope = expect.dot(&h.lu().solve(&expect).unwrap());
             assert!((f.slope(&sys, &z) / slope - 1.0).abs() < 1e-10);
         }
-        assert!((sys.apply_norm2(&DVector::repeat(sys.ncols, 1.0))
-            - (&m * DVector::repeat(sys.ncols, 1.0)).norm_squared())
-        .abs()
-            < 1e-12);
+        assert!(
+            (sys.apply_norm2(&DVector::repeat(sys.ncols, 1.0))
+                - (&m * DVector::repeat(sys.ncols, 1.0)).norm_squared())
+            .abs()
+                < 1e-12
+        );
     }
 
     #[test]
@@ -714,7 +715,11 @@ mod tests {
         }
         let cov = block_covariance(&sys, 1.0, 3, super::super::DEFAULT_RCOND).unwrap();
         assert!(cov.rank_deficiency >= 1);
-        assert!(cov.undetermined[1] && cov.undetermined[2], "{:?}", cov.null_weights);
+        assert!(
+            cov.undetermined[1] && cov.undetermined[2],
+            "{:?}",
+            cov.null_weights
+        );
         assert!(!cov.undetermined[0]);
     }
 }

@@ -152,10 +152,7 @@ fn dropped_weights(sigma: &DVector<f64>, v_t: &DMatrix<f64>, n: usize, rcond: f6
 /// the square of its blocks.
 #[derive(Debug, Clone)]
 pub enum ParameterCovariance {
-    Dense {
-        cov: Covariance,
-        corr: DMatrix<f64>,
-    },
+    Dense { cov: Covariance, corr: DMatrix<f64> },
     Blocks(BlockCovariance),
 }
 

@@ -29,11 +29,11 @@ mod iterate;
 mod least_squares;
 mod step;
 
+pub use blocks::{block_covariance, Block, BlockCovariance, BlockSystem};
 pub use covariance::{
     correlation, covariance, covariance_with_rcond, null_space_weights, Covariance,
     ParameterCovariance, DEFAULT_RCOND,
 };
-pub use blocks::{block_covariance, Block, BlockCovariance, BlockSystem};
 pub use least_squares::{LeastSquares, Linearized, System};
 use step::ScaledSvd;
 

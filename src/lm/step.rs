@@ -57,7 +57,11 @@ pub(super) fn scaled_gradient(gradient: &DVector<f64>, diag: &DVector<f64>) -> f
 }
 
 /// [`gradient_cosine`] from the gradient `Jᵀr` (for a block linearisation).
-pub(super) fn gradient_cosine_of(gradient: &DVector<f64>, col_norms: &DVector<f64>, rn: f64) -> f64 {
+pub(super) fn gradient_cosine_of(
+    gradient: &DVector<f64>,
+    col_norms: &DVector<f64>,
+    rn: f64,
+) -> f64 {
     gradient
         .iter()
         .zip(col_norms.iter())

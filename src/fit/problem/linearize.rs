@@ -29,9 +29,9 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 use super::evaluator::{Evaluator, Space};
-use crate::lm::{Block, BlockSystem, Linearized, ParameterCovariance, System};
 use super::forward::{FitParam, Forward, ParamSet};
 use super::residual::{ScaleMode, CHUNK};
+use crate::lm::{Block, BlockSystem, Linearized, ParameterCovariance, System};
 
 /// Model values below this are floored before taking logarithms (as in the residual pass).
 const MODEL_FLOOR: f64 = 1e-300;
@@ -76,7 +76,10 @@ impl Linearization {
     pub fn rhs(&self) -> DVector<f64> {
         DVector::from_iterator(
             self.system.nrows(),
-            self.system.blocks.iter().flat_map(|b| b.rhs.iter().copied()),
+            self.system
+                .blocks
+                .iter()
+                .flat_map(|b| b.rhs.iter().copied()),
         )
     }
 
@@ -474,11 +477,7 @@ impl<F: Forward> Evaluator<'_, F> {
                     }
                     row += 1;
                 }
-                Block {
-                    local,
-                    matrix,
-                    rhs,
-                }
+                Block { local, matrix, rhs }
             })
             .collect();
         Some(Linearization {
