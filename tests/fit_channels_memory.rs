@@ -22,6 +22,8 @@ const SAMPLES: usize = 40;
 
 /// Run hairfit with `args` (stdout/stderr to `log`), at most `limit`; its exit success and peak
 /// resident set in KiB (`ru_maxrss` of exactly this child, from `wait4`).
+// The child is reaped by `wait4` (which also returns its usage), not by `Child::wait`.
+#[allow(clippy::zombie_processes)]
 fn peak_rss_kib(args: &[&str], log: &Path, limit: Duration) -> (bool, i64) {
     let mut command = cli::hairfit_command(args);
     let out = File::create(log).unwrap();
