@@ -1,6 +1,7 @@
 //! Large-data passes of the fit: the chunked cost and the accumulated linearisation (per-channel
 //! QR, never the dense Jacobian) at 100k samples × 3 channels and 2000 samples × 100 channels
-//! (σ_a free per channel), against the dense Jacobian they replace.
+//! (σ_a free per channel), against the dense Jacobian they replace; the covariance by channel
+//! blocks against the dense one.
 //!
 //! `cargo bench --bench large`. Whole-command figures (1M × 3, 10M × 1, 100 channels, eval) are
 //! measured with `/usr/bin/time -v hairfit …` (README, Performance).
@@ -71,6 +72,19 @@ fn bench(c: &mut Criterion) {
         });
         group.bench_function(format!("dense jacobian {id}"), |b| {
             b.iter(|| ev.eval_internal(&u, true).n_cols)
+        });
+        // Standard errors from the linearisation: by channel blocks (Schur complement onto the
+        // shared parameters, linear in channels) against the dense SVD (cubic in channels).
+        let lin = ev.linearize_internal(&u, None).expect("no cancel flag");
+        let ss = lin.rhs().norm_squared();
+        let dof = lin.rows - lin.system.ncols;
+        group.bench_function(format!("covariance by blocks {id}"), |b| {
+            b.iter(|| {
+                hairfit::lm::block_covariance(&lin.system, ss, dof, hairfit::lm::DEFAULT_RCOND)
+            })
+        });
+        group.bench_function(format!("covariance dense {id}"), |b| {
+            b.iter(|| hairfit::lm::covariance(&lin.matrix(), ss, dof))
         });
     }
     group.finish();

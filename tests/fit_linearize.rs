@@ -90,8 +90,12 @@ fn check(space: Space, loss: Loss, fixed: bool) {
     let r = DVector::from_column_slice(&dense.residual);
     let what = format!("{space} {loss} fixed={fixed}");
     assert_eq!(lin.rows, m);
-    assert_gram_close(&(j.tr_mul(&j)), &(lin.matrix.tr_mul(&lin.matrix)), &what);
-    let (g, gl) = (j.tr_mul(&r), lin.matrix.tr_mul(&lin.rhs));
+    assert_gram_close(
+        &(j.tr_mul(&j)),
+        &(lin.matrix().tr_mul(&lin.matrix())),
+        &what,
+    );
+    let (g, gl) = (j.tr_mul(&r), lin.matrix().tr_mul(&lin.rhs()));
     let jn = j.tr_mul(&j);
     for k in 0..g.len() {
         // Same scale argument as the Gram matrix: |Jᵀr|_k ≤ ‖J_k‖‖r‖.
@@ -104,7 +108,7 @@ fn check(space: Space, loss: Loss, fixed: bool) {
         );
     }
     assert!(
-        (lin.rhs.norm() / r.norm() - 1.0).abs() < 1e-12,
+        (lin.rhs().norm() / r.norm() - 1.0).abs() < 1e-12,
         "{what} residual norm"
     );
     for (a, b) in lin.scale.iter().zip(&dense.scale) {
@@ -169,19 +173,19 @@ fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_wi
     };
     let (one, c1) = run(1500, 1);
     let (two, c2) = run(1500, 2);
-    assert_eq!(one.matrix.as_slice(), two.matrix.as_slice());
-    assert_eq!(one.rhs.as_slice(), two.rhs.as_slice());
+    assert_eq!(one.matrix().as_slice(), two.matrix().as_slice());
+    assert_eq!(one.rhs().as_slice(), two.rhs().as_slice());
     assert_eq!(c1.to_bits(), c2.to_bits());
     // Each channel keeps one triangle of (free columns + 2) rows, however many samples there are:
     // memory is linear in channels and independent of samples.
-    let width = one.matrix.ncols() + 2;
+    let width = one.matrix().ncols() + 2;
     let (small, _) = run(300, 2);
     assert!(
-        one.matrix.nrows() <= NC * width,
+        one.matrix().nrows() <= NC * width,
         "{} rows",
-        one.matrix.nrows()
+        one.matrix().nrows()
     );
-    assert_eq!(small.matrix.nrows(), one.matrix.nrows());
+    assert_eq!(small.matrix().nrows(), one.matrix().nrows());
 }
 
 /// Extra columns reduced alongside (the `--mode exact` evidence projects with them) keep every
@@ -230,9 +234,11 @@ fn extra_columns_keep_their_inner_products_with_the_jacobian() {
     full.set_column(dense.n_cols, &DVector::from_column_slice(&dense.residual));
     full.set_column(dense.n_cols + 1, &DVector::from_column_slice(&e1));
     full.set_column(dense.n_cols + 2, &DVector::from_column_slice(&e2));
-    let mut reduced = DMatrix::zeros(lin.matrix.nrows(), dense.n_cols + 3);
-    reduced.columns_mut(0, dense.n_cols).copy_from(&lin.matrix);
-    reduced.set_column(dense.n_cols, &lin.rhs);
+    let mut reduced = DMatrix::zeros(lin.matrix().nrows(), dense.n_cols + 3);
+    reduced
+        .columns_mut(0, dense.n_cols)
+        .copy_from(&lin.matrix());
+    reduced.set_column(dense.n_cols, &lin.rhs());
     reduced
         .columns_mut(dense.n_cols + 1, 2)
         .copy_from(&lin.extra);

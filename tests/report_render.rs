@@ -200,6 +200,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
         correlation: Correlation {
             names: free,
             matrix,
+            ..Correlation::default()
         },
         warnings: vec![
             "k_g: no sample near the glint (|phi - phi_c| < 2 w_c); k_g and w_c are not determined"

@@ -240,11 +240,28 @@ pub struct ScaleEntry {
 }
 
 /// `fit.json` → `correlation`: `matrix[i][j]` between `names[i]` and `names[j]` (`null` where
-/// undefined, e.g. an undetermined direction).
+/// undefined, e.g. an undetermined direction). With more than [`Correlation::FULL_MAX`] free
+/// parameters (many channels) `names` holds the shared parameters only and `per_channel` each
+/// per-channel parameter's correlations with them: the full matrix grows as channels².
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Correlation {
     pub names: Vec<String>,
     pub matrix: Vec<Vec<Option<f64>>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub per_channel: Vec<ChannelCorrelation>,
+}
+
+impl Correlation {
+    /// Most free parameters whose full correlation matrix is written.
+    pub const FULL_MAX: usize = 64;
+}
+
+/// `fit.json` → `correlation.per_channel[]`: one per-channel parameter's correlations with the
+/// parameters in `correlation.names`, in that order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelCorrelation {
+    pub name: String,
+    pub with_shared: Vec<Option<f64>>,
 }
 
 /// `fit.json` → `residuals.per_channel[]`.

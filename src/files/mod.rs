@@ -26,9 +26,10 @@ pub use curves::{
     DOWN_WEIGHT,
 };
 pub use fit_json::{
-    ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource, FitJson, FitStatus,
-    Floored, GofThresholds, GoodnessOfFit, Interval, OptionsRecord, ParamStatus, ParameterEntry,
-    ResidualSummary, ScaleEntry, ScaleMethod, Suggestion, TraceStage, Verdict,
+    ChannelCorrelation, ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource,
+    FitJson, FitStatus, Floored, GofThresholds, GoodnessOfFit, Interval, OptionsRecord,
+    ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, ScaleMethod, Suggestion, TraceStage,
+    Verdict,
 };
 pub use load_report::{LineTally, LoadReport, RejectReason, FIRST_LINES};
 pub use timing::{StageTiming, Timing};

@@ -7,16 +7,16 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::diagnostics::{null_space_weights, NULL_WEIGHT, POORLY_DETERMINED};
+use super::diagnostics::{NULL_WEIGHT, POORLY_DETERMINED};
 use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode};
 use super::FitOutcome;
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
 use crate::files::CurvesMode;
 use crate::files::{
-    finite, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo, DownWeighted, FitJson,
-    FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
-    StageTiming, Timing, TraceStage, DOWN_WEIGHT,
+    finite, ChannelCorrelation, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo,
+    DownWeighted, FitJson, FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry,
+    ResidualSummary, ScaleEntry, StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
 use crate::model::ModelConfig;
 
@@ -53,8 +53,7 @@ pub struct Assembly<'a, 'e, 'f, F: Forward> {
 /// The covariance of the free parameters and scales, in reporting units, with what makes a
 /// column's standard error meaningless.
 struct Uncertainty {
-    cov: Option<crate::lm::Covariance>,
-    corr: Option<nalgebra::DMatrix<f64>>,
+    cov: Option<crate::lm::ParameterCovariance>,
     null_w: Vec<f64>,
     col_zero: Vec<bool>,
     dof: usize,
@@ -65,10 +64,10 @@ impl Uncertainty {
     /// Column `j`'s standard error, unless it is undetermined.
     fn std_of(&self, j: usize) -> Option<f64> {
         let c = self.cov.as_ref()?;
-        if c.undetermined[j] || self.col_zero[j] || self.null_w[j] >= NULL_WEIGHT {
+        if c.undetermined(j) || self.col_zero[j] || self.null_w[j] >= NULL_WEIGHT {
             return None;
         }
-        finite(c.matrix[(j, j)].max(0.0).sqrt())
+        finite(c.variance(j).max(0.0).sqrt())
     }
 }
 
@@ -80,31 +79,55 @@ fn uncertainty<F: Forward>(
     warnings: &mut Vec<String>,
 ) -> Uncertainty {
     let col: Vec<f64> = ev.free.iter().map(|&p| 1.0 / p.report_factor()).collect();
-    // Accumulated in chunks (MᵀM = JᵀJ, ‖t‖ = ‖r̃‖): the same covariance without storing J.
+    // Accumulated in chunks (MᵀM = JᵀJ, ‖t‖ = ‖r̃‖): the same covariance without storing J,
+    // by channel blocks when there are many channels.
     let lin = ev
         .linearize(x, &col, ScaleMode::FixedNatural(scale), None)
         .expect("no cancel flag: the pass runs to the end");
     let m = lin.rows;
-    let ncol = lin.matrix.ncols();
-    let jm = lin.matrix;
-    let ss = lin.rhs.norm_squared();
+    let ncol = lin.system.ncols;
     let dof = m.saturating_sub(ncol);
-    let cov = crate::lm::covariance(&jm, ss, dof);
+    let (cov, null_w) = lin.covariance(dof);
     if cov.is_none() {
         warnings.push(format!(
             "no standard errors: {m} residuals for {ncol} parameters (dof = {dof}) or a non-finite Jacobian"
         ));
     }
-    let corr = cov.as_ref().map(|c| crate::lm::correlation(&c.matrix));
     Uncertainty {
-        null_w: null_space_weights(&jm),
-        col_zero: (0..ncol)
-            .map(|j| jm.column(j).iter().all(|v| *v == 0.0))
-            .collect(),
+        null_w,
+        col_zero: lin.zero_columns(),
         cov,
-        corr,
         dof,
         m,
+    }
+}
+
+/// fit.json `correlation`: the whole matrix of the free parameters while it is small; with more
+/// than [`Correlation::FULL_MAX`] of them (many channels) the shared parameters' matrix and each
+/// per-channel parameter's correlations with them, so the record grows linearly in channels.
+fn correlation_record<F: Forward>(
+    ev: &Evaluator<'_, F>,
+    unc: &Uncertainty,
+    nc: usize,
+) -> Correlation {
+    let nf = ev.free.len();
+    let corr = |i: usize, j: usize| unc.cov.as_ref().and_then(|c| finite(c.correlation(i, j)));
+    let full = nf <= Correlation::FULL_MAX;
+    let (shared, own): (Vec<usize>, Vec<usize>) =
+        (0..nf).partition(|&j| full || ev.free[j].channel().is_none_or(|c| c >= nc));
+    Correlation {
+        names: shared.iter().map(|&j| ev.free[j].json_name()).collect(),
+        matrix: shared
+            .iter()
+            .map(|&i| shared.iter().map(|&j| corr(i, j)).collect())
+            .collect(),
+        per_channel: own
+            .iter()
+            .map(|&i| ChannelCorrelation {
+                name: ev.free[i].json_name(),
+                with_shared: shared.iter().map(|&j| corr(i, j)).collect(),
+            })
+            .collect(),
     }
 }
 
@@ -135,10 +158,12 @@ fn parameter_entries<F: Forward>(
                 let undetermined = unc.col_zero[j]
                     || too_wide
                     || unc.null_w[j] >= NULL_WEIGHT
-                    || unc.cov.as_ref().is_some_and(|c| c.undetermined[j]);
-                let partners: Vec<String> = match &unc.corr {
-                    Some(r) => (0..nf)
-                        .filter(|&k| k != j && r[(j, k)].abs() > 0.99)
+                    || unc.cov.as_ref().is_some_and(|c| c.undetermined(j));
+                let partners: Vec<String> = match &unc.cov {
+                    Some(c) => c
+                        .neighbours(j)
+                        .into_iter()
+                        .filter(|&k| k < nf && k != j && c.correlation(j, k).abs() > 0.99)
                         .map(|k| ev.free[k].json_name())
                         .collect(),
                     None => Vec::new(),
@@ -418,16 +443,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
             s.channel
         ));
     }
-    let correlation = Correlation {
-        names: ev.free.iter().map(|p| p.json_name()).collect(),
-        matrix: (0..nf)
-            .map(|i| {
-                (0..nf)
-                    .map(|j| unc.corr.as_ref().and_then(|r| finite(r[(i, j)])))
-                    .collect()
-            })
-            .collect(),
-    };
+    let correlation = correlation_record(ev, &unc, nc);
     let residuals = residual_summary(ev, data, &e, &unc);
     // Everything fixed: no solver unknowns, the scales come in closed form (variable
     // projection). The solver has nothing to run on and says `failed`; the fit is complete.

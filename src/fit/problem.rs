@@ -102,10 +102,6 @@ impl<F: Forward> crate::lm::LeastSquares for LsqProblem<'_, '_, F> {
             .ev
             .linearize_internal(u.as_slice(), self.cancel.as_deref())
             .ok_or_else(|| argmin::core::Error::msg("interrupted"))?;
-        Ok(crate::lm::Linearized {
-            matrix: lin.matrix,
-            residuals: lin.rhs,
-            rows: lin.rows,
-        })
+        Ok(lin.into_lm())
     }
 }

@@ -205,20 +205,26 @@ fn exact_mode<F: Forward>(x: &Evidence<'_, '_, '_, F>, g: &GoodnessOfFit) -> Opt
         &[&d, &rc],
         None,
     )?;
-    if lin.matrix.iter().any(|v| !v.is_finite()) {
+    if !lin.system.all_finite() {
         return None;
     }
-    let svd = lin.matrix.svd(true, false);
-    let u = svd.u?;
-    let smax = svd.singular_values.max();
-    let mut d_perp = lin.extra.column(0).into_owned();
-    for (j, &sv) in svd.singular_values.iter().enumerate() {
-        if sv > 1e-10 * smax {
-            let col = u.column(j);
-            let c = col.dot(&d_perp);
-            d_perp.axpy(-c, &col, 1.0);
+    let d_perp = if lin.is_small() {
+        let svd = lin.matrix().svd(true, false);
+        let u = svd.u?;
+        let smax = svd.singular_values.max();
+        let mut d_perp = lin.extra.column(0).into_owned();
+        for (j, &sv) in svd.singular_values.iter().enumerate() {
+            if sv > 1e-10 * smax {
+                let col = u.column(j);
+                let c = col.dot(&d_perp);
+                d_perp.axpy(-c, &col, 1.0);
+            }
         }
-    }
+        d_perp
+    } else {
+        // Many channels: by blocks, linear in channels (the dense M is channels²).
+        crate::lm::blocks::orthogonal_part(&lin.system, &lin.extra.column(0).into_owned(), 1e-10)
+    };
     let rd = lin.extra.column(1).dot(&d_perp);
     let dd = d_perp.norm_squared();
     let rr: f64 =

@@ -3,6 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::blocks::BlockCovariance;
 use super::step::{column_norms, svd_with_projection, ScaledSvd};
 
 /// Default relative singular-value cutoff for [`covariance`]: directions of the column-scaled
@@ -144,6 +145,56 @@ fn dropped_weights(sigma: &DVector<f64>, v_t: &DMatrix<f64>, n: usize, rcond: f6
         }
     }
     weight
+}
+
+/// The covariance of a linearisation as a fit reports it: dense (with its correlation matrix)
+/// for a small system, by blocks ([`BlockCovariance`]) for one whose dense form would grow as
+/// the square of its blocks.
+#[derive(Debug, Clone)]
+pub enum ParameterCovariance {
+    Dense { cov: Covariance, corr: DMatrix<f64> },
+    Blocks(BlockCovariance),
+}
+
+impl ParameterCovariance {
+    /// From a dense covariance, with its correlation matrix.
+    pub fn dense(cov: Covariance) -> ParameterCovariance {
+        let corr = correlation(&cov.matrix);
+        ParameterCovariance::Dense { cov, corr }
+    }
+
+    /// Variance of column `j`.
+    pub fn variance(&self, j: usize) -> f64 {
+        match self {
+            ParameterCovariance::Dense { cov, .. } => cov.matrix[(j, j)],
+            ParameterCovariance::Blocks(b) => b.entry(j, j),
+        }
+    }
+
+    /// Correlation between columns `i` and `j`.
+    pub fn correlation(&self, i: usize, j: usize) -> f64 {
+        match self {
+            ParameterCovariance::Dense { corr, .. } => corr[(i, j)],
+            ParameterCovariance::Blocks(b) => b.correlation(i, j),
+        }
+    }
+
+    /// Whether at least 10% of column `j`'s weight lies in dropped directions.
+    pub fn undetermined(&self, j: usize) -> bool {
+        match self {
+            ParameterCovariance::Dense { cov, .. } => cov.undetermined[j],
+            ParameterCovariance::Blocks(b) => b.undetermined[j],
+        }
+    }
+
+    /// Columns worth scanning for strong correlations with `j`: all (dense), or the shared ones
+    /// and `j`'s own block's (blocks, see [`BlockCovariance::neighbours`]).
+    pub fn neighbours(&self, j: usize) -> Vec<usize> {
+        match self {
+            ParameterCovariance::Dense { cov, .. } => (0..cov.matrix.ncols()).collect(),
+            ParameterCovariance::Blocks(b) => b.neighbours(j),
+        }
+    }
 }
 
 /// Correlation matrix `C_ij = cov_ij / √(cov_ii cov_jj)`; entries with a zero variance are 0

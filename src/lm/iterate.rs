@@ -4,38 +4,64 @@
 use argmin::core::{
     Error as ArgminError, Problem, Solver, State, TerminationReason, TerminationStatus, KV,
 };
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
-use super::least_squares::{LeastSquares, Linearized};
+use super::blocks::block_trust_region_step;
+use super::least_squares::{LeastSquares, Linearized, System};
 use super::step::{
-    all_finite, column_norms, gradient_cosine, scaled_gradient, svd_with_projection,
+    column_norms, gradient_cosine, gradient_cosine_of, scaled_gradient, svd_with_projection,
     trust_region_step,
 };
-use super::{LevenbergMarquardt, LmState, LmTermination};
+use super::{Factored, LevenbergMarquardt, LmState, LmTermination};
 
 impl LevenbergMarquardt {
     /// Update the scaling from a new linearisation (`M`, `t`; `‖r‖ = fnorm`), factor it and run
     /// the gradient test.
-    fn refresh(&mut self, jacobian: &DMatrix<f64>, residuals: &DVector<f64>, fnorm: f64) {
-        let n = jacobian.ncols();
-        let col_norms = column_norms(jacobian);
+    fn refresh(&mut self, lin: &Linearized, fnorm: f64) {
+        let col_norms = match &lin.system {
+            System::Dense { matrix, .. } => column_norms(matrix),
+            System::Blocks(b) => b.column_norms(),
+        };
+        let n = col_norms.len();
         if self.diag.len() != n {
             self.diag = col_norms.map(|c| if c > 0.0 { c } else { 1.0 });
         } else {
             self.diag.zip_apply(&col_norms, |d, c| *d = d.max(c));
         }
+        self.gradient = lin.gradient();
         if fnorm == 0.0 {
             // Also covers m = 0; nothing to factor.
             self.status = Some(LmTermination::ZeroResidual);
             return;
-        } else if gradient_cosine(jacobian, residuals, &col_norms, fnorm) <= self.gtol {
+        }
+        let cosine = match &lin.system {
+            System::Dense { matrix, residuals } => {
+                gradient_cosine(matrix, residuals, &col_norms, fnorm)
+            }
+            System::Blocks(_) => gradient_cosine_of(&self.gradient, &col_norms, fnorm),
+        };
+        if cosine <= self.gtol {
             self.status = Some(LmTermination::GradientConverged);
         }
-        let mut scaled = jacobian.clone();
-        for (j, mut col) in scaled.column_iter_mut().enumerate() {
-            col /= self.diag[j];
-        }
-        self.svd = Some(svd_with_projection(scaled, residuals));
+        self.factor = Some(match &lin.system {
+            System::Dense { matrix, residuals } => {
+                let mut scaled = matrix.clone();
+                for (j, mut col) in scaled.column_iter_mut().enumerate() {
+                    col /= self.diag[j];
+                }
+                Factored::Svd(svd_with_projection(scaled, residuals))
+            }
+            System::Blocks(b) => Factored::Blocks(b.scale_columns(&self.diag)),
+        });
+    }
+}
+
+/// The state at an accepted linearisation: a dense one keeps its Jacobian and residuals there
+/// (argmin's usual fields); a block one has no dense Jacobian to keep.
+fn with_linearization(state: LmState, lin: Linearized) -> LmState {
+    match lin.system {
+        System::Dense { matrix, residuals } => state.residuals(residuals).jacobian(matrix),
+        System::Blocks(_) => state,
     }
 }
 
@@ -46,14 +72,31 @@ fn linearize_checked<O: LeastSquares>(
     trial: O::Trial,
 ) -> Result<Linearized, ArgminError> {
     let lin = problem.problem("jacobian_count", |p| p.linearize(x, trial))?;
-    if lin.matrix.nrows() != lin.residuals.len() || lin.matrix.ncols() != x.len() {
-        return Err(anyhow_error(&format!(
-            "Jacobian is {}x{} but residuals have {} rows and parameters {} entries",
-            lin.matrix.nrows(),
-            lin.matrix.ncols(),
-            lin.residuals.len(),
-            x.len()
-        )));
+    match &lin.system {
+        System::Dense { matrix, residuals } => {
+            if matrix.nrows() != residuals.len() || matrix.ncols() != x.len() {
+                return Err(anyhow_error(&format!(
+                    "Jacobian is {}x{} but residuals have {} rows and parameters {} entries",
+                    matrix.nrows(),
+                    matrix.ncols(),
+                    residuals.len(),
+                    x.len()
+                )));
+            }
+        }
+        System::Blocks(b) => {
+            let bad = b.ncols != x.len()
+                || b.blocks.iter().any(|blk| {
+                    blk.matrix.ncols() != b.shared.len() + blk.local.len()
+                        || blk.matrix.nrows() != blk.rhs.len()
+                });
+            if bad {
+                return Err(anyhow_error(&format!(
+                    "block linearisation does not match {} parameters or its residuals",
+                    x.len()
+                )));
+            }
+        }
     }
     Ok(lin)
 }
@@ -83,18 +126,18 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             ));
         }
         let lin = linearize_checked(problem, &x0, trial)?;
-        if !all_finite(lin.matrix.as_slice()) {
+        if !lin.all_finite() {
             return Err(anyhow_error(
                 "Jacobian at the initial parameters is not finite; choose another start",
             ));
         }
         self.diag = DVector::zeros(0);
-        self.svd = None;
+        self.factor = None;
         self.status = None;
         self.first_step = true;
         self.lambda = 0.0;
         self.rows = lin.rows;
-        self.refresh(&lin.matrix, &lin.residuals, fnorm);
+        self.refresh(&lin, fnorm);
         let xnorm = self.diag.component_mul(&x0).norm();
         self.delta = if xnorm > 0.0 {
             self.radius_factor * xnorm
@@ -104,11 +147,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         let cost = 0.5 * fnorm * fnorm;
         let kv = argmin::kv!("cost" => cost; "delta" => self.delta;);
         Ok((
-            state
-                .param(x0)
-                .residuals(lin.residuals)
-                .jacobian(lin.matrix)
-                .cost(cost),
+            with_linearization(state.param(x0).cost(cost), lin),
             Some(kv),
         ))
     }
@@ -118,7 +157,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         problem: &mut Problem<O>,
         mut state: LmState,
     ) -> std::result::Result<(LmState, Option<KV>), ArgminError> {
-        let svd = self.svd.as_ref().ok_or_else(|| {
+        let factor = self.factor.as_ref().ok_or_else(|| {
             anyhow_error("LevenbergMarquardt: no factorisation; was init run and not converged?")
         })?;
         let x = state
@@ -128,7 +167,12 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         let fnorm = (2.0 * state.get_cost()).sqrt();
         let rows = self.rows;
 
-        let step = trust_region_step(svd, self.delta, self.lambda, rows);
+        let step = match factor {
+            Factored::Svd(svd) => trust_region_step(svd, self.delta, self.lambda, rows),
+            Factored::Blocks(scaled) => {
+                block_trust_region_step(scaled, self.delta, self.lambda, rows)
+            }
+        };
         let p = step.z.component_div(&self.diag);
         let pnorm = step.z.norm();
         if self.first_step {
@@ -184,13 +228,8 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         if !accepted && fnorm1.is_finite() && prered <= self.noise && actred >= -self.noise {
             let trial = trial.take().expect("trial is taken once");
             let lin = linearize_checked(problem, &x_new, trial)?;
-            let old = match (state.get_jacobian(), state.get_residuals()) {
-                (Some(jo), Some(ro)) => scaled_gradient(jo, ro, &self.diag),
-                _ => f64::INFINITY,
-            };
-            if all_finite(lin.matrix.as_slice())
-                && scaled_gradient(&lin.matrix, &lin.residuals, &self.diag) < old
-            {
+            let old = scaled_gradient(&self.gradient, &self.diag);
+            if lin.all_finite() && scaled_gradient(&lin.gradient(), &self.diag) < old {
                 accepted = true;
                 noise_accepted = true;
             }
@@ -210,20 +249,16 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                     lin.rows
                 )));
             }
-            if !all_finite(lin.matrix.as_slice()) {
+            if !lin.all_finite() {
                 return Err(anyhow_error(&format!(
                     "Jacobian is not finite at parameters {:?} where the residuals are finite; \
                      check the model's derivatives",
                     x_new.as_slice()
                 )));
             }
-            self.refresh(&lin.matrix, &lin.residuals, fnorm1);
+            self.refresh(&lin, fnorm1);
             let cost = 0.5 * fnorm1 * fnorm1;
-            state = state
-                .param(x_new.clone())
-                .residuals(lin.residuals)
-                .jacobian(lin.matrix)
-                .cost(cost);
+            state = with_linearization(state.param(x_new.clone()).cost(cost), lin);
         }
         let xnorm = self
             .diag

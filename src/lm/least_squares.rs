@@ -1,20 +1,60 @@
 //! What the LM solver asks of a problem: the residual norm at trial points, and at accepted points
 //! a linearisation `(M, t)` with `MᵀM = JᵀJ`, `Mᵀt = Jᵀr` and `‖t‖ = ‖r‖` — the Jacobian itself
 //! for small problems ([`Operator`] + [`Jacobian`], every such type qualifies), or a reduced form
-//! accumulated in chunks for large ones (the fit's problem), so `J` need never be stored.
+//! accumulated in chunks for large ones (the fit's problem), so `J` need never be stored. A
+//! reduced form may come by blocks ([`BlockSystem`]) when most columns touch one block of rows
+//! only: the solver then eliminates them block by block.
 
 use argmin::core::{Error as ArgminError, Jacobian, Operator};
 use nalgebra::{DMatrix, DVector};
 
+use super::blocks::BlockSystem;
+
 /// A linearisation of the residuals at one point.
 #[derive(Debug, Clone)]
 pub struct Linearized {
-    /// `M` with `MᵀM = JᵀJ` (`J` itself for a dense problem).
-    pub matrix: DMatrix<f64>,
-    /// `t` with `Mᵀt = Jᵀr` and `‖t‖ = ‖r‖` (`r` itself for a dense problem).
-    pub residuals: DVector<f64>,
+    /// `(M, t)` with `MᵀM = JᵀJ`, `Mᵀt = Jᵀr` and `‖t‖ = ‖r‖`.
+    pub system: System,
     /// Number of residuals `m` (sets the rounding-level singular-value cutoff).
     pub rows: usize,
+}
+
+/// How a linearisation stores `(M, t)`.
+#[derive(Debug, Clone)]
+pub enum System {
+    /// `M` and `t` as they are (`J` and `r` themselves for a dense problem).
+    Dense {
+        matrix: DMatrix<f64>,
+        residuals: DVector<f64>,
+    },
+    /// By blocks of rows with columns of their own (see [`BlockSystem`]).
+    Blocks(BlockSystem),
+}
+
+impl Linearized {
+    /// Number of columns of `M`.
+    pub fn ncols(&self) -> usize {
+        match &self.system {
+            System::Dense { matrix, .. } => matrix.ncols(),
+            System::Blocks(b) => b.ncols,
+        }
+    }
+
+    /// Whether every entry of `M` is finite.
+    pub fn all_finite(&self) -> bool {
+        match &self.system {
+            System::Dense { matrix, .. } => matrix.iter().all(|v| v.is_finite()),
+            System::Blocks(b) => b.all_finite(),
+        }
+    }
+
+    /// `Mᵀt`.
+    pub fn gradient(&self) -> DVector<f64> {
+        match &self.system {
+            System::Dense { matrix, residuals } => matrix.tr_mul(residuals),
+            System::Blocks(b) => b.gradient(),
+        }
+    }
 }
 
 /// A nonlinear least-squares problem `min ½‖r(x)‖²` as the LM solver runs it.
@@ -48,8 +88,10 @@ where
         let matrix = self.jacobian(x)?;
         Ok(Linearized {
             rows: r.len(),
-            matrix,
-            residuals: r,
+            system: System::Dense {
+                matrix,
+                residuals: r,
+            },
         })
     }
 }

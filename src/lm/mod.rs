@@ -11,6 +11,10 @@
 //! with another `λ` costs no refactorisation. Where the cost change drops below rounding noise,
 //! the scaled gradient judges steps instead (see [`DEFAULT_COST_NOISE`]).
 //!
+//! A linearisation may come by blocks ([`BlockSystem`]: a few shared columns, the rest each
+//! confined to one block of rows, as a channel's own parameters are); the step is then solved by
+//! block elimination (`blocks`) for each `λ`, in time and memory linear in the number of blocks.
+//!
 //! One argmin iteration is one trial step (one residual evaluation); a Jacobian is evaluated only
 //! after an accepted step. The state's cost is `½‖r‖²`.
 
@@ -19,16 +23,28 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
 
+pub mod blocks;
 pub mod covariance;
 mod iterate;
 mod least_squares;
 mod step;
 
+pub use blocks::{block_covariance, Block, BlockCovariance, BlockSystem};
 pub use covariance::{
-    correlation, covariance, covariance_with_rcond, null_space_weights, Covariance, DEFAULT_RCOND,
+    correlation, covariance, covariance_with_rcond, null_space_weights, Covariance,
+    ParameterCovariance, DEFAULT_RCOND,
 };
-pub use least_squares::{LeastSquares, Linearized};
+pub use least_squares::{LeastSquares, Linearized, System};
 use step::ScaledSvd;
+
+/// The factorisation of the scaled linearisation kept until the next one.
+#[derive(Debug, Clone)]
+enum Factored {
+    /// SVD of a dense `J D⁻¹`: every `λ` costs a diagonal solve.
+    Svd(ScaledSvd),
+    /// The column-scaled block system, refactored per `λ` by block elimination.
+    Blocks(BlockSystem),
+}
 
 /// The argmin state the solver runs on: param, residuals and Jacobian as nalgebra types.
 pub type LmState = IterState<DVector<f64>, (), DMatrix<f64>, (), DVector<f64>, f64>;
@@ -115,7 +131,9 @@ pub struct LevenbergMarquardt {
     delta: f64,
     lambda: f64,
     first_step: bool,
-    svd: Option<ScaledSvd>,
+    factor: Option<Factored>,
+    /// `Jᵀr` at the current point (judges noise-level steps).
+    gradient: DVector<f64>,
     status: Option<LmTermination>,
     /// Number of residuals of the problem (the linearisation may have fewer rows).
     rows: usize,
@@ -162,7 +180,8 @@ impl LevenbergMarquardt {
             delta: 0.0,
             lambda: 0.0,
             first_step: true,
-            svd: None,
+            factor: None,
+            gradient: DVector::zeros(0),
             status: None,
             rows: 0,
         }

@@ -51,14 +51,23 @@ pub(super) fn column_norms(a: &DMatrix<f64>) -> DVector<f64> {
     DVector::from_iterator(a.ncols(), a.column_iter().map(|c| c.norm()))
 }
 
-/// Whether every entry is finite.
-pub(super) fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
+/// Norm of the scaled gradient `‖D⁻¹ Jᵀ r‖` from the gradient `Jᵀr`.
+pub(super) fn scaled_gradient(gradient: &DVector<f64>, diag: &DVector<f64>) -> f64 {
+    gradient.component_div(diag).norm()
 }
 
-/// Norm of the scaled gradient `‖D⁻¹ Jᵀ r‖`.
-pub(super) fn scaled_gradient(j: &DMatrix<f64>, r: &DVector<f64>, diag: &DVector<f64>) -> f64 {
-    j.tr_mul(r).component_div(diag).norm()
+/// [`gradient_cosine`] from the gradient `Jᵀr` (for a block linearisation).
+pub(super) fn gradient_cosine_of(
+    gradient: &DVector<f64>,
+    col_norms: &DVector<f64>,
+    rn: f64,
+) -> f64 {
+    gradient
+        .iter()
+        .zip(col_norms.iter())
+        .filter(|(_, &c)| c > 0.0)
+        .map(|(g, &c)| (g / (c * rn)).abs())
+        .fold(0.0, f64::max)
 }
 
 /// MINPACK's gradient test: `max_j |J_jᵀ r| / (‖J_j‖ ‖r‖)`, the largest cosine between the

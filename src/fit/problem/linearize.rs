@@ -16,6 +16,10 @@
 //! known only after all rows are seen. `[a | B | r] = QR` gives `J = Q (R_B + R_a dsᵀ)`, so the
 //! chunks are reduced first and `ds` applied to the small triangle at the end.
 //!
+//! The result stays by channel ([`BlockSystem`]): the dense `M` would be
+//! `channels·(shared+3) × (shared+channels)`, quadratic in channels, while the LM step and the
+//! covariance eliminate each channel's own columns block by block (`crate::lm::blocks`).
+//!
 //! Determinism: chunks of [`CHUNK`] samples are reduced in parallel, in fixed rounds, and merged in
 //! chunk order, so results are bit-identical for any thread count.
 
@@ -27,30 +31,107 @@ use rayon::prelude::*;
 use super::evaluator::{Evaluator, Space};
 use super::forward::{FitParam, Forward, ParamSet};
 use super::residual::{ScaleMode, CHUNK};
+use crate::lm::{Block, BlockSystem, Linearized, ParameterCovariance, System};
 
 /// Model values below this are floored before taking logarithms (as in the residual pass).
 const MODEL_FLOOR: f64 = 1e-300;
 /// Stand-in for a non-finite residual (as in the residual pass).
 const BAD_RESIDUAL: f64 = 1e100;
 /// Chunks reduced in parallel per round before they are merged in order: bounds the partial
-/// triangles held at once while leaving enough work items for every thread.
+/// triangles held at once while leaving enough work items for every thread (scaled down with
+/// many channels, so at most `ROUND²` channel triangles are held; results do not depend on it).
 const ROUND: usize = 64;
 
 /// The accumulated linearisation of the residuals at one point.
 #[derive(Debug, Clone)]
 pub struct Linearization {
-    /// `M` (rows × parameters): `MᵀM = JᵀJ`.
-    pub matrix: DMatrix<f64>,
-    /// `t`: `Mᵀt = Jᵀr̃`, `‖t‖ = ‖r̃‖`.
-    pub rhs: DVector<f64>,
+    /// `(M, t)` by channel: `MᵀM = JᵀJ`, `Mᵀt = Jᵀr̃`, `‖t‖ = ‖r̃‖`; each channel's block has the
+    /// shared columns and its own (its local parameter, its explicit scale), so the storage is
+    /// linear in channels.
+    pub system: BlockSystem,
     /// Number of residuals `m` that `M` stands for.
     pub rows: usize,
     /// Per-channel scale `s_c` used.
     pub scale: Vec<f64>,
     /// The extra columns `e` asked of [`Evaluator::linearize_with`], transformed alike: with `Q`
-    /// the orthogonal factor, `[M | t | E] = Qᵀ[J | r̃ | e]`, so every inner product among
-    /// Jacobian columns, residuals and extras is kept.
+    /// the orthogonal factor, `[M | t | E] = Qᵀ[J | r̃ | e]` (rows of `M` as in
+    /// [`Linearization::matrix`]), so every inner product among Jacobian columns, residuals and
+    /// extras is kept.
     pub extra: DMatrix<f64>,
+}
+
+/// Largest number of columns for which the LM solver gets the dense `M` (one SVD per Jacobian,
+/// a truncated-SVD Gauss–Newton step) rather than the block system: a few channels cost nothing
+/// dense, and their results stay those of the dense solver. Above it the dense `M` grows as
+/// channels².
+pub const DENSE_MAX_COLUMNS: usize = 32;
+
+impl Linearization {
+    /// Dense `M` (rows in channel order): `O(channels²)` memory, for small systems.
+    pub fn matrix(&self) -> DMatrix<f64> {
+        self.system.to_dense().0
+    }
+
+    /// `t` (rows in channel order).
+    pub fn rhs(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.system.nrows(),
+            self.system
+                .blocks
+                .iter()
+                .flat_map(|b| b.rhs.iter().copied()),
+        )
+    }
+
+    /// Whether the dense form is small enough to be the one used ([`DENSE_MAX_COLUMNS`]).
+    pub fn is_small(&self) -> bool {
+        self.system.ncols <= DENSE_MAX_COLUMNS
+    }
+
+    /// Whether column `j` of `M` is zero at every row.
+    pub fn zero_columns(&self) -> Vec<bool> {
+        let mut nonzero = vec![false; self.system.ncols];
+        for b in &self.system.blocks {
+            for (k, col) in b.matrix.column_iter().enumerate() {
+                let j = match self.system.shared.get(k) {
+                    Some(&j) => j,
+                    None => b.local[k - self.system.shared.len()],
+                };
+                nonzero[j] |= col.iter().any(|v| *v != 0.0);
+            }
+        }
+        nonzero.into_iter().map(|n| !n).collect()
+    }
+
+    /// Covariance `s²(MᵀM)⁺` with `s² = ‖t‖²/dof` (dense when small, else by blocks) and each
+    /// column's weight in the null space (see [`crate::lm::null_space_weights`]).
+    pub fn covariance(&self, dof: usize) -> (Option<ParameterCovariance>, Vec<f64>) {
+        let ss = self.rhs().norm_squared();
+        if self.is_small() {
+            let jm = self.matrix();
+            let cov = crate::lm::covariance(&jm, ss, dof).map(ParameterCovariance::dense);
+            (cov, crate::lm::null_space_weights(&jm))
+        } else {
+            let cov = crate::lm::block_covariance(&self.system, ss, dof, crate::lm::DEFAULT_RCOND);
+            let null = match &cov {
+                Some(c) => c.null_weights.clone(),
+                None => vec![0.0; self.system.ncols],
+            };
+            (cov.map(ParameterCovariance::Blocks), null)
+        }
+    }
+
+    /// The LM solver's linearisation: dense when small, else by blocks.
+    pub fn into_lm(self) -> Linearized {
+        let rows = self.rows;
+        let system = if self.is_small() {
+            let (matrix, residuals) = self.system.to_dense();
+            System::Dense { matrix, residuals }
+        } else {
+            System::Blocks(self.system)
+        };
+        Linearized { system, rows }
+    }
 }
 
 /// Which solver columns one channel's rows touch.
@@ -312,8 +393,10 @@ impl<F: Forward> Evaluator<'_, F> {
         let n_chunks = self.angles.len().div_ceil(CHUNK);
         let mut tri: Vec<DMatrix<f64>> = vec![DMatrix::zeros(0, w); nc];
         let mut sums = vec![0.0; nc * sum_width];
-        for round in (0..n_chunks).step_by(ROUND) {
-            let parts: Vec<Option<ChunkPart>> = (round..(round + ROUND).min(n_chunks))
+        // Fewer chunks per round with many channels: each part holds a triangle per channel.
+        let per_round = (ROUND * ROUND / nc.max(1)).clamp(2, ROUND);
+        for round in (0..n_chunks).step_by(per_round) {
+            let parts: Vec<Option<ChunkPart>> = (round..(round + per_round).min(n_chunks))
                 .into_par_iter()
                 .map(|ci| {
                     if cancelled(cancel) {
@@ -355,35 +438,54 @@ impl<F: Forward> Evaluator<'_, F> {
             }
             d
         };
-        let extra = if projected { 0 } else { nc };
-        let n_cols = nf + extra;
-        let n_rows: usize = tri.iter().map(|t| t.nrows()).sum();
-        let mut matrix = DMatrix::zeros(n_rows, n_cols);
-        let mut rhs = DVector::zeros(n_rows);
-        let mut extra_out = DMatrix::zeros(n_rows, ne);
         let mut row = 0;
-        for (c, t) in tri.iter().enumerate() {
-            let dc = ds(c);
-            for i in 0..t.nrows() {
-                let ra = t[(i, 0)];
-                for (l, dl) in dc.iter().enumerate() {
-                    if let Some(j) = layout.free_index(c, l) {
-                        matrix[(row, j)] = t[(i, 1 + l)] + ra * dl;
-                    }
-                }
+        let n_rows: usize = tri.iter().map(|t| t.nrows()).sum();
+        let mut extra_out = DMatrix::zeros(n_rows, ne);
+        let ns = layout.shared.len();
+        let blocks = tri
+            .iter()
+            .enumerate()
+            .map(|(c, t)| {
+                let dc = ds(c);
+                // Own columns: the channel's local parameter (if free), then its scale (if
+                // explicit).
+                let own_local = layout.local[c];
+                let mut local: Vec<usize> = own_local.into_iter().collect();
                 if !projected {
-                    matrix[(row, nf + c)] = ra;
+                    local.push(nf + c);
                 }
-                rhs[row] = t[(i, nl + 1)];
-                for e in 0..ne {
-                    extra_out[(row, e)] = t[(i, nl + 2 + e)];
+                let mut matrix = DMatrix::zeros(t.nrows(), ns + local.len());
+                let mut rhs = DVector::zeros(t.nrows());
+                for i in 0..t.nrows() {
+                    let ra = t[(i, 0)];
+                    for (l, dl) in dc.iter().enumerate() {
+                        let col = if l < ns {
+                            Some(l)
+                        } else {
+                            own_local.map(|_| ns)
+                        };
+                        if let Some(col) = col {
+                            matrix[(i, col)] = t[(i, 1 + l)] + ra * dl;
+                        }
+                    }
+                    if !projected {
+                        matrix[(i, ns + local.len() - 1)] = ra;
+                    }
+                    rhs[i] = t[(i, nl + 1)];
+                    for e in 0..ne {
+                        extra_out[(row, e)] = t[(i, nl + 2 + e)];
+                    }
+                    row += 1;
                 }
-                row += 1;
-            }
-        }
+                Block { local, matrix, rhs }
+            })
+            .collect();
         Some(Linearization {
-            matrix,
-            rhs,
+            system: BlockSystem {
+                ncols: nf + if projected { 0 } else { nc },
+                shared: layout.shared.clone(),
+                blocks,
+            },
             rows: self.angles.len() * nc,
             scale: s,
             extra: extra_out,
