@@ -1,14 +1,14 @@
 //! The Marschner 2003 forward model of `MODEL.md`: configuration, parameters, angles and the
 //! scattering function `S`, generic over the number type so forward-mode AD gives exact Jacobians.
 //!
-//! Number type: every model function takes `T: num_dual::DualNum<f64>` (which is `Clone`, not
-//! `Copy`), so it works for `f64`, `Dual64`, `DualSVec64<N>` and `DualDVec64`. For `f64` the clones
-//! are free and the code is monomorphised with no allocation per call.
+//! Number type: [`scattering`] takes `T: ModelNum` (`f64`, `DualSVec64<N>`, `DualDVec64`;
+//! `Clone`, not `Copy`); the per-equation functions take any `num_dual::DualNum<f64>`, and the
+//! index-only geometry runs in `T::Scalar` ([`chain`]). For `f64` the clones are free and the
+//! code is monomorphised with no allocation per call.
 
 use std::fmt;
 use std::str::FromStr;
 
-use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 pub mod angles;
 pub mod azimuthal;
 pub mod bravais;
+pub mod chain;
 pub mod eccentricity;
 pub mod exit_angle;
 pub mod fresnel;
@@ -33,6 +34,7 @@ use eccentricity::eccentric_index;
 use exit_angle::ExitMap;
 use longitudinal::longitudinal;
 
+pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
 pub use measurement::Measurement;
 pub use parameters::{ParamSpec, Unit};
@@ -341,10 +343,10 @@ impl Angles {
 /// S for every colour channel (`out.len() == params.sigma_a.len()`); roots computed once, shared
 /// by channels.
 ///
-/// `T` is `f64` or any num-dual number (`Dual64`, `DualSVec64<N>`, `DualDVec64`): the bound is just
-/// `DualNum<f64>` (Clone, not Copy). Panics if `out.len() != params.sigma_a.len()` (a programming
+/// `T` is `f64` or a first-order num-dual vector (`DualSVec64<N>`, `DualDVec64`): [`ModelNum`]
+/// (Clone, not Copy). Panics if `out.len() != params.sigma_a.len()` (a programming
 /// error, not bad input). Parameters are assumed valid ([`Params::validate`]).
-pub fn scattering<T: DualNum<f64>>(
+pub fn scattering<T: ModelNum>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
@@ -359,7 +361,7 @@ pub fn scattering<T: DualNum<f64>>(
 
 /// Same, split per lobe: `out[c] = [R, TT, TRT]` contributions (each already divided by
 /// cos²θ_d); disabled lobes 0.
-pub fn scattering_by_lobe<T: DualNum<f64>>(
+pub fn scattering_by_lobe<T: ModelNum>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
@@ -374,7 +376,7 @@ pub fn scattering_by_lobe<T: DualNum<f64>>(
 
 /// Sum of the lobes per channel.
 struct Total<'a, T>(&'a mut [T]);
-impl<T: DualNum<f64>> Sink<T> for Total<'_, T> {
+impl<T: ModelNum> Sink<T> for Total<'_, T> {
     #[inline]
     fn add(&mut self, channel: usize, _lobe: usize, value: T) {
         self.0[channel] += value;
@@ -383,7 +385,7 @@ impl<T: DualNum<f64>> Sink<T> for Total<'_, T> {
 
 /// Lobes kept apart per channel.
 struct ByLobe<'a, T>(&'a mut [[T; 3]]);
-impl<T: DualNum<f64>> Sink<T> for ByLobe<'_, T> {
+impl<T: ModelNum> Sink<T> for ByLobe<'_, T> {
     #[inline]
     fn add(&mut self, channel: usize, lobe: usize, value: T) {
         self.0[channel][lobe] += value;
@@ -392,7 +394,7 @@ impl<T: DualNum<f64>> Sink<T> for ByLobe<'_, T> {
 
 /// `S = Σ_p M_p(θ_h)·N_p(θ_d, φ, φ_h)/cos²θ_d` over the enabled lobes; disabled lobes and effects
 /// are skipped before any of their work (roots, caustics, η*).
-fn evaluate<T: DualNum<f64>, S: Sink<T>>(
+fn evaluate<T: ModelNum, S: Sink<T>>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
@@ -405,15 +407,15 @@ fn evaluate<T: DualNum<f64>, S: Sink<T>>(
     let n = params.sigma_a.len();
 
     if lobes.r || lobes.tt {
-        let br = bravais_indices(&params.eta, sin_td, cos_td);
+        let br = bravais_indices(&params.eta.seed(), sin_td, cos_td);
         if lobes.r {
             let m = longitudinal(0, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
-            add_r(&br, ha.phi, n, &m, sink);
+            add_r(&br, &params.eta, ha.phi, n, &m, sink);
         }
         if lobes.tt {
             let m = longitudinal(1, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
             let map = ExitMap::new(config.mode, 1, br.eta_p.clone());
-            add_root_sum(1, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+            add_root_sum(1, &map, &br, &params.eta, ha.phi, &params.sigma_a, &m, sink);
         }
     }
     if lobes.trt {
@@ -422,13 +424,14 @@ fn evaluate<T: DualNum<f64>, S: Sink<T>>(
         } else {
             params.eta.clone()
         };
-        let br = bravais_indices(&eta, sin_td, cos_td);
+        let br = bravais_indices(&eta.seed(), sin_td, cos_td);
         let m = longitudinal(2, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
         let map = ExitMap::new(config.mode, 2, br.eta_p.clone());
         if config.effects.glints {
             add_trt_with_glints(
                 &map,
                 &br,
+                &eta,
                 ha.phi,
                 &params.sigma_a,
                 &params.k_g,
@@ -439,7 +442,7 @@ fn evaluate<T: DualNum<f64>, S: Sink<T>>(
                 sink,
             );
         } else {
-            add_root_sum(2, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+            add_root_sum(2, &map, &br, &eta, ha.phi, &params.sigma_a, &m, sink);
         }
     }
 }

@@ -9,7 +9,7 @@ use num_dual::{Derivative, DualNum, DualVec64};
 use crate::fit::bounds::Bound;
 use crate::model::jacobian::seeded;
 use crate::model::{
-    scattering, scattering_by_lobe, Angles, Measurement, ModelConfig, ParamName, Params,
+    scattering, scattering_by_lobe, Angles, Measurement, ModelConfig, ModelNum, ParamName, Params,
 };
 
 /// One parameter of a model family as the fit handles it: read and set in the family's
@@ -141,7 +141,7 @@ pub struct ModelForward {
 impl ModelForward {
     /// [`Forward::values`] in any number type: `f64`, or dual numbers whose derivative parts
     /// then carry exact gradients ([`gradients`]).
-    pub fn values_in<T: DualNum<f64>>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]) {
+    pub fn values_in<T: ModelNum>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]) {
         let nc = p.sigma_a.len();
         for (a, o) in angles.iter().zip(out.chunks_mut(nc)) {
             scattering(p, &self.config, a, o);
