@@ -11,7 +11,7 @@ use super::angles::wrap_t;
 use super::bravais::Bravais;
 use super::chain::ModelNum;
 use super::exit_angle::ExitMap;
-use super::fresnel::{absorption, chord, cos_gamma_t, fresnel, fresnel_attenuation};
+use super::fresnel::{absorbed, chord, cos_gamma_t, fresnel, fresnel_attenuation};
 use super::instrument;
 use super::longitudinal::INV_SQRT_TAU;
 use super::roots::{exit_roots, lift_root};
@@ -78,7 +78,7 @@ pub fn add_root_sum<T: ModelNum, S: Sink<T>>(
         let base = T::chain(&(fresnel_attenuation(p, f) * cos_gi / denom), eta) * scale.clone();
         let ch = T::chain(&chord(&cos_gt, &br.cos_theta_t), eta);
         for (c, s) in sigma_a.iter().enumerate() {
-            sink.add(c, p, base.clone() * absorption(p, s, &ch));
+            sink.add(c, p, absorbed(p, &base, s, &ch));
         }
     }
 }
@@ -194,7 +194,7 @@ pub fn add_trt_with_glints<T: ModelNum, S: Sink<T>>(
         * scale.clone();
     let ch = T::chain(&chord(&cos_gt, &br.cos_theta_t), eta);
     for (c, s) in sigma_a.iter().enumerate() {
-        sink.add(c, 2, base.clone() * absorption(2, s, &ch));
+        sink.add(c, 2, absorbed(2, &base, s, &ch));
     }
 }
 

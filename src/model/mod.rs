@@ -30,9 +30,9 @@ pub mod roots;
 use angles::half_angles;
 use azimuthal::{add_r, add_root_sum, add_trt_with_glints, Sink};
 use bravais::bravais_indices;
-use eccentricity::eccentric_index;
+use eccentricity::{eccentric_index_at, eccentric_terms};
 use exit_angle::ExitMap;
-use longitudinal::longitudinal;
+use longitudinal::{gaussian, lobe_shape};
 
 pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
@@ -352,11 +352,31 @@ pub fn scattering<T: ModelNum>(
     angles: &Angles,
     out: &mut [T],
 ) {
-    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
-    for o in out.iter_mut() {
-        *o = T::from(0.0);
+    scattering_batch(params, config, std::slice::from_ref(angles), out);
+}
+
+/// [`scattering`] of every direction in `angles`: `out[k * nc + c]` for sample `k`, channel `c`
+/// (panics unless `out.len() == angles.len() * nc`). The parameter-only factors are computed
+/// once for the batch.
+pub fn scattering_batch<T: ModelNum>(
+    params: &Params<T>,
+    config: &ModelConfig,
+    angles: &[Angles],
+    out: &mut [T],
+) {
+    let nc = params.sigma_a.len();
+    assert_eq!(
+        out.len(),
+        angles.len() * nc,
+        "one output per sample and channel"
+    );
+    let prepared = Prepared::new(params);
+    for (a, o) in angles.iter().zip(out.chunks_mut(nc.max(1))) {
+        for v in o.iter_mut() {
+            *v = T::from(0.0);
+        }
+        evaluate(params, &prepared, config, a, &mut Total(o));
     }
-    evaluate(params, config, angles, &mut Total(out));
 }
 
 /// Same, split per lobe: `out[c] = [R, TT, TRT]` contributions (each already divided by
@@ -371,7 +391,13 @@ pub fn scattering_by_lobe<T: ModelNum>(
     for o in out.iter_mut() {
         *o = [T::from(0.0), T::from(0.0), T::from(0.0)];
     }
-    evaluate(params, config, angles, &mut ByLobe(out));
+    evaluate(
+        params,
+        &Prepared::new(params),
+        config,
+        angles,
+        &mut ByLobe(out),
+    );
 }
 
 /// Sum of the lobes per channel.
@@ -392,10 +418,36 @@ impl<T: ModelNum> Sink<T> for ByLobe<'_, T> {
     }
 }
 
+/// The parameter-only factors of `S`, shared by every sample of a batch.
+struct Prepared<T> {
+    /// `(α_p, β_p)` of R, TT, TRT.
+    shapes: [(T, T); 3],
+    /// The eccentric index's `(η*_1 + η*_2, η*_1 − η*_2)`.
+    eccentric: (T, T),
+}
+
+impl<T: ModelNum> Prepared<T> {
+    fn new(params: &Params<T>) -> Self {
+        let shape = |p| lobe_shape(p, &params.alpha_r, &params.beta_r);
+        Prepared {
+            shapes: [shape(0), shape(1), shape(2)],
+            eccentric: eccentric_terms(&params.eta, &params.eccentricity),
+        }
+    }
+
+    /// `M_p(θ_h)`, as [`longitudinal::longitudinal`].
+    #[inline]
+    fn longitudinal(&self, p: usize, theta_h: f64) -> T {
+        let (alpha, beta) = &self.shapes[p];
+        gaussian(-alpha.clone() + theta_h, beta)
+    }
+}
+
 /// `S = Σ_p M_p(θ_h)·N_p(θ_d, φ, φ_h)/cos²θ_d` over the enabled lobes; disabled lobes and effects
 /// are skipped before any of their work (roots, caustics, η*).
 fn evaluate<T: ModelNum, S: Sink<T>>(
     params: &Params<T>,
+    prepared: &Prepared<T>,
     config: &ModelConfig,
     angles: &Angles,
     sink: &mut S,
@@ -409,23 +461,23 @@ fn evaluate<T: ModelNum, S: Sink<T>>(
     if lobes.r || lobes.tt {
         let br = bravais_indices(&params.eta.seed(), sin_td, cos_td);
         if lobes.r {
-            let m = longitudinal(0, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            let m = prepared.longitudinal(0, ha.theta_h) * inv_cos2;
             add_r(&br, &params.eta, ha.phi, n, &m, sink);
         }
         if lobes.tt {
-            let m = longitudinal(1, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            let m = prepared.longitudinal(1, ha.theta_h) * inv_cos2;
             let map = ExitMap::new(config.mode, 1, br.eta_p.clone());
             add_root_sum(1, &map, &br, &params.eta, ha.phi, &params.sigma_a, &m, sink);
         }
     }
     if lobes.trt {
         let eta = if config.effects.eccentricity {
-            eccentric_index(&params.eta, &params.eccentricity, ha.phi_h)
+            eccentric_index_at(&prepared.eccentric, ha.phi_h)
         } else {
             params.eta.clone()
         };
         let br = bravais_indices(&eta.seed(), sin_td, cos_td);
-        let m = longitudinal(2, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+        let m = prepared.longitudinal(2, ha.theta_h) * inv_cos2;
         let map = ExitMap::new(config.mode, 2, br.eta_p.clone());
         if config.effects.glints {
             add_trt_with_glints(
