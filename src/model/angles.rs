@@ -21,7 +21,8 @@ pub fn wrap(x: f64) -> f64 {
 /// in degrees; converting to radians and back would not round-trip exactly).
 #[inline]
 pub fn wrap_deg(x: f64) -> f64 {
-    let y = x % 360.0;
+    // `x % 360` is x itself inside ±360: skip the fmod call (same bits).
+    let y = if x.abs() < 360.0 { x } else { x % 360.0 };
     if y <= -180.0 {
         y + 360.0
     } else if y > 180.0 {

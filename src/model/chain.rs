@@ -78,7 +78,7 @@ mod tests {
             0.7,
             Derivative::some(nalgebra::SVector::from([1.5, -2.0, 0.25])),
         );
-        let full = x.sin() * x.clone();
+        let full = x.sin() * x;
         let s = x.seed();
         let via = <DualSVec64<3> as ModelNum>::chain(&(s.sin() * s), &x);
         assert_eq!(full.re, via.re);
@@ -97,7 +97,7 @@ mod tests {
         let d = |v: [f64; 2]| Derivative::some(nalgebra::SVector::from(v));
         let x = DualSVec64::<2>::new(0.3, d([1.0, 0.5]));
         let y = DualSVec64::<2>::new(-1.2, d([-0.25, 2.0]));
-        let full = x.clone() * y.exp();
+        let full = x * y.exp();
         let e = y.re.exp();
         let via = DualSVec64::<2>::linear(x.re * e, &[(e, &x), (x.re * e, &y)]);
         assert_eq!(full.re, via.re);
