@@ -2,9 +2,10 @@
 //! Each iteration evaluates one batch of `BATCH` angle sets, so throughput = BATCH / time.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use hairfit::fit::{Forward, ModelForward};
 use hairfit::model::{
-    scattering, scattering_jacobian, Angles, Effects, Lobes, ModelConfig, ParamName, Params,
-    RootMode, StaticJacobian,
+    scattering, scattering_jacobian, Angles, Effects, Lobes, Measurement, ModelConfig, ParamName,
+    Params, RootMode, StaticJacobian,
 };
 use hairfit::params::ParameterFile as _;
 
@@ -114,5 +115,42 @@ fn bench_model(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_model);
+/// The fit's passes over a batch of 3-channel samples: values (cost, `hairfit eval`) and the
+/// compressed exact gradients of the default free set (linearisation; σ_a in one dual slot).
+fn bench_batch(c: &mut Criterion) {
+    let mut p = params();
+    p.sigma_a = vec![0.2, 0.4, 0.8];
+    let angles = angle_set();
+    let fwd = ModelForward {
+        config: ModelConfig::default(),
+        measurement: Measurement::S,
+    };
+    let mut group = c.benchmark_group("batch 3 channels");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    let mut out = vec![0.0; BATCH * 3];
+    group.bench_function("values", |b| {
+        b.iter(|| {
+            fwd.values(black_box(&p), &angles, &mut out);
+            out[0]
+        })
+    });
+    let shared = [
+        ParamName::Eta,
+        ParamName::AlphaR,
+        ParamName::BetaR,
+        ParamName::KG,
+        ParamName::WC,
+    ];
+    let local: Vec<_> = (0..3).map(|c| Some(ParamName::SigmaA(c))).collect();
+    let mut grad = vec![0.0; BATCH * 3 * (shared.len() + 1)];
+    group.bench_function("gradients 5 shared + sigma_a", |b| {
+        b.iter(|| {
+            fwd.gradients_compressed(black_box(&p), &shared, &local, &angles, &mut out, &mut grad);
+            grad[0]
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_model, bench_batch);
 criterion_main!(benches);

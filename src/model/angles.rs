@@ -6,7 +6,10 @@ use std::f64::consts::{PI, TAU};
 /// `wrap`: map an angle to `(−π, π]`.
 #[inline]
 pub fn wrap(x: f64) -> f64 {
-    let y = x.rem_euclid(TAU);
+    // `x.rem_euclid(TAU)` without its fmod where |x| < 2π (there the fmod returns x): the same
+    // bits, at a fraction of the cost on the per-sample path.
+    let r = if x.abs() < TAU { x } else { x % TAU };
+    let y = if r < 0.0 { r + TAU } else { r };
     if y > PI {
         y - TAU
     } else {
@@ -18,7 +21,8 @@ pub fn wrap(x: f64) -> f64 {
 /// in degrees; converting to radians and back would not round-trip exactly).
 #[inline]
 pub fn wrap_deg(x: f64) -> f64 {
-    let y = x % 360.0;
+    // `x % 360` is x itself inside ±360: skip the fmod call (same bits).
+    let y = if x.abs() < 360.0 { x } else { x % 360.0 };
     if y <= -180.0 {
         y + 360.0
     } else if y > 180.0 {
@@ -71,5 +75,40 @@ mod tests {
         assert_eq!(wrap_deg(540.0), 180.0);
         assert_eq!(wrap_deg(-190.0), 170.0);
         assert_eq!(wrap_deg(359.5), -0.5);
+    }
+
+    /// The fmod-free fast path returns exactly what `rem_euclid` gives, inside and outside 2π.
+    #[test]
+    fn wrap_is_bit_identical_to_rem_euclid() {
+        let reference = |x: f64| {
+            let y = x.rem_euclid(TAU);
+            if y > PI {
+                y - TAU
+            } else {
+                y
+            }
+        };
+        let mut x = -20.0;
+        while x < 20.0 {
+            for v in [
+                x,
+                -x,
+                TAU,
+                -TAU,
+                PI,
+                -PI,
+                0.0,
+                -0.0,
+                f64::NAN,
+                f64::INFINITY,
+            ] {
+                let (a, b) = (wrap(v), reference(v));
+                assert!(
+                    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                    "{v}"
+                );
+            }
+            x += 0.012_345;
+        }
     }
 }

@@ -1,12 +1,17 @@
 //! Azimuthal scattering `N_p`: R in closed form, TT and TRT summed over every root, and the TRT
 //! glint replacement with its fade past the caustic merge.
+//!
+//! The geometry (Bravais indices, map, roots, Fresnel factors, caustic) runs in the scalar type
+//! `E = T::Scalar` (derivative with respect to the lobe's index `eta` only) and is mapped to `T`
+//! by [`ModelNum::chain`] where it meets the other parameters.
 
-use num_dual::DualNum;
+use num_dual::{DualNum, DualStruct};
 
 use super::angles::wrap_t;
 use super::bravais::Bravais;
+use super::chain::ModelNum;
 use super::exit_angle::ExitMap;
-use super::fresnel::{absorption, chord, cos_gamma_t, fresnel, fresnel_attenuation};
+use super::fresnel::{absorbed, chord, cos_gamma_t, fresnel, fresnel_attenuation};
 use super::instrument;
 use super::longitudinal::INV_SQRT_TAU;
 use super::roots::{exit_roots, lift_root};
@@ -23,31 +28,35 @@ pub trait Sink<T> {
     fn add(&mut self, channel: usize, lobe: usize, value: T);
 }
 
-/// `N_R(φ) = F(h)·cos γ/4` at the single exact root `γ = −φ/2` (both modes), times `scale`.
-pub fn add_r<T: DualNum<f64>, S: Sink<T>>(
-    br: &Bravais<T>,
+/// `N_R(φ) = F(h)·cos γ/4` at the single exact root `γ = −φ/2` (both modes), times `scale`;
+/// `br` is at index `eta`.
+pub fn add_r<T: ModelNum, S: Sink<T>>(
+    br: &Bravais<T::Scalar>,
+    eta: &T,
     phi: f64,
     n_channels: usize,
     scale: &T,
     sink: &mut S,
 ) {
     let (h, cos_gi) = (-0.5 * phi).sin_cos();
-    let (h, cos_gi) = (T::from(h), T::from(cos_gi));
+    let (h, cos_gi) = (T::Scalar::from(h), T::Scalar::from(cos_gi));
     let cos_gt = cos_gamma_t(&h, &br.eta_p);
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gi, &cos_gt);
     // |2 dΦ/dγ| = 4 for p = 0.
-    let v = f * cos_gi * 0.25 * scale.clone();
+    let v = T::chain(&(f * cos_gi * 0.25), eta) * scale.clone();
     for c in 0..n_channels {
         sink.add(c, 0, v.clone());
     }
 }
 
-/// `N_p(φ) = Σ_roots A(p, h)/|2 dΦ/dh|` (as `A cos γ / |2 dΦ/dγ|`), times `scale`, for p ≥ 1.
+/// `N_p(φ) = Σ_roots A(p, h)/|2 dΦ/dh|` (as `A cos γ / |2 dΦ/dγ|`), times `scale`, for p ≥ 1;
+/// `map` and `br` are at index `eta`.
 #[allow(clippy::too_many_arguments)]
-pub fn add_root_sum<T: DualNum<f64>, S: Sink<T>>(
+pub fn add_root_sum<T: ModelNum, S: Sink<T>>(
     p: usize,
-    map: &ExitMap<T>,
-    br: &Bravais<T>,
+    map: &ExitMap<T::Scalar>,
+    br: &Bravais<T::Scalar>,
+    eta: &T,
     phi: f64,
     sigma_a: &[T],
     scale: &T,
@@ -62,24 +71,25 @@ pub fn add_root_sum<T: DualNum<f64>, S: Sink<T>>(
         let slope = map.slope(&g);
         let mut denom = if slope.re() < 0.0 { -slope } else { slope } * 2.0;
         if denom.re() < MIN_DENOM {
-            denom = T::from(MIN_DENOM);
+            denom = T::Scalar::from(MIN_DENOM);
         }
         let cos_gt = cos_gamma_t(&h, &br.eta_p);
         let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gi, &cos_gt);
-        let base = fresnel_attenuation(p, f) * cos_gi / denom * scale.clone();
-        let ch = chord(&cos_gt, &br.cos_theta_t);
+        let base = T::chain(&(fresnel_attenuation(p, f) * cos_gi / denom), eta) * scale.clone();
+        let ch = T::chain(&chord(&cos_gt, &br.cos_theta_t), eta);
         for (c, s) in sigma_a.iter().enumerate() {
-            sink.add(c, p, base.clone() * absorption(p, s, &ch));
+            sink.add(c, p, absorbed(p, &base, s, &ch));
         }
     }
 }
 
-/// The TRT caustic as the glint sees it: fade `t`, `φ_c`, `γ_c` (`h_c = sin γ_c`) and `Δh`.
+/// The TRT caustic as the glint sees it: fade `t`, `φ_c`, `γ_c` (`h_c = sin γ_c`, in the
+/// scalar type `E` of the lobe's index) and `Δh`.
 #[derive(Debug, Clone)]
-pub struct Glint<T> {
+pub struct Glint<T, E> {
     pub t: T,
     pub phi_c: T,
-    pub gamma_c: T,
+    pub gamma_c: E,
     pub delta_h: T,
 }
 
@@ -98,12 +108,14 @@ pub fn smoothstep<T: DualNum<f64>>(e0: f64, e1: &T, x: &T) -> T {
 
 /// Glint geometry of MODEL.md "TRT: glints": below the merge (η' < 2) the fold of the same map
 /// the roots use; at or past it `φ_c = h_c = 0`, `Δh = Δh_M`, `t = 1 − smoothstep(2, 2+Δη', η')`.
-pub fn glint_geometry<T: DualNum<f64>>(
-    map: &ExitMap<T>,
+/// `map` is at index `eta`.
+pub fn glint_geometry<T: ModelNum>(
+    map: &ExitMap<T::Scalar>,
+    eta: &T,
     w_c: &T,
     delta_eta_prime: &T,
     delta_h_m: &T,
-) -> Glint<T> {
+) -> Glint<T, T::Scalar> {
     instrument::count_caustic();
     if map.eta_p.re() < 2.0 {
         if let Some(gc) = map.caustic() {
@@ -114,13 +126,13 @@ pub fn glint_geometry<T: DualNum<f64>>(
             // Δh = min(Δh_M, 2·sqrt(2w_c/|Φ''|)), compared without dividing by a vanishing Φ''.
             let dhm = delta_h_m.re();
             let delta_h = if 8.0 * w_c.re() < dhm * dhm * d2.re() {
-                (w_c.clone() * 2.0 / d2).sqrt() * 2.0
+                (w_c.clone() * 2.0 / T::chain(&d2, eta)).sqrt() * 2.0
             } else {
                 delta_h_m.clone()
             };
             return Glint {
                 t: T::from(1.0),
-                phi_c,
+                phi_c: T::chain(&phi_c, eta),
                 gamma_c: gc,
                 delta_h,
             };
@@ -128,9 +140,9 @@ pub fn glint_geometry<T: DualNum<f64>>(
     }
     let upper = delta_eta_prime.clone() + 2.0;
     Glint {
-        t: -smoothstep(2.0, &upper, &map.eta_p) + 1.0,
+        t: -smoothstep(2.0, &upper, &T::chain(&map.eta_p, eta)) + 1.0,
         phi_c: T::from(0.0),
-        gamma_c: T::from(0.0),
+        gamma_c: T::Scalar::from(0.0),
         delta_h: delta_h_m.clone(),
     }
 }
@@ -143,11 +155,12 @@ fn bump<T: DualNum<f64>>(x: T, w_c: &T) -> T {
 }
 
 /// `N_TRT` with glints, times `scale`: `N_2·(1 − tG(φ−φ_c))(1 − tG(φ+φ_c))` +
-/// `t·k_G·A(2, h_c)·Δh·(g(φ−φ_c; w_c) + g(φ+φ_c; w_c))`.
+/// `t·k_G·A(2, h_c)·Δh·(g(φ−φ_c; w_c) + g(φ+φ_c; w_c))`; `map` and `br` are at index `eta`.
 #[allow(clippy::too_many_arguments)]
-pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
-    map: &ExitMap<T>,
-    br: &Bravais<T>,
+pub fn add_trt_with_glints<T: ModelNum, S: Sink<T>>(
+    map: &ExitMap<T::Scalar>,
+    br: &Bravais<T::Scalar>,
+    eta: &T,
     phi: f64,
     sigma_a: &[T],
     k_g: &T,
@@ -157,13 +170,13 @@ pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
     scale: &T,
     sink: &mut S,
 ) {
-    let gl = glint_geometry(map, w_c, delta_eta_prime, delta_h_m);
+    let gl = glint_geometry(map, eta, w_c, delta_eta_prime, delta_h_m);
     let dm = wrap_t(-gl.phi_c.clone() + phi);
     let dp = wrap_t(gl.phi_c.clone() + phi);
     // At φ = ±φ_c with t = 1 this factor is exactly 0, so N_2 (∞ there) contributes 0.
     let (g_m, g_p) = (bump(dm, w_c), bump(dp, w_c));
     let fade = (-(gl.t.clone() * g_m.clone()) + 1.0) * (-(gl.t.clone() * g_p.clone()) + 1.0);
-    add_root_sum(2, map, br, phi, sigma_a, &(fade * scale.clone()), sink);
+    add_root_sum(2, map, br, eta, phi, sigma_a, &(fade * scale.clone()), sink);
     if gl.t.re() == 0.0 {
         return;
     }
@@ -173,10 +186,15 @@ pub fn add_trt_with_glints<T: DualNum<f64>, S: Sink<T>>(
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gc, &cos_gt);
     // g(x; w_c) = G(x)/(w_c·√(2π)): reuse the two G values of the fade.
     let lobes = (g_m + g_p) / w_c.clone() * INV_SQRT_TAU;
-    let base = fresnel_attenuation(2, f) * gl.t * k_g.clone() * gl.delta_h * lobes * scale.clone();
-    let ch = chord(&cos_gt, &br.cos_theta_t);
+    let base = T::chain(&fresnel_attenuation(2, f), eta)
+        * gl.t
+        * k_g.clone()
+        * gl.delta_h
+        * lobes
+        * scale.clone();
+    let ch = T::chain(&chord(&cos_gt, &br.cos_theta_t), eta);
     for (c, s) in sigma_a.iter().enumerate() {
-        sink.add(c, 2, base.clone() * absorption(2, s, &ch));
+        sink.add(c, 2, absorbed(2, &base, s, &ch));
     }
 }
 

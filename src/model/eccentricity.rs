@@ -8,13 +8,25 @@ use super::{instrument, Angles};
 /// `η*_2 = 2(η−1)a⁻² − η + 2`; equals η for a = 1.
 #[inline]
 pub fn eccentric_index<T: DualNum<f64>>(eta: &T, a: &T, phi_h: f64) -> T {
-    instrument::count_eccentricity();
+    eccentric_index_at(&eccentric_terms(eta, a), phi_h)
+}
+
+/// The parameter-only part of [`eccentric_index`]: `(η*_1 + η*_2, η*_1 − η*_2)`.
+#[inline]
+pub fn eccentric_terms<T: DualNum<f64>>(eta: &T, a: &T) -> (T, T) {
     let a2 = a.clone() * a.clone();
     let k = (eta.clone() - 1.0) * 2.0;
     let base = -eta.clone() + 2.0;
     let e1 = k.clone() * a2.clone() + base.clone();
     let e2 = k / a2 + base;
-    ((e1.clone() + e2.clone()) + (e1 - e2) * (2.0 * phi_h).cos()) * 0.5
+    (e1.clone() + e2.clone(), e1 - e2)
+}
+
+/// [`eccentric_index`] from its [`eccentric_terms`] (same operations, same value).
+#[inline]
+pub fn eccentric_index_at<T: DualNum<f64>>((sum, diff): &(T, T), phi_h: f64) -> T {
+    instrument::count_eccentricity();
+    (sum.clone() + diff.clone() * (2.0 * phi_h).cos()) * 0.5
 }
 
 /// Spread (max − min) of `cos 2φ_h = cos(φ_i + φ_r)` over `angles`: eccentricity acts through it,

@@ -2,6 +2,8 @@
 
 use num_dual::DualNum;
 
+use super::chain::ModelNum;
+
 /// Fresnel `F(γ_i)` for `h = sin γ_i` with `cos γ_i` and `cos γ_t = sqrt(1 − h²/η'²)` given:
 /// `(r_s² + r_p²)/2`. The internal reflection `F(1/η', 1/η'', γ_t)` is the same value.
 #[inline]
@@ -40,6 +42,19 @@ pub fn fresnel_attenuation<T: DualNum<f64>>(p: usize, f: T) -> T {
 #[inline]
 pub fn absorption<T: DualNum<f64>>(p: usize, sigma_a: &T, chord_over_cos_tt: &T) -> T {
     (sigma_a.clone() * chord_over_cos_tt.clone() * (-(p as f64))).exp()
+}
+
+/// `base · T(h)^p`, the same value as `base * absorption(p, sigma_a, chord)` with the
+/// derivative by the chain rule in f64 (one exp of the real part, no dual arithmetic).
+#[inline]
+pub fn absorbed<T: ModelNum>(p: usize, base: &T, sigma_a: &T, chord_over_cos_tt: &T) -> T {
+    let (b, s, c) = (base.re(), sigma_a.re(), chord_over_cos_tt.re());
+    let e = (s * c * (-(p as f64))).exp();
+    let k = -(p as f64) * b * e;
+    T::linear(
+        b * e,
+        &[(e, base), (k * c, sigma_a), (k * s, chord_over_cos_tt)],
+    )
 }
 
 /// `2 cos γ_t / cos θ_t`: the path length through the fiber per unit radius, per internal segment.

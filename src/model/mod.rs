@@ -1,14 +1,14 @@
 //! The Marschner 2003 forward model of `MODEL.md`: configuration, parameters, angles and the
 //! scattering function `S`, generic over the number type so forward-mode AD gives exact Jacobians.
 //!
-//! Number type: every model function takes `T: num_dual::DualNum<f64>` (which is `Clone`, not
-//! `Copy`), so it works for `f64`, `Dual64`, `DualSVec64<N>` and `DualDVec64`. For `f64` the clones
-//! are free and the code is monomorphised with no allocation per call.
+//! Number type: [`scattering`] takes `T: ModelNum` (`f64`, `DualSVec64<N>`, `DualDVec64`;
+//! `Clone`, not `Copy`); the per-equation functions take any `num_dual::DualNum<f64>`, and the
+//! index-only geometry runs in `T::Scalar` ([`chain`]). For `f64` the clones are free and the
+//! code is monomorphised with no allocation per call.
 
 use std::fmt;
 use std::str::FromStr;
 
-use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 pub mod angles;
 pub mod azimuthal;
 pub mod bravais;
+pub mod chain;
 pub mod eccentricity;
 pub mod exit_angle;
 pub mod fresnel;
@@ -29,10 +30,11 @@ pub mod roots;
 use angles::half_angles;
 use azimuthal::{add_r, add_root_sum, add_trt_with_glints, Sink};
 use bravais::bravais_indices;
-use eccentricity::eccentric_index;
+use eccentricity::{eccentric_index_at, eccentric_terms};
 use exit_angle::ExitMap;
-use longitudinal::longitudinal;
+use longitudinal::{gaussian, lobe_shape};
 
+pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
 pub use measurement::Measurement;
 pub use parameters::{ParamSpec, Unit};
@@ -341,25 +343,45 @@ impl Angles {
 /// S for every colour channel (`out.len() == params.sigma_a.len()`); roots computed once, shared
 /// by channels.
 ///
-/// `T` is `f64` or any num-dual number (`Dual64`, `DualSVec64<N>`, `DualDVec64`): the bound is just
-/// `DualNum<f64>` (Clone, not Copy). Panics if `out.len() != params.sigma_a.len()` (a programming
+/// `T` is `f64` or a first-order num-dual vector (`DualSVec64<N>`, `DualDVec64`): [`ModelNum`]
+/// (Clone, not Copy). Panics if `out.len() != params.sigma_a.len()` (a programming
 /// error, not bad input). Parameters are assumed valid ([`Params::validate`]).
-pub fn scattering<T: DualNum<f64>>(
+pub fn scattering<T: ModelNum>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
     out: &mut [T],
 ) {
-    assert_eq!(out.len(), params.sigma_a.len(), "one output per channel");
-    for o in out.iter_mut() {
-        *o = T::from(0.0);
+    scattering_batch(params, config, std::slice::from_ref(angles), out);
+}
+
+/// [`scattering`] of every direction in `angles`: `out[k * nc + c]` for sample `k`, channel `c`
+/// (panics unless `out.len() == angles.len() * nc`). The parameter-only factors are computed
+/// once for the batch.
+pub fn scattering_batch<T: ModelNum>(
+    params: &Params<T>,
+    config: &ModelConfig,
+    angles: &[Angles],
+    out: &mut [T],
+) {
+    let nc = params.sigma_a.len();
+    assert_eq!(
+        out.len(),
+        angles.len() * nc,
+        "one output per sample and channel"
+    );
+    let prepared = Prepared::new(params);
+    for (a, o) in angles.iter().zip(out.chunks_mut(nc.max(1))) {
+        for v in o.iter_mut() {
+            *v = T::from(0.0);
+        }
+        evaluate(params, &prepared, config, a, &mut Total(o));
     }
-    evaluate(params, config, angles, &mut Total(out));
 }
 
 /// Same, split per lobe: `out[c] = [R, TT, TRT]` contributions (each already divided by
 /// cos²θ_d); disabled lobes 0.
-pub fn scattering_by_lobe<T: DualNum<f64>>(
+pub fn scattering_by_lobe<T: ModelNum>(
     params: &Params<T>,
     config: &ModelConfig,
     angles: &Angles,
@@ -369,12 +391,18 @@ pub fn scattering_by_lobe<T: DualNum<f64>>(
     for o in out.iter_mut() {
         *o = [T::from(0.0), T::from(0.0), T::from(0.0)];
     }
-    evaluate(params, config, angles, &mut ByLobe(out));
+    evaluate(
+        params,
+        &Prepared::new(params),
+        config,
+        angles,
+        &mut ByLobe(out),
+    );
 }
 
 /// Sum of the lobes per channel.
 struct Total<'a, T>(&'a mut [T]);
-impl<T: DualNum<f64>> Sink<T> for Total<'_, T> {
+impl<T: ModelNum> Sink<T> for Total<'_, T> {
     #[inline]
     fn add(&mut self, channel: usize, _lobe: usize, value: T) {
         self.0[channel] += value;
@@ -383,17 +411,43 @@ impl<T: DualNum<f64>> Sink<T> for Total<'_, T> {
 
 /// Lobes kept apart per channel.
 struct ByLobe<'a, T>(&'a mut [[T; 3]]);
-impl<T: DualNum<f64>> Sink<T> for ByLobe<'_, T> {
+impl<T: ModelNum> Sink<T> for ByLobe<'_, T> {
     #[inline]
     fn add(&mut self, channel: usize, lobe: usize, value: T) {
         self.0[channel][lobe] += value;
     }
 }
 
+/// The parameter-only factors of `S`, shared by every sample of a batch.
+struct Prepared<T> {
+    /// `(α_p, β_p)` of R, TT, TRT.
+    shapes: [(T, T); 3],
+    /// The eccentric index's `(η*_1 + η*_2, η*_1 − η*_2)`.
+    eccentric: (T, T),
+}
+
+impl<T: ModelNum> Prepared<T> {
+    fn new(params: &Params<T>) -> Self {
+        let shape = |p| lobe_shape(p, &params.alpha_r, &params.beta_r);
+        Prepared {
+            shapes: [shape(0), shape(1), shape(2)],
+            eccentric: eccentric_terms(&params.eta, &params.eccentricity),
+        }
+    }
+
+    /// `M_p(θ_h)`, as [`longitudinal::longitudinal`].
+    #[inline]
+    fn longitudinal(&self, p: usize, theta_h: f64) -> T {
+        let (alpha, beta) = &self.shapes[p];
+        gaussian(-alpha.clone() + theta_h, beta)
+    }
+}
+
 /// `S = Σ_p M_p(θ_h)·N_p(θ_d, φ, φ_h)/cos²θ_d` over the enabled lobes; disabled lobes and effects
 /// are skipped before any of their work (roots, caustics, η*).
-fn evaluate<T: DualNum<f64>, S: Sink<T>>(
+fn evaluate<T: ModelNum, S: Sink<T>>(
     params: &Params<T>,
+    prepared: &Prepared<T>,
     config: &ModelConfig,
     angles: &Angles,
     sink: &mut S,
@@ -405,30 +459,31 @@ fn evaluate<T: DualNum<f64>, S: Sink<T>>(
     let n = params.sigma_a.len();
 
     if lobes.r || lobes.tt {
-        let br = bravais_indices(&params.eta, sin_td, cos_td);
+        let br = bravais_indices(&params.eta.seed(), sin_td, cos_td);
         if lobes.r {
-            let m = longitudinal(0, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
-            add_r(&br, ha.phi, n, &m, sink);
+            let m = prepared.longitudinal(0, ha.theta_h) * inv_cos2;
+            add_r(&br, &params.eta, ha.phi, n, &m, sink);
         }
         if lobes.tt {
-            let m = longitudinal(1, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+            let m = prepared.longitudinal(1, ha.theta_h) * inv_cos2;
             let map = ExitMap::new(config.mode, 1, br.eta_p.clone());
-            add_root_sum(1, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+            add_root_sum(1, &map, &br, &params.eta, ha.phi, &params.sigma_a, &m, sink);
         }
     }
     if lobes.trt {
         let eta = if config.effects.eccentricity {
-            eccentric_index(&params.eta, &params.eccentricity, ha.phi_h)
+            eccentric_index_at(&prepared.eccentric, ha.phi_h)
         } else {
             params.eta.clone()
         };
-        let br = bravais_indices(&eta, sin_td, cos_td);
-        let m = longitudinal(2, ha.theta_h, &params.alpha_r, &params.beta_r) * inv_cos2;
+        let br = bravais_indices(&eta.seed(), sin_td, cos_td);
+        let m = prepared.longitudinal(2, ha.theta_h) * inv_cos2;
         let map = ExitMap::new(config.mode, 2, br.eta_p.clone());
         if config.effects.glints {
             add_trt_with_glints(
                 &map,
                 &br,
+                &eta,
                 ha.phi,
                 &params.sigma_a,
                 &params.k_g,
@@ -439,7 +494,7 @@ fn evaluate<T: DualNum<f64>, S: Sink<T>>(
                 sink,
             );
         } else {
-            add_root_sum(2, &map, &br, ha.phi, &params.sigma_a, &m, sink);
+            add_root_sum(2, &map, &br, &eta, ha.phi, &params.sigma_a, &m, sink);
         }
     }
 }

@@ -9,7 +9,8 @@ use num_dual::{Derivative, DualNum, DualVec64};
 use crate::fit::bounds::Bound;
 use crate::model::jacobian::seeded;
 use crate::model::{
-    scattering, scattering_by_lobe, Angles, Measurement, ModelConfig, ParamName, Params,
+    scattering_batch, scattering_by_lobe, Angles, Measurement, ModelConfig, ModelNum, ParamName,
+    Params,
 };
 
 /// One parameter of a model family as the fit handles it: read and set in the family's
@@ -141,11 +142,9 @@ pub struct ModelForward {
 impl ModelForward {
     /// [`Forward::values`] in any number type: `f64`, or dual numbers whose derivative parts
     /// then carry exact gradients ([`gradients`]).
-    pub fn values_in<T: DualNum<f64>>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]) {
+    pub fn values_in<T: ModelNum>(&self, p: &Params<T>, angles: &[Angles], out: &mut [T]) {
         let nc = p.sigma_a.len();
-        for (a, o) in angles.iter().zip(out.chunks_mut(nc)) {
-            scattering(p, &self.config, a, o);
-        }
+        scattering_batch(p, &self.config, angles, &mut out[..angles.len() * nc]);
         self.measurement
             .apply(angles, &mut out[..angles.len() * nc]);
     }
@@ -287,14 +286,12 @@ fn dual_pass<D: Dim>(
 {
     let nw = dim.value();
     let nc = pd.sigma_a.len();
-    let mut o: Vec<DualVec64<D>> = vec![DualVec64::from_re(0.0); nc];
-    for (k, a) in angles.iter().enumerate() {
-        forward.values_in(pd, std::slice::from_ref(a), &mut o);
-        for (c, v) in o.iter().enumerate() {
-            out[k * nc + c] = v.re;
-            let e = v.eps.clone().unwrap_generic(dim, U1);
-            let row = &mut grad[(k * nc + c) * nw..(k * nc + c + 1) * nw];
-            row.copy_from_slice(e.as_slice());
-        }
+    // The whole chunk at once, so the parameter-only factors are computed once.
+    let mut o: Vec<DualVec64<D>> = vec![DualVec64::from_re(0.0); angles.len() * nc];
+    forward.values_in(pd, angles, &mut o);
+    for (r, v) in o.into_iter().enumerate() {
+        out[r] = v.re;
+        let e = v.eps.unwrap_generic(dim, U1);
+        grad[r * nw..(r + 1) * nw].copy_from_slice(e.as_slice());
     }
 }
