@@ -68,14 +68,16 @@ fn bench(c: &mut Criterion) {
             b.iter(|| ev.cost_internal(&u, None))
         });
         group.bench_function(format!("linearize {id}"), |b| {
-            b.iter(|| ev.linearize_internal(&u, None))
+            b.iter(|| ev.linearize_internal(&u, None, None))
         });
         group.bench_function(format!("dense jacobian {id}"), |b| {
             b.iter(|| ev.eval_internal(&u, true).n_cols)
         });
         // Standard errors from the linearisation: by channel blocks (Schur complement onto the
         // shared parameters, linear in channels) against the dense SVD (cubic in channels).
-        let lin = ev.linearize_internal(&u, None).expect("no cancel flag");
+        let lin = ev
+            .linearize_internal(&u, None, None)
+            .expect("no cancel flag");
         let ss = lin.rhs().norm_squared();
         let dof = lin.rows - lin.system.ncols;
         group.bench_function(format!("covariance by blocks {id}"), |b| {

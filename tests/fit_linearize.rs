@@ -80,10 +80,14 @@ fn check(space: Space, loss: Loss, fixed: bool) {
             (ev.cost_internal(&u, None).unwrap() / ev.eval_internal(&u, false).cost() - 1.0).abs()
                 < 1e-12
         );
-        (
-            ev.eval_internal(&u, true),
-            ev.linearize_internal(&u, None).unwrap(),
-        )
+        let lin = ev.linearize_internal(&u, None, None).unwrap();
+        // The LM passes the trial's scale to the linearisation at the same point: exactly the
+        // scale the linearisation finds itself, so the system is the same to the bit.
+        let (_, trial_scale) = ev.cost_and_scale(&u, None).unwrap();
+        let reused = ev.linearize_internal(&u, Some(trial_scale), None).unwrap();
+        assert_eq!(lin.matrix(), reused.matrix());
+        assert_eq!(lin.rhs(), reused.rhs());
+        (ev.eval_internal(&u, true), lin)
     };
     let m = dense.residual.len();
     let j = DMatrix::from_row_slice(m, dense.n_cols, dense.jacobian.as_deref().unwrap());
@@ -166,7 +170,7 @@ fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_wi
             .unwrap();
         pool.install(|| {
             (
-                ev.linearize_internal(&u, None).unwrap(),
+                ev.linearize_internal(&u, None, None).unwrap(),
                 ev.cost_internal(&u, None).unwrap(),
             )
         })

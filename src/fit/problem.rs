@@ -84,23 +84,28 @@ pub struct LsqProblem<'e, 'f, F: Forward> {
 }
 
 impl<F: Forward> crate::lm::LeastSquares for LsqProblem<'_, '_, F> {
-    type Trial = ();
+    /// The fit-space scale of the trial, so the linearisation there skips a model pass.
+    type Trial = Option<Vec<f64>>;
 
     /// A cancelled pass is an infinite norm: the step is rejected and the solver stops at the
     /// iteration boundary with its best point.
-    fn trial(&self, u: &DVector<f64>) -> Result<(f64, ()), argmin::core::Error> {
-        let cost = self.ev.cost_internal(u.as_slice(), self.cancel.as_deref());
-        Ok((cost.map_or(f64::INFINITY, |c| (2.0 * c).sqrt()), ()))
+    fn trial(&self, u: &DVector<f64>) -> Result<(f64, Self::Trial), argmin::core::Error> {
+        Ok(
+            match self.ev.cost_and_scale(u.as_slice(), self.cancel.as_deref()) {
+                Some((c, sq)) => ((2.0 * c).sqrt(), Some(sq)),
+                None => (f64::INFINITY, None),
+            },
+        )
     }
 
     fn linearize(
         &self,
         u: &DVector<f64>,
-        _: (),
+        scale: Self::Trial,
     ) -> Result<crate::lm::Linearized, argmin::core::Error> {
         let lin = self
             .ev
-            .linearize_internal(u.as_slice(), self.cancel.as_deref())
+            .linearize_internal(u.as_slice(), scale, self.cancel.as_deref())
             .ok_or_else(|| argmin::core::Error::msg("interrupted"))?;
         Ok(lin.into_lm())
     }

@@ -311,6 +311,16 @@ impl<F: Forward> Evaluator<'_, F> {
     /// raised during the pass. Equal to [`Evaluator::eval_internal`]`(u, false).cost()` up to the
     /// order of the sum.
     pub fn cost_internal(&self, u: &[f64], cancel: Option<&AtomicBool>) -> Option<f64> {
+        self.cost_and_scale(u, cancel).map(|(cost, _)| cost)
+    }
+
+    /// [`Evaluator::cost_internal`] and the fit-space scale it used (projected, or the solver's),
+    /// which a linearisation at the same `u` reuses instead of a second pass over the model.
+    pub fn cost_and_scale(
+        &self,
+        u: &[f64],
+        cancel: Option<&AtomicBool>,
+    ) -> Option<(f64, Vec<f64>)> {
         let (x, _, mode) = self.solver_point(u);
         let p = self.params_at(&x);
         let model = self.model_values(&p, cancel)?;
@@ -332,7 +342,7 @@ impl<F: Forward> Evaluator<'_, F> {
                     .sum::<f64>()
             })
             .collect();
-        Some(0.5 * partial.iter().sum::<f64>())
+        Some((0.5 * partial.iter().sum::<f64>(), sq))
     }
 
     fn natural_scale(&self, sq: &[f64]) -> Vec<f64> {
@@ -344,13 +354,16 @@ impl<F: Forward> Evaluator<'_, F> {
 
     /// [`Evaluator::linearize`] at solver parameters `u` (transforms applied; scale projected or
     /// explicit as in [`Evaluator::eval_internal`]).
+    /// `scale`: the fit-space scale [`Evaluator::cost_and_scale`] found at this same `u` (one
+    /// model pass fewer); `None` computes it.
     pub fn linearize_internal(
         &self,
         u: &[f64],
+        scale: Option<Vec<f64>>,
         cancel: Option<&AtomicBool>,
     ) -> Option<Linearization> {
         let (x, dxdu, mode) = self.solver_point(u);
-        self.linearize(&x, &dxdu, mode, cancel)
+        self.linearize_at(&x, &dxdu, mode, &[], scale, cancel)
     }
 
     /// The linearisation at natural free values `x`, columns scaled by `col_factor` as in
@@ -376,12 +389,26 @@ impl<F: Forward> Evaluator<'_, F> {
         extra: &[&[f64]],
         cancel: Option<&AtomicBool>,
     ) -> Option<Linearization> {
+        self.linearize_at(x, col_factor, mode, extra, None, cancel)
+    }
+
+    /// [`Evaluator::linearize_with`] given the fit-space scale at `x` when known.
+    fn linearize_at(
+        &self,
+        x: &[f64],
+        col_factor: &[f64],
+        mode: ScaleMode<'_>,
+        extra: &[&[f64]],
+        known_scale: Option<Vec<f64>>,
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Linearization> {
         let nc = self.n_channels;
         let nf = self.free.len();
         let p = self.params_at(x);
-        let sq = match mode {
-            ScaleMode::Projected => self.scale_q(&self.model_values(&p, cancel)?, mode),
-            _ => self.scale_q(&[], mode),
+        let sq = match (mode, known_scale) {
+            (_, Some(sq)) => sq,
+            (ScaleMode::Projected, None) => self.scale_q(&self.model_values(&p, cancel)?, mode),
+            (_, None) => self.scale_q(&[], mode),
         };
         let s = self.natural_scale(&sq);
         let projected = matches!(mode, ScaleMode::Projected);
