@@ -274,7 +274,8 @@ pub fn publish_fit<P>(
     produce: impl FnOnce(&Path) -> Result<FitOutcome<P>>,
 ) -> Result<PublishedFit<P>> {
     let set = OutputSet::begin(out, command, force, inputs)?;
-    let outcome = produce(set.staging())?;
+    let mut outcome = produce(set.staging())?;
+    let writing = std::time::Instant::now();
     // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
     let curves = crate::fit::written_curves(&outcome);
     crate::fit::write_outputs_with(set.staging(), &outcome, curves.as_deref())?;
@@ -285,6 +286,8 @@ pub fn publish_fit<P>(
         &crate::report::ReportOptions::default(),
     );
     drop(curves);
+    outcome.timing.outputs_s = Some(writing.elapsed().as_secs_f64());
+    crate::files::write_timing(set.staging(), &outcome.timing)?;
     // Messages name the directory the user asked for, not the staging one.
     let report_error = drawn.err().map(|e| {
         e.to_string().replace(

@@ -212,7 +212,9 @@ pub fn fit_command(
     // Shown from the end of the fit until its files and report are published.
     let mut writing = None;
     let published = publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
+        let loading = std::time::Instant::now();
         let (ds, report) = load(data_path, load_options)?;
+        let load_s = loading.elapsed().as_secs_f64();
         let load_warnings = report.warnings.clone();
         // --strict: angles that look like radians are an error, not a warning.
         if args.strict {
@@ -231,6 +233,7 @@ pub fn fit_command(
         // The loader's settings are options of this fit too, and its warnings the fit's.
         outcome.json.options.load = Some(format!("{load_options:?}"));
         outcome.json.warnings.splice(0..0, load_warnings);
+        outcome.timing.load_s = Some(load_s);
         writing = Some(super::summary::writing_spinner(
             opts.progress,
             outcome.curves.len(),

@@ -143,6 +143,14 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
         s += &format!("warning: {w}\n");
     }
     s += &format!("wall time {:.2} s", out.timing.wall_time_s);
+    // Before and after the fit: reading the data, writing the files and the report.
+    let around: Vec<String> = [("load", out.timing.load_s), ("outputs", out.timing.outputs_s)]
+        .iter()
+        .filter_map(|(what, t)| t.map(|t| format!("{what} {t:.2} s")))
+        .collect();
+    if !around.is_empty() {
+        s += &format!(" (+ {})", around.join(", "));
+    }
     if let Some(d) = dir {
         let curves = match j.options.curves {
             crate::files::CurvesMode::Full => ",curves.csv".to_string(),

@@ -122,6 +122,11 @@ pub fn write_fit_dir(
     if let Some(curves) = curves {
         curves.write_csv(&dir.join("curves.csv"), None)?;
     }
+    write_timing(dir, timing)
+}
+
+/// Write `timing.json` into `dir` (again after the report, with its `outputs_s`).
+pub fn write_timing(dir: &Path, timing: &Timing) -> Result<()> {
     write_json(&dir.join(timing::TIMING_FILE), timing)
 }
 

@@ -24,6 +24,12 @@ pub struct Timing {
     #[serde(deserialize_with = "nan_if_missing")]
     pub wall_time_s: f64,
     pub stages: Vec<StageTiming>,
+    /// Reading and checking the data file (`hairfit fit`; absent when the data came otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_s: Option<f64>,
+    /// Writing the fit's files and drawing its report, after the fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outputs_s: Option<f64>,
 }
 
 impl Timing {

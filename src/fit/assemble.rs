@@ -513,6 +513,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         timing: Timing {
             wall_time_s: started.elapsed().as_secs_f64(),
             stages: stage_times,
+            ..Timing::default()
         },
     })
 }
