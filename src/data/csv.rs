@@ -1,5 +1,6 @@
 //! The header CSV format (`theta_i,phi_i,theta_r,phi_r,radiance[_<ch>]...,[sigma...],[weight...]`)
-//! reader and writer. Streaming with one reused `ByteRecord`, so memory is the accepted samples.
+//! reader (header, columns, cells; the rows are streamed by [`super::csv_rows`] in bounded
+//! blocks, so memory is the accepted samples) and writer.
 //! Comment lines before the header may carry the unit directive `# angles: deg|rad`;
 //! [`write_csv`] writes degrees and says so.
 

@@ -1,7 +1,8 @@
 //! The data rows of a header CSV: read in large blocks of whole lines, each block parsed in
-//! parallel pieces and fed to [`Rows`] in file order, so the dataset, the report and the first
-//! error are exactly those of reading line by line. From the first block holding a quote or a
-//! lone carriage return on, the csv crate reads the rest (see [`super::records`]).
+//! parallel pieces and fed to [`Rows`] in file order (while the next block is parsed), so the
+//! dataset, the report and the first error are exactly those of reading line by line. From the
+//! first block holding a quote or a lone carriage return on, the csv crate reads the rest (see
+//! [`super::records`]).
 
 use std::io::Read;
 use std::path::Path;
@@ -45,19 +46,33 @@ pub(super) fn read_rows(
 ) -> Result<()> {
     let path = input.path;
     let mut blocks = Blocks::new(reader, prefix, BLOCK_BYTES);
-    // Lines before the current block.
-    let mut line_base = input.header_line;
-    let mut bytes_done = 0u64;
-    let mut reserved = false;
+    // Lines of the file before the next piece to feed (pieces count their lines from 1).
+    let mut lines_fed = input.header_line;
+    // Block k is parsed (in parallel pieces) while block k-1, parsed, is fed to `rows` in file
+    // order. The piece buffers are reused block after block: fresh ones cost a page fault per
+    // page.
+    let mut parsing: Vec<Piece> = Vec::new();
     let mut parsed: Vec<Piece> = Vec::new();
+    let mut parsed_count = 0;
+    let mut parsed_bytes = 0u64;
+    let mut fed_bytes = 0u64;
+    let mut reserved = false;
+    let feed = |pieces: &mut [Piece], rows: &mut Rows, lines_fed: &mut u64| -> Result<()> {
+        pieces.iter_mut().try_for_each(|piece| {
+            piece.feed(cols, rows, *lines_fed)?;
+            *lines_fed += piece.line_count;
+            Ok(())
+        })
+    };
     loop {
         let Some(block) = blocks.next_block().map_err(|e| read_error(path, e))? else {
-            return Ok(());
+            return feed(&mut parsed[..parsed_count], rows, &mut lines_fed);
         };
         if needs_csv_parser(block) {
+            feed(&mut parsed[..parsed_count], rows, &mut lines_fed)?;
             return read_rows_csv(
                 blocks.rest_from_block(),
-                line_base,
+                lines_fed,
                 input,
                 options,
                 cols,
@@ -65,29 +80,27 @@ pub(super) fn read_rows(
             );
         }
         let pieces = split_at_lines(block, PIECES_PER_BLOCK);
-        let mut starts = Vec::with_capacity(pieces.len());
-        for piece in &pieces {
-            let lines = count_lines(piece);
-            starts.push((line_base, lines));
-            line_base += lines;
+        if parsing.len() < pieces.len() {
+            parsing.resize_with(pieces.len(), Piece::default);
         }
-        // Parsed pieces are reused block after block: fresh ones cost a page fault per page.
-        if parsed.len() < pieces.len() {
-            parsed.resize_with(pieces.len(), Piece::default);
-        }
-        pieces
-            .par_iter()
-            .zip(starts)
-            .zip(parsed.par_iter_mut())
-            .for_each(|((piece, start), out)| parse_piece(piece, start, input, options, cols, out));
-        for piece in &mut parsed[..pieces.len()] {
-            piece.feed(cols, rows)?;
-        }
-        bytes_done += block.len() as u64;
+        let ((), fed) = rayon::join(
+            || {
+                pieces
+                    .par_iter()
+                    .zip(parsing.par_iter_mut())
+                    .for_each(|(piece, out)| parse_piece(piece, input, options, cols, out))
+            },
+            || feed(&mut parsed[..parsed_count], rows, &mut lines_fed),
+        );
+        fed?;
+        fed_bytes += parsed_bytes;
+        std::mem::swap(&mut parsing, &mut parsed);
+        parsed_count = pieces.len();
+        parsed_bytes = block.len() as u64;
         if !reserved && rows.rows_read() >= SIZE_SAMPLE_ROWS {
             reserved = true;
-            let per_row = bytes_done / rows.rows_read() + 1;
-            let rest = input.file_len.saturating_sub(bytes_done) / per_row;
+            let per_row = fed_bytes / rows.rows_read() + 1;
+            let rest = input.file_len.saturating_sub(fed_bytes) / per_row;
             // 10% headroom: row lengths vary a little through a file.
             rows.reserve((rest + rest / 10) as usize);
         }
@@ -95,17 +108,21 @@ pub(super) fn read_rows(
 }
 
 /// The rows of one piece of a block, parsed: the used cells of each row (columns in file order,
-/// ignored ones left out), its line, and the error that ended the piece early, if any.
+/// ignored ones left out), its line counted from 1 at the piece's start (pieces are parsed
+/// before the lines ahead of them are counted), and the error that ended the piece early.
 #[derive(Default)]
 struct Piece {
     cells: Vec<Cell>,
     lines: Vec<u64>,
     error: Option<Error>,
+    /// Lines in the piece.
+    line_count: u64,
 }
 
 impl Piece {
-    /// Hand the rows to `rows` in order, then the piece's error.
-    fn feed(&mut self, cols: &Columns, rows: &mut Rows) -> Result<()> {
+    /// Hand the rows to `rows` in order, then the piece's error; `lines_before`: lines of the
+    /// file before the piece.
+    fn feed(&mut self, cols: &Columns, rows: &mut Rows, lines_before: u64) -> Result<()> {
         let nc = cols.channels.len();
         let mut radiance: Vec<Cell> = vec![None; nc];
         let mut sigma: Vec<Cell> = vec![None; if cols.has_sigma { nc } else { 0 }];
@@ -128,17 +145,24 @@ impl Piece {
                 for (&role, &cell) in used.iter().zip(row) {
                     cells.place(role, cell);
                 }
-                rows.row(line, angles, &radiance, &sigma, &weight);
+                rows.row(lines_before + line, angles, &radiance, &sigma, &weight);
             }
         }
-        self.error.take().map_or(Ok(()), Err)
+        match self.error.take() {
+            None => Ok(()),
+            Some(mut error) => {
+                if let Error::Input { line, .. } = &mut error {
+                    *line += lines_before;
+                }
+                Err(error)
+            }
+        }
     }
 }
 
-/// Parse the lines of `piece` (`start`: lines of the file before it, lines in it) into `out`.
+/// Parse the lines of `piece` into `out` (lines counted from 1 at the piece's start).
 fn parse_piece(
     piece: &[u8],
-    (first, lines): (u64, u64),
     input: &Input,
     options: &LoadOptions,
     cols: &Columns,
@@ -146,16 +170,17 @@ fn parse_piece(
 ) {
     let n_fields = cols.roles.len();
     let used = cols.roles.iter().filter(|r| **r != Role::Ignored).count();
+    out.line_count = count_lines(piece);
     out.cells.clear();
     out.lines.clear();
     out.error = None;
-    out.cells.reserve(lines as usize * used);
-    out.lines.reserve(lines as usize);
+    out.cells.reserve(out.line_count as usize * used);
+    out.lines.reserve(out.line_count as usize);
     let delimiter = input.delimiter;
     // Delimiter positions of the line: one pass finds the field count and the fields.
     let mut commas: Vec<usize> = Vec::with_capacity(n_fields);
     for_each_line(piece, |index, text| {
-        let line = first + index + 1;
+        let line = index + 1;
         commas.clear();
         commas.extend(memchr::memchr_iter(delimiter, text));
         let found = commas.len() + 1;
