@@ -132,10 +132,7 @@ pub fn eval_stream_with<R: Read, W: Write + ?Sized>(
     let mut line_base = 0u64;
     let mut first_block = true;
     let mut starts: Vec<usize> = Vec::new();
-    loop {
-        let Some(mut block) = blocks.next_block().map_err(|e| read_error(source, e))? else {
-            break;
-        };
+    while let Some(mut block) = blocks.next_block().map_err(|e| read_error(source, e))? {
         if needs_csv_parser(block) {
             eval_csv_rest(blocks.rest_from_block(), line_base, &mut eval)?;
             return eval.finish();
