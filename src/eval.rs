@@ -10,7 +10,8 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
-use crate::data::lines::{csv_error, LineCounter, TextGuard};
+use crate::data::lines::{csv_error, read_error, LineCounter, TextGuard};
+use crate::data::records::{count_lines, for_each_line, needs_csv_parser, parse_f64, Blocks};
 use crate::data::AngleUnit;
 use crate::error::{Error, Result};
 use crate::family::{FamilyModel, FamilyParams};
@@ -102,140 +103,366 @@ pub fn eval_file(
 }
 
 /// Evaluate a CSV stream; `source` names the input in error messages.
+///
+/// Quote-free input is split by hand in large blocks and copied through verbatim; from the first
+/// block with a quote or a lone carriage return on, the csv crate reads the rest (the output is
+/// the same either way).
 pub fn eval_stream<R: Read, W: Write + ?Sized>(
     input: R,
     source: &Path,
     output: &mut W,
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
-    let (input, newlines) = LineCounter::wrap(input);
+    let model = |angles: &[Angles], out: &mut [f64]| request.model.eval_batch(angles, out);
+    eval_stream_with(input, source, output, request, &model)
+}
+
+/// [`eval_stream`] with `model` in place of the request's model (`model(angles, out)` fills
+/// `out` row-major, one value per row and channel): benchmarks time the reading and writing
+/// alone with a trivial one.
+pub fn eval_stream_with<R: Read, W: Write + ?Sized>(
+    input: R,
+    source: &Path,
+    output: &mut W,
+    request: &EvalRequest,
+    model: &(dyn Fn(&[Angles], &mut [f64]) + Sync),
+) -> Result<EvalSummary> {
+    let mut blocks = Blocks::new(input, &[], BLOCK_BYTES);
+    let mut eval = Evaluation::new(source, output, request, model);
+    let mut line_base = 0u64;
+    let mut first_block = true;
+    let mut starts: Vec<usize> = Vec::new();
+    while let Some(mut block) = blocks.next_block().map_err(|e| read_error(source, e))? {
+        if needs_csv_parser(block) {
+            eval_csv_rest(blocks.rest_from_block(), line_base, &mut eval)?;
+            return eval.finish();
+        }
+        if first_block {
+            // The csv crate drops a byte-order mark at the start of the input.
+            block = block.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(block);
+            first_block = false;
+        }
+        let mut result = Ok(());
+        for_each_line(block, |index, line| {
+            let split = SplitLine::new(line, &mut starts);
+            result = eval.record(line_base + index + 1, &split, Some(line));
+            result.is_ok()
+        });
+        result?;
+        line_base += count_lines(block);
+    }
+    if eval.header.is_none() {
+        // No header at all: the error names the missing columns at the last line.
+        eval.record(line_base.max(1), &csv::ByteRecord::new(), None)?;
+    }
+    eval.finish()
+}
+
+/// Read the rest of the input (after `line_base` lines) with the csv crate.
+fn eval_csv_rest<R: Read, W: Write + ?Sized>(
+    rest: R,
+    line_base: u64,
+    eval: &mut Evaluation<'_, W>,
+) -> Result<()> {
+    let source = eval.source;
+    let (input, newlines) = LineCounter::wrap(rest);
     let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .flexible(false)
+        .has_headers(false)
+        .flexible(true)
         .comment(Some(b'#'))
         .from_reader(input);
-    // The record just read ends before the reader's position; its last byte is on its line.
-    let line_of_last_record = |reader: &csv::Reader<_>| {
-        let end: u64 = csv::Reader::position(reader).byte();
-        1 + newlines.borrow_mut().count_before(end.saturating_sub(1))
-    };
-    let headers = match reader.byte_headers() {
-        Ok(h) => h.clone(),
-        Err(e) => {
-            let line = line_of_last_record(&reader);
-            return Err(csv_error(source, e, line));
+    let mut record = csv::ByteRecord::new();
+    loop {
+        let more = reader.read_byte_record(&mut record);
+        // The record just read ends before the reader's position; its last byte is on its line.
+        let end: u64 = reader.position().byte();
+        let line = line_base + 1 + newlines.borrow_mut().count_before(end.saturating_sub(1));
+        match more {
+            Ok(true) => eval.record(line, &record, None)?,
+            Ok(false) => {
+                if eval.header.is_none() {
+                    eval.record(line, &csv::ByteRecord::new(), None)?;
+                }
+                return Ok(());
+            }
+            Err(e) => return Err(csv_error(source, e, line)),
         }
-    };
-    let header_line = line_of_last_record(&reader);
-    let header_names: Vec<String> = headers
-        .iter()
-        .enumerate()
-        .map(|(i, h)| {
-            let name = String::from_utf8_lossy(h);
-            // A UTF-8 byte-order mark may precede the first header.
-            let name = if i == 0 {
-                name.trim_start_matches('\u{feff}')
-            } else {
-                &name
-            };
-            name.trim().to_string()
-        })
-        .collect();
-    let angle_index = locate_angle_columns(source, header_line, &header_names)?;
-    for name in &request.output_columns {
-        if header_names.iter().any(|h| h == name) {
+    }
+}
+
+/// Input bytes per block read.
+const BLOCK_BYTES: usize = 1 << 20;
+
+/// The fields of a record, from a quote-free line or from the csv crate.
+trait Fields {
+    fn count(&self) -> usize;
+    fn field(&self, i: usize) -> &[u8];
+}
+
+impl Fields for csv::ByteRecord {
+    fn count(&self) -> usize {
+        self.len()
+    }
+    fn field(&self, i: usize) -> &[u8] {
+        self.get(i).unwrap_or_default()
+    }
+}
+
+/// A quote-free line split at its commas.
+struct SplitLine<'a> {
+    text: &'a [u8],
+    /// Start of each field; the field runs to the next start minus the comma.
+    starts: &'a [usize],
+}
+
+impl<'a> SplitLine<'a> {
+    /// Split `text`, keeping the field starts in `starts` (reused line after line).
+    fn new(text: &'a [u8], starts: &'a mut Vec<usize>) -> Self {
+        starts.clear();
+        starts.push(0);
+        starts.extend(memchr::memchr_iter(b',', text).map(|i| i + 1));
+        SplitLine { text, starts }
+    }
+}
+
+impl Fields for SplitLine<'_> {
+    fn count(&self) -> usize {
+        self.starts.len()
+    }
+    fn field(&self, i: usize) -> &[u8] {
+        let end = self
+            .starts
+            .get(i + 1)
+            .map_or(self.text.len(), |next| next - 1);
+        &self.text[self.starts[i]..end]
+    }
+}
+
+/// The header, once read.
+struct Header {
+    names: Vec<String>,
+    angle_index: [usize; 4],
+}
+
+/// An evaluation in progress: rows gathered into chunks, each evaluated in parallel and written
+/// as one large write.
+struct Evaluation<'a, W: ?Sized> {
+    source: &'a Path,
+    output: &'a mut W,
+    request: &'a EvalRequest,
+    model: &'a (dyn Fn(&[Angles], &mut [f64]) + Sync),
+    unit: AngleUnit,
+    header: Option<Header>,
+    n_channels: usize,
+    chunk_rows: usize,
+    angles: Vec<Angles>,
+    /// Each row's input fields as written out (comma-joined, quoted where needed), back to back.
+    passthrough: Vec<u8>,
+    passthrough_ends: Vec<usize>,
+    values: Vec<f64>,
+    out: Vec<u8>,
+    rows: u64,
+}
+
+impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
+    fn new(
+        source: &'a Path,
+        output: &'a mut W,
+        request: &'a EvalRequest,
+        model: &'a (dyn Fn(&[Angles], &mut [f64]) + Sync),
+    ) -> Self {
+        let n_channels = request.model.n_channels().max(1);
+        let chunk_rows = (CHUNK_VALUES / n_channels).clamp(1, CHUNK_ROWS);
+        Evaluation {
+            source,
+            output,
+            request,
+            model,
+            unit: request.angles.unwrap_or(AngleUnit::Deg),
+            header: None,
+            n_channels,
+            chunk_rows,
+            angles: Vec::with_capacity(chunk_rows),
+            passthrough: Vec::new(),
+            passthrough_ends: Vec::with_capacity(chunk_rows),
+            values: Vec::with_capacity(chunk_rows * n_channels),
+            out: Vec::new(),
+            rows: 0,
+        }
+    }
+
+    /// Take one record at `line`: the header first, then data rows. `raw` is the line itself
+    /// when it can be copied to the output as it is.
+    fn record(&mut self, line: u64, fields: &impl Fields, raw: Option<&[u8]>) -> Result<()> {
+        let Some(header) = &self.header else {
+            return self.header(line, fields);
+        };
+        let expected = header.names.len();
+        if fields.count() != expected {
             return Err(Error::input(
-                source,
-                header_line,
-                1 + header_names.iter().position(|h| h == name).unwrap() as u64,
+                self.source,
+                line,
+                fields.count() as u64 + 1,
                 format!(
-                    "the input already has a column `{name}`, which eval would append; rename it"
+                    "this row has {} fields but the header has {expected}",
+                    fields.count()
                 ),
             ));
         }
-    }
-
-    let mut writer = csv::WriterBuilder::new().from_writer(output);
-    let mut out_header: Vec<&str> = header_names.iter().map(String::as_str).collect();
-    out_header.extend(request.output_columns.iter().map(String::as_str));
-    writer
-        .write_record(&out_header)
-        .map_err(|e| write_error(&e))?;
-
-    let n_channels = request.model.n_channels().max(1);
-    let chunk_rows = (CHUNK_VALUES / n_channels).clamp(1, CHUNK_ROWS);
-    // Records are reused chunk after chunk: a fresh record per row cost a malloc/free pair per
-    // row, ~17% of eval's time.
-    let mut pool: Vec<csv::ByteRecord> = Vec::with_capacity(chunk_rows);
-    let mut angles: Vec<Angles> = Vec::with_capacity(chunk_rows);
-    let mut values: Vec<f64> = Vec::with_capacity(chunk_rows * n_channels);
-    let mut rows = 0u64;
-    loop {
-        angles.clear();
-        let mut filled = 0;
-        while filled < chunk_rows {
-            if filled == pool.len() {
-                pool.push(csv::ByteRecord::new());
-            }
-            match reader.read_byte_record(&mut pool[filled]) {
-                Ok(true) => {}
-                Ok(false) => break,
-                Err(e) => {
-                    let line = line_of_last_record(&reader);
-                    return Err(csv_error(source, e, line));
+        self.angles.push(parse_angles(
+            self.source,
+            line,
+            fields,
+            &header.angle_index,
+            &header.names,
+            self.unit,
+        )?);
+        match raw {
+            Some(raw) => self.passthrough.extend_from_slice(raw),
+            None => {
+                for i in 0..fields.count() {
+                    if i > 0 {
+                        self.passthrough.push(b',');
+                    }
+                    push_csv_field(&mut self.passthrough, fields.field(i));
                 }
             }
-            let line = line_of_last_record(&reader);
-            angles.push(parse_angles(
-                source,
-                line,
-                &pool[filled],
-                &angle_index,
-                &header_names,
-                request.angles.unwrap_or(AngleUnit::Deg),
-            )?);
-            filled += 1;
         }
-        let records = &pool[..filled];
-        if records.is_empty() {
-            break;
+        self.passthrough_ends.push(self.passthrough.len());
+        if self.angles.len() == self.chunk_rows {
+            self.flush_chunk()?;
         }
-        values.clear();
-        values.resize(records.len() * n_channels, 0.0);
+        Ok(())
+    }
+
+    /// Read the header at `line`, check it and write the output's header.
+    fn header(&mut self, line: u64, fields: &impl Fields) -> Result<()> {
+        let names: Vec<String> = (0..fields.count())
+            .map(|i| {
+                let name = String::from_utf8_lossy(fields.field(i));
+                // A UTF-8 byte-order mark may precede the first header.
+                let name = if i == 0 {
+                    name.trim_start_matches('\u{feff}')
+                } else {
+                    &name
+                };
+                name.trim().to_string()
+            })
+            .collect();
+        let angle_index = locate_angle_columns(self.source, line, &names)?;
+        for name in &self.request.output_columns {
+            if let Some(k) = names.iter().position(|h| h == name) {
+                return Err(Error::input(
+                    self.source,
+                    line,
+                    1 + k as u64,
+                    format!(
+                        "the input already has a column `{name}`, which eval would append; rename it"
+                    ),
+                ));
+            }
+        }
+        let all = names
+            .iter()
+            .map(String::as_str)
+            .chain(self.request.output_columns.iter().map(String::as_str));
+        for (i, name) in all.enumerate() {
+            if i > 0 {
+                self.out.push(b',');
+            }
+            push_csv_field(&mut self.out, name.as_bytes());
+        }
+        self.out.push(b'\n');
+        self.header = Some(Header { names, angle_index });
+        Ok(())
+    }
+
+    /// Evaluate the gathered rows and write them.
+    fn flush_chunk(&mut self) -> Result<()> {
+        let n_channels = self.n_channels;
+        let model = self.model;
+        self.values.clear();
+        self.values.resize(self.angles.len() * n_channels, 0.0);
         // Chunks of rows share the Chiang width integral per exit direction.
-        values
+        self.values
             .par_chunks_mut(n_channels * EVAL_BATCH)
-            .zip(angles.par_chunks(EVAL_BATCH))
-            .for_each(|(out, a)| request.model.eval_batch(a, out));
-        if let Some(j) = values.iter().position(|v| !v.is_finite()) {
+            .zip(self.angles.par_chunks(EVAL_BATCH))
+            .for_each(|(out, a)| model(a, out));
+        if let Some(j) = self.values.iter().position(|v| !v.is_finite()) {
+            let row = j / n_channels;
+            let start = if row == 0 {
+                0
+            } else {
+                self.passthrough_ends[row - 1]
+            };
             return Err(non_finite_error(
-                source,
-                records,
-                j / n_channels,
-                values[j],
-                request,
+                self.source,
+                &self.passthrough[start..self.passthrough_ends[row]],
+                self.values[j],
+                self.request,
             ));
         }
-        // Input fields pass through as bytes; values are appended with ryu's shortest round-trip
-        // digits (no String per value, no record copy).
+        // Values are appended with ryu's shortest round-trip digits, all into one buffer.
         let mut digits = ryu::Buffer::new();
-        for (record, vals) in records.iter().zip(values.chunks(n_channels)) {
-            for field in record.iter() {
-                writer.write_field(field).map_err(|e| write_error(&e))?;
-            }
+        let mut start = 0;
+        for (&end, vals) in self
+            .passthrough_ends
+            .iter()
+            .zip(self.values.chunks(n_channels))
+        {
+            self.out.extend_from_slice(&self.passthrough[start..end]);
+            start = end;
             for &v in vals {
-                writer
-                    .write_field(digits.format_finite(v))
-                    .map_err(|e| write_error(&e))?;
+                self.out.push(b',');
+                self.out
+                    .extend_from_slice(digits.format_finite(v).as_bytes());
             }
-            writer
-                .write_record(None::<&[u8]>)
-                .map_err(|e| write_error(&e))?;
+            self.out.push(b'\n');
         }
-        rows += records.len() as u64;
+        self.rows += self.angles.len() as u64;
+        self.angles.clear();
+        self.passthrough.clear();
+        self.passthrough_ends.clear();
+        self.write_out()
     }
-    writer.flush().map_err(|e| Error::io("<output>", e))?;
-    Ok(EvalSummary { rows })
+
+    fn write_out(&mut self) -> Result<()> {
+        self.output
+            .write_all(&self.out)
+            .map_err(|e| Error::Other(format!("could not write the output: {e}")))?;
+        self.out.clear();
+        Ok(())
+    }
+
+    /// Evaluate and write what is left; the summary.
+    fn finish(mut self) -> Result<EvalSummary> {
+        if !self.angles.is_empty() {
+            self.flush_chunk()?;
+        }
+        self.write_out()?;
+        self.output.flush().map_err(|e| Error::io("<output>", e))?;
+        Ok(EvalSummary { rows: self.rows })
+    }
+}
+
+/// Append `field` as the csv crate writes it: in quotes (inner quotes doubled) when it holds a
+/// comma, a quote or a line break, else as it is.
+fn push_csv_field(out: &mut Vec<u8>, field: &[u8]) {
+    if field
+        .iter()
+        .any(|&b| matches!(b, b',' | b'"' | b'\n' | b'\r'))
+    {
+        out.push(b'"');
+        for &b in field {
+            if b == b'"' {
+                out.push(b'"');
+            }
+            out.push(b);
+        }
+        out.push(b'"');
+    } else {
+        out.extend_from_slice(field);
+    }
 }
 
 /// Indices of the four angle columns, or an error naming the missing ones.
@@ -268,7 +495,7 @@ fn locate_angle_columns(source: &Path, header_line: u64, headers: &[String]) -> 
 fn parse_angles(
     source: &Path,
     line: u64,
-    record: &csv::ByteRecord,
+    record: &impl Fields,
     index: &[usize; 4],
     headers: &[String],
     unit: AngleUnit,
@@ -279,23 +506,14 @@ fn parse_angles(
     };
     let mut deg = [0.0f64; 4];
     for (k, &col) in index.iter().enumerate() {
-        let field = record.get(col).unwrap_or_default();
-        let text = std::str::from_utf8(field).map_err(|_| {
-            Error::input(source, line, col as u64 + 1, "the field is not valid UTF-8")
-        })?;
-        let value: f64 = text.trim().parse().map_err(|_| {
-            Error::input(
-                source,
-                line,
-                col as u64 + 1,
-                format!(
-                    "`{}` is not a number (column `{}`, {unit_name})",
-                    text.trim(),
-                    headers[col]
-                ),
-            )
-        })?;
+        let field = record.field(col);
+        // Fast path: plain ASCII digits parse exactly as `str::parse` reads them after `trim`.
+        let value = match parse_f64(field.trim_ascii()) {
+            Some(v) => v,
+            None => parse_text(source, line, field, col, &headers[col], unit_name)?,
+        };
         if !value.is_finite() {
+            let text = String::from_utf8_lossy(field);
             return Err(Error::input(
                 source,
                 line,
@@ -332,27 +550,39 @@ fn parse_angles(
     })
 }
 
-/// A non-finite S is an error naming the row and the parameters, never a `NaN` in the output.
-fn non_finite_error(
+/// The slow path of a field the fast parser refused: UTF-8 text, trimmed of any whitespace,
+/// through `str::parse` (the errors name line and column).
+fn parse_text(
     source: &Path,
-    records: &[csv::ByteRecord],
-    row: usize,
-    value: f64,
-    request: &EvalRequest,
-) -> Error {
-    let fields: Vec<String> = records[row]
-        .iter()
-        .map(|f| String::from_utf8_lossy(f).into_owned())
-        .collect();
+    line: u64,
+    field: &[u8],
+    col: usize,
+    header: &str,
+    unit_name: &str,
+) -> Result<f64> {
+    let text = std::str::from_utf8(field)
+        .map_err(|_| Error::input(source, line, col as u64 + 1, "the field is not valid UTF-8"))?;
+    text.trim().parse().map_err(|_| {
+        Error::input(
+            source,
+            line,
+            col as u64 + 1,
+            format!(
+                "`{}` is not a number (column `{header}`, {unit_name})",
+                text.trim()
+            ),
+        )
+    })
+}
+
+/// A non-finite S is an error naming the row (its fields as written out) and the parameters,
+/// never a `NaN` in the output.
+fn non_finite_error(source: &Path, row: &[u8], value: f64, request: &EvalRequest) -> Error {
     Error::Other(format!(
         "{}: the model gives S = {value} for the row `{}` with the parameters {}: use \
          parameters the model can evaluate",
         source.display(),
-        fields.join(","),
+        String::from_utf8_lossy(row),
         request.params.json_line()
     ))
-}
-
-fn write_error(err: &csv::Error) -> Error {
-    Error::Other(format!("could not write the output: {err}"))
 }

@@ -1,26 +1,28 @@
 //! The header CSV format (`theta_i,phi_i,theta_r,phi_r,radiance[_<ch>]...,[sigma...],[weight...]`)
-//! reader and writer. Streaming with one reused `ByteRecord`, so memory is the accepted samples.
+//! reader (header, columns, cells; the rows are streamed by [`super::csv_rows`] in bounded
+//! blocks, so memory is the accepted samples) and writer.
 //! Comment lines before the header may carry the unit directive `# angles: deg|rad`;
 //! [`write_csv`] writes degrees and says so.
 
 use std::collections::{HashMap, HashSet};
-use std::io::{BufRead, Read};
+use std::io::BufRead;
 use std::path::Path;
 
-use super::lines::{csv_error, next_line, read_error, LineCounter};
-use super::rows::{Cell, RowCells, Rows};
+use super::csv_rows::{read_rows, Input};
+use super::lines::{next_line, read_error};
+use super::rows::{Cell, Rows};
 use super::{Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 
 /// The columns of a CSV file, from its header.
 #[derive(Debug)]
-struct Columns {
-    roles: Vec<Role>,
-    channels: Vec<String>,
-    has_sigma: bool,
-    has_weight: bool,
-    ignored: Vec<String>,
+pub(super) struct Columns {
+    pub roles: Vec<Role>,
+    pub channels: Vec<String>,
+    pub has_sigma: bool,
+    pub has_weight: bool,
+    pub ignored: Vec<String>,
 }
 
 /// What comes before the data: the header fields and the number of lines consumed (comments,
@@ -267,7 +269,16 @@ pub(crate) fn parse_cell(
     column: u64,
     name: &str,
 ) -> Result<Cell> {
-    let text = std::str::from_utf8(bytes.trim_ascii()).map_err(|_| {
+    let trimmed = bytes.trim_ascii();
+    if trimmed.is_empty() || trimmed == missing.as_bytes() {
+        return Ok(None);
+    }
+    // The fast parser reads exactly what `str::parse` reads; the text is only decoded for the
+    // error message.
+    if let Some(value) = super::records::parse_f64(trimmed) {
+        return Ok(Some(value));
+    }
+    let text = std::str::from_utf8(trimmed).map_err(|_| {
         Error::input(
             path,
             line,
@@ -275,21 +286,16 @@ pub(crate) fn parse_cell(
             format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
         )
     })?;
-    if text.is_empty() || text == missing {
-        return Ok(None);
-    }
-    text.parse::<f64>().map(Some).map_err(|_| {
-        Error::input(
-            path,
-            line,
-            column,
-            format!(
-                "column `{name}`: `{}` is not a number (write `{missing}` or leave the cell \
-                 empty for a value that was not measured)",
-                text.chars().take(40).collect::<String>()
-            ),
-        )
-    })
+    Err(Error::input(
+        path,
+        line,
+        column,
+        format!(
+            "column `{name}`: `{}` is not a number (write `{missing}` or leave the cell \
+             empty for a value that was not measured)",
+            text.chars().take(40).collect::<String>()
+        ),
+    ))
 }
 
 /// Load a header CSV file.
@@ -318,8 +324,17 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
         header: &pre.header,
         header_line,
         file_len,
+        delimiter,
     };
-    read_rows(reader, &input, options, &cols, &mut rows)?;
+    let prefix = reader.buffer().to_vec();
+    read_rows(
+        reader.into_inner(),
+        &prefix,
+        &input,
+        options,
+        &cols,
+        &mut rows,
+    )?;
     if rows.rows_read() == 0 {
         return Err(Error::input(
             path,
@@ -329,105 +344,6 @@ pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, L
         ));
     }
     Ok(rows.finish())
-}
-
-/// Where the data rows come from.
-struct Input<'a> {
-    path: &'a Path,
-    header: &'a csv::StringRecord,
-    header_line: u64,
-    file_len: u64,
-}
-
-/// Rows after which the bytes per row so far size the reservation for the rest of the file.
-const SIZE_SAMPLE_ROWS: u64 = 4096;
-
-/// Stream the data rows after the header into `rows`.
-fn read_rows(
-    reader: impl Read,
-    input: &Input,
-    options: &LoadOptions,
-    cols: &Columns,
-    rows: &mut Rows,
-) -> Result<()> {
-    let Input {
-        path,
-        header,
-        header_line,
-        file_len,
-    } = *input;
-    let (reader, newlines) = LineCounter::wrap(reader);
-    let mut csv = csv::ReaderBuilder::new()
-        .delimiter(options.delimiter_for(path)?)
-        .has_headers(false)
-        .flexible(true)
-        .comment(Some(b'#'))
-        .buffer_capacity(1 << 16)
-        .from_reader(reader);
-    let nc = cols.channels.len();
-    let mut record = csv::ByteRecord::new();
-    let mut radiance: Vec<Cell> = vec![None; nc];
-    let mut sigma: Vec<Cell> = vec![None; if cols.has_sigma { nc } else { 0 }];
-    let mut weight: Vec<Cell> = vec![None; if cols.has_weight { nc } else { 0 }];
-    let n_fields = cols.roles.len();
-    loop {
-        let more = csv.read_byte_record(&mut record).map_err(|e| {
-            let byte = e.position().map_or(0, |p| p.byte());
-            let line = header_line + 1 + newlines.borrow_mut().count_before(byte);
-            csv_error(path, e, line)
-        })?;
-        if !more {
-            return Ok(());
-        }
-        // The record ends just before csv's position; its last byte is on the record's line.
-        let end = csv.position().byte();
-        let line = header_line + 1 + newlines.borrow_mut().count_before(end.saturating_sub(1));
-        if record.len() != n_fields {
-            // A line of spaces only is blank, not a row.
-            if record.len() == 1 && record[0].iter().all(u8::is_ascii_whitespace) {
-                continue;
-            }
-            let column = record.len().min(n_fields) + 1;
-            return Err(Error::input(
-                path,
-                line,
-                column as u64,
-                format!(
-                    "expected {n_fields} fields as in the header, found {} \
-                     (a truncated or mis-delimited row?)",
-                    record.len()
-                ),
-            ));
-        }
-        let mut angles: [Cell; 4] = [None; 4];
-        for (k, (role, field)) in cols.roles.iter().zip(record.iter()).enumerate() {
-            if *role == Role::Ignored {
-                continue;
-            }
-            let cell = parse_cell(
-                field,
-                &options.missing,
-                path,
-                line,
-                k as u64 + 1,
-                &header[k],
-            )?;
-            let mut cells = RowCells {
-                angles: &mut angles,
-                radiance: &mut radiance,
-                sigma: &mut sigma,
-                weight: &mut weight,
-            };
-            cells.place(*role, cell);
-        }
-        rows.row(line, angles, &radiance, &sigma, &weight);
-        if rows.rows_read() == SIZE_SAMPLE_ROWS {
-            let per_row = end / SIZE_SAMPLE_ROWS + 1;
-            let rest = file_len.saturating_sub(end) / per_row;
-            // 10% headroom: row lengths vary a little through a file.
-            rows.reserve((rest + rest / 10) as usize);
-        }
-    }
 }
 
 /// Column name for a channel's value: `radiance` for the lone default channel, else

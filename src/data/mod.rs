@@ -6,6 +6,7 @@
 //! a bad value is a rejection counted in the report, never silently dropped.
 
 mod csv;
+mod csv_rows;
 
 /// The four angle columns every dataset has, in this order.
 pub const ANGLE_COLUMNS: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
@@ -27,6 +28,7 @@ pub(crate) enum Role {
 mod expr;
 mod json;
 pub(crate) mod lines;
+pub(crate) mod records;
 mod report;
 mod rows;
 mod scan;
