@@ -144,10 +144,13 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     }
     s += &format!("wall time {:.2} s", out.timing.wall_time_s);
     // Before and after the fit: reading the data, writing the files and the report.
-    let around: Vec<String> = [("load", out.timing.load_s), ("outputs", out.timing.outputs_s)]
-        .iter()
-        .filter_map(|(what, t)| t.map(|t| format!("{what} {t:.2} s")))
-        .collect();
+    let around: Vec<String> = [
+        ("load", out.timing.load_s),
+        ("outputs", out.timing.outputs_s),
+    ]
+    .iter()
+    .filter_map(|(what, t)| t.map(|t| format!("{what} {t:.2} s")))
+    .collect();
     if !around.is_empty() {
         s += &format!(" (+ {})", around.join(", "));
     }
