@@ -318,44 +318,13 @@ pub(super) fn block_trust_region_step(
         .sqrt();
     let cutoff = fro * f64::EPSILON * rows.max(scaled.ncols) as f64;
     let floor = cutoff * cutoff;
-    let at = |lambda: f64| {
+    let sg = scaled.gradient().norm();
+    let (lambda, z) = super::step::secular_search(delta, lambda_guess, sg, |lambda| {
         let f = Factor::of(scaled, lambda.max(floor));
         let z = f.solve(scaled);
-        (f, z)
-    };
-    let (_, mut z) = at(0.0);
-    let mut lambda = 0.0;
-    if z.norm() > 1.1 * delta {
-        let sg = scaled.gradient().norm();
-        let (mut lo, mut hi) = (0.0, sg / delta);
-        lambda = if lambda_guess > lo && lambda_guess < hi {
-            lambda_guess
-        } else {
-            1e-3 * hi
-        };
-        for _ in 0..60 {
-            let (factor, zl) = at(lambda);
-            z = zl;
-            let zn = z.norm();
-            if (zn - delta).abs() <= 0.1 * delta {
-                break;
-            }
-            if zn > delta {
-                lo = lambda;
-            } else {
-                hi = lambda;
-            }
-            let slope = factor.slope(scaled, &z);
-            let newton = lambda + (zn - delta) / delta * zn * zn / slope;
-            lambda = if newton > lo && newton < hi && newton.is_finite() {
-                newton
-            } else if lo > 0.0 {
-                (lo * hi).sqrt()
-            } else {
-                0.5 * (lo + hi)
-            };
-        }
-    }
+        let slope_at = z.clone();
+        (z, move || f.slope(scaled, &slope_at))
+    });
     super::step::TrialStep {
         jp2: scaled.apply_norm2(&z),
         z,

@@ -114,6 +114,50 @@ pub(super) fn secular_slope(svd: &ScaledSvd, lambda: f64) -> f64 {
         .sum()
 }
 
+/// Moré's secular equation `‖z(λ)‖ = Δ` to within 10% by safeguarded Newton on `1/‖z‖`, for
+/// any factorisation: `at(λ)` gives the scaled step `z(λ)` and a closure for `-½ d‖z‖²/dλ`;
+/// `sg` is `‖Jᵀr‖` scaled (`λ ≤ sg/Δ` brackets the root). `(0, z(0))` when the Gauss–Newton
+/// step already fits.
+pub(super) fn secular_search<S: FnOnce() -> f64>(
+    delta: f64,
+    lambda_guess: f64,
+    sg: f64,
+    mut at: impl FnMut(f64) -> (DVector<f64>, S),
+) -> (f64, DVector<f64>) {
+    let (mut z, _) = at(0.0);
+    let mut lambda = 0.0;
+    if z.norm() > 1.1 * delta {
+        let (mut lo, mut hi) = (0.0, sg / delta);
+        lambda = if lambda_guess > lo && lambda_guess < hi {
+            lambda_guess
+        } else {
+            1e-3 * hi
+        };
+        for _ in 0..60 {
+            let (zl, slope) = at(lambda);
+            z = zl;
+            let zn = z.norm();
+            if (zn - delta).abs() <= 0.1 * delta {
+                break;
+            }
+            if zn > delta {
+                lo = lambda;
+            } else {
+                hi = lambda;
+            }
+            let newton = lambda + (zn - delta) / delta * zn * zn / slope();
+            lambda = if newton > lo && newton < hi && newton.is_finite() {
+                newton
+            } else if lo > 0.0 {
+                (lo * hi).sqrt()
+            } else {
+                0.5 * (lo + hi)
+            };
+        }
+    }
+    (lambda, z)
+}
+
 /// The LM step whose scaled length fits the trust radius `delta` to within 10% (Moré's secular
 /// equation `‖z(λ)‖ = Δ`, solved by safeguarded Newton on `1/‖z‖`); `λ = 0` if the Gauss–Newton
 /// step already fits.
@@ -124,39 +168,11 @@ pub(super) fn trust_region_step(
     rows: usize,
 ) -> TrialStep {
     let cutoff = gauss_newton_cutoff(svd, rows);
-    let gn = damped_coefficients(svd, 0.0, cutoff);
-    let mut lambda = 0.0;
-    let mut w = gn;
-    if w.norm() > 1.1 * delta {
-        let sg = svd.sigma.component_mul(&svd.g).norm();
-        let (mut lo, mut hi) = (0.0, sg / delta);
-        lambda = if lambda_guess > lo && lambda_guess < hi {
-            lambda_guess
-        } else {
-            1e-3 * hi
-        };
-        for _ in 0..60 {
-            w = damped_coefficients(svd, lambda, cutoff);
-            let zn = w.norm();
-            if (zn - delta).abs() <= 0.1 * delta {
-                break;
-            }
-            if zn > delta {
-                lo = lambda;
-            } else {
-                hi = lambda;
-            }
-            let slope = secular_slope(svd, lambda);
-            let newton = lambda + (zn - delta) / delta * zn * zn / slope;
-            lambda = if newton > lo && newton < hi && newton.is_finite() {
-                newton
-            } else if lo > 0.0 {
-                (lo * hi).sqrt()
-            } else {
-                0.5 * (lo + hi)
-            };
-        }
-    }
+    let sg = svd.sigma.component_mul(&svd.g).norm();
+    let (lambda, w) = secular_search(delta, lambda_guess, sg, |lambda| {
+        let w = damped_coefficients(svd, lambda, cutoff);
+        (w, move || secular_slope(svd, lambda))
+    });
     let jp2 = svd.sigma.component_mul(&w).norm_squared();
     TrialStep {
         z: svd.v_t.tr_mul(&w),
