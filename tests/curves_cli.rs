@@ -215,67 +215,49 @@ fn curves_io_speed_old_and_new() {
 fn curves_auto_switches_to_the_summary_above_the_row_limit() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
+    // `n` samples of 3 channels fitted with the default --curves: what it printed, fit.json.
+    let synth_and_fit = |name: &str, n: usize| {
+        let data = dir.join(format!("{name}.csv"));
+        hairfit_ok(&[
+            "synth",
+            "--params",
+            "data/true_rgb.json",
+            "--rig",
+            &format!("sphere:n={n}:max=60"),
+            "--noise",
+            "relative:0.05",
+            "--seed",
+            "4",
+            "--output",
+            s(&data),
+        ]);
+        let out = dir.join(name);
+        let printed = cli::stdout(&hairfit_ok(&[
+            "fit",
+            s(&data),
+            "--starts",
+            "2",
+            "--intervals",
+            "linear",
+            "--no-progress",
+            "--out",
+            s(&out),
+        ]));
+        (printed, FitJson::load(&out.join("fit.json")).unwrap())
+    };
     // Just over the limit: 3 channels × (limit / 3 + 100) samples.
     let n = hairfit::fit::AUTO_FULL_CURVES_ROWS / 3 + 100;
-    let data = dir.join("big.csv");
-    hairfit_ok(&[
-        "synth",
-        "--params",
-        "data/true_rgb.json",
-        "--rig",
-        &format!("sphere:n={n}:max=60"),
-        "--noise",
-        "relative:0.05",
-        "--seed",
-        "4",
-        "--output",
-        s(&data),
-    ]);
-    let out = dir.join("fit");
-    let printed = cli::stdout(&hairfit_ok(&[
-        "fit",
-        s(&data),
-        "--starts",
-        "2",
-        "--intervals",
-        "linear",
-        "--no-progress",
-        "--out",
-        s(&out),
-    ]));
-    let fit = FitJson::load(&out.join("fit.json")).unwrap();
+    let (printed, fit) = synth_and_fit("big", n);
+    let out = dir.join("big");
     assert_eq!(fit.options.curves.to_string(), "summary");
     assert!(fit.options.curves_reason.starts_with("auto:"));
     assert!(printed.contains("curves.csv (summary: over"), "{printed}");
     let curves = read_curves_csv(&out.join("curves.csv")).unwrap();
     assert!(curves.len() < 3 * n / 10, "{} rows", curves.len());
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
-    assert!(html.contains("--curves auto:"));
+    assert!(html.contains("`--curves auto` chose it: "), "{html}");
     // Below the limit the default stays full.
-    let small = dir.join("small.csv");
-    hairfit_ok(&[
-        "synth",
-        "--params",
-        "data/true_rgb.json",
-        "--rig",
-        "sphere:n=3000:max=60",
-        "--seed",
-        "4",
-        "--output",
-        s(&small),
-    ]);
-    hairfit_ok(&[
-        "fit",
-        s(&small),
-        "--starts",
-        "2",
-        "--intervals",
-        "linear",
-        "--no-progress",
-        "--out",
-        s(&dir.join("small_fit")),
-    ]);
-    let fit = FitJson::load(&dir.join("small_fit/fit.json")).unwrap();
+    let (_, fit) = synth_and_fit("small", 3000);
     assert_eq!(fit.options.curves.to_string(), "full");
     assert!(fit.options.curves_reason.is_empty());
 }

@@ -603,13 +603,15 @@ fn direction_groups(angles: &[crate::model::Angles]) -> (Vec<usize>, Vec<usize>)
     drop(keyed);
     let mut group = vec![usize::MAX; angles.len()];
     let mut counts = Vec::new();
-    for i in 0..angles.len() {
-        let f = first[i] as usize;
+    for (i, &f) in first.iter().enumerate() {
+        let f = f as usize;
+        // A run's first sample opens its group; later ones (f < i) join the group f opened.
         if f == i {
             group[i] = counts.len();
             counts.push(0);
+        } else {
+            group[i] = group[f];
         }
-        group[i] = group[f];
         counts[group[i]] += 1;
     }
     (group, counts)

@@ -165,7 +165,8 @@ pub fn render_curves_report(
                 let why = if fit.options.curves_reason.is_empty() {
                     "`--curves summary`".to_string()
                 } else {
-                    format!("`--curves {}`", fit.options.curves_reason)
+                    let why = &fit.options.curves_reason;
+                    format!("`--curves auto` chose it: {}", why.trim_start_matches("auto: "))
                 };
                 summary.notes.push(format!(
                     "curves.csv is a summary ({why}): {} rows of {} samples, the slices drawn, an even spread and every down-weighted sample; figures of the data show those rows only",
