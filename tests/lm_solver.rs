@@ -253,3 +253,123 @@ fn rank_deficient_and_underdetermined_problems_still_converge() {
     // Linear and consistent: the residual reaches rounding level of the inputs.
     assert!(report.cost < 1e-28, "{}", report.cost);
 }
+
+/// y = a·exp(−b·t) + c at 200 points of [0, 5] with deterministic pseudo-noise of σ = 0.01.
+struct NoisyDecay {
+    t: Vec<f64>,
+    y: Vec<f64>,
+}
+
+impl NoisyDecay {
+    fn new() -> Self {
+        let mut state = 7u64;
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let t: Vec<f64> = (0..200).map(|i| 5.0 * i as f64 / 199.0).collect();
+        // Sum of 12 uniforms − 6: close to a unit normal.
+        let y = t
+            .iter()
+            .map(|&t| {
+                let noise: f64 = (0..12).map(|_| uniform()).sum::<f64>() - 6.0;
+                2.0 * (-1.3 * t).exp() + 0.5 + 0.01 * noise
+            })
+            .collect();
+        NoisyDecay { t, y }
+    }
+}
+
+impl Operator for NoisyDecay {
+    type Param = DVector<f64>;
+    type Output = DVector<f64>;
+    fn apply(&self, p: &DVector<f64>) -> Result<DVector<f64>, ArgminError> {
+        Ok(DVector::from_iterator(
+            self.t.len(),
+            self.t
+                .iter()
+                .zip(&self.y)
+                .map(|(&t, &y)| p[0] * (-p[1] * t).exp() + p[2] - y),
+        ))
+    }
+}
+
+impl Jacobian for NoisyDecay {
+    type Param = DVector<f64>;
+    type Jacobian = DMatrix<f64>;
+    fn jacobian(&self, p: &DVector<f64>) -> Result<DMatrix<f64>, ArgminError> {
+        Ok(DMatrix::from_fn(self.t.len(), 3, |i, j| {
+            let e = (-p[1] * self.t[i]).exp();
+            match j {
+                0 => e,
+                1 => -p[0] * self.t[i] * e,
+                _ => 1.0,
+            }
+        }))
+    }
+}
+
+#[test]
+fn statistical_stop_ends_within_its_share_of_a_standard_error() {
+    let start = DVector::from_vec(vec![1.0, 0.5, 0.0]);
+    let exact = minimize(NoisyDecay::new(), start.clone(), LmOptions::default()).unwrap();
+    let dof = 200 - 3;
+    let chi2 = 1e-3;
+    let options = LmOptions {
+        dof,
+        chi2,
+        ..LmOptions::default()
+    };
+    let early = minimize(NoisyDecay::new(), start, options).unwrap();
+    assert_eq!(
+        early.termination,
+        Some(LmTermination::StatisticallyConverged)
+    );
+    assert!(
+        early.iterations < exact.iterations,
+        "{} iterations, {} to rounding level",
+        early.iterations,
+        exact.iterations
+    );
+    // Standard errors at the rounding-level optimum: s²(JᵀJ)⁻¹ with s² = ‖r‖²/dof.
+    let s2 = 2.0 * exact.cost / dof as f64;
+    let cov = (exact.jacobian.transpose() * &exact.jacobian)
+        .try_inverse()
+        .unwrap()
+        * s2;
+    for i in 0..3 {
+        let se = cov[(i, i)].sqrt();
+        let moved = (early.param[i] - exact.param[i]).abs();
+        // The stop is taken where the Gauss–Newton step predicts Δχ² ≤ chi2, which bounds each
+        // parameter's distance by √chi2 standard errors; 10% slack for the quadratic model.
+        assert!(
+            moved <= 1.1 * chi2.sqrt() * se,
+            "parameter {i} is {moved:.3e} from the optimum, SE {se:.3e}"
+        );
+    }
+    assert!(early.cost >= exact.cost * (1.0 - 1e-12));
+}
+
+#[test]
+fn statistical_stop_at_the_optimum_takes_no_step() {
+    let exact = minimize(
+        NoisyDecay::new(),
+        DVector::from_vec(vec![1.0, 0.5, 0.0]),
+        LmOptions::default(),
+    )
+    .unwrap();
+    let options = LmOptions {
+        dof: 197,
+        chi2: 1e-3,
+        ..LmOptions::default()
+    };
+    let again = minimize(NoisyDecay::new(), exact.param.clone(), options).unwrap();
+    assert_eq!(
+        again.termination,
+        Some(LmTermination::StatisticallyConverged)
+    );
+    assert_eq!(again.iterations, 0);
+    assert_eq!(again.param, exact.param);
+}

@@ -644,6 +644,24 @@ mod tests {
     }
 
     #[test]
+    fn undamped_step_predicts_the_dense_gauss_newton_decrease() {
+        let sys = system(7, 5);
+        let (m, t) = sys.to_dense();
+        let rows = m.nrows();
+        // Dense Gauss–Newton: ‖M p‖² with M p the projection of −t onto M's column space.
+        let p = m.clone().svd(true, true).solve(&t, 1e-14).unwrap();
+        let dense = (&m * p).norm_squared();
+        let step = block_trust_region_step(&sys, f64::INFINITY, 0.0, rows);
+        assert_eq!(step.lambda, 0.0);
+        // A well-conditioned random system: agreement to rounding of its ~20 columns.
+        assert!(
+            (step.jp2 - dense).abs() <= 1e-12 * dense,
+            "{} vs {dense}",
+            step.jp2
+        );
+    }
+
+    #[test]
     fn block_covariance_matches_the_dense_covariance() {
         let sys = system(9, 11);
         let (m, _) = sys.to_dense();

@@ -53,6 +53,24 @@ impl LevenbergMarquardt {
             }
             System::Blocks(b) => Factored::Blocks(b.scale_columns(&self.diag)),
         });
+        if self.status.is_none() && self.chi2_tol > 0.0 && self.dof > 0 {
+            let decrement = self.gauss_newton_decrement();
+            if decrement * self.dof as f64 <= self.chi2_tol * fnorm * fnorm {
+                self.status = Some(LmTermination::StatisticallyConverged);
+            }
+        }
+    }
+
+    /// `‖J p‖²` of the undamped (Gauss–Newton) step at the current factorisation: the decrease of
+    /// `‖r‖²` the linear model predicts for going all the way to its minimum.
+    fn gauss_newton_decrement(&self) -> f64 {
+        match &self.factor {
+            Some(Factored::Svd(svd)) => trust_region_step(svd, f64::INFINITY, 0.0, self.rows).jp2,
+            Some(Factored::Blocks(scaled)) => {
+                block_trust_region_step(scaled, f64::INFINITY, 0.0, self.rows).jp2
+            }
+            None => f64::INFINITY,
+        }
     }
 }
 
@@ -302,6 +320,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 LmTermination::CostConverged
                 | LmTermination::StepConverged
                 | LmTermination::GradientConverged
+                | LmTermination::StatisticallyConverged
                 | LmTermination::ZeroResidual => TerminationReason::SolverConverged,
                 LmTermination::MachinePrecision => TerminationReason::SolverExit(s.text().into()),
             }),

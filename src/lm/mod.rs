@@ -62,6 +62,9 @@ pub enum LmTermination {
     ZeroResidual,
     /// A tolerance is below machine precision and the iterate can no longer improve.
     MachinePrecision,
+    /// The Gauss–Newton step from the current point predicts a χ² decrease below the statistical
+    /// tolerance ([`LevenbergMarquardt::with_statistical_tolerance`]).
+    StatisticallyConverged,
 }
 
 impl LmTermination {
@@ -74,6 +77,9 @@ impl LmTermination {
             LmTermination::ZeroResidual => "residuals are zero",
             LmTermination::MachinePrecision => {
                 "no further improvement possible at machine precision"
+            }
+            LmTermination::StatisticallyConverged => {
+                "the Gauss-Newton step predicts a chi-square decrease below tolerance"
             }
         }
     }
@@ -137,6 +143,9 @@ pub struct LevenbergMarquardt {
     status: Option<LmTermination>,
     /// Number of residuals of the problem (the linearisation may have fewer rows).
     rows: usize,
+    /// Statistical stop: degrees of freedom of the residuals and the χ² tolerance (0: off).
+    dof: usize,
+    chi2_tol: f64,
 }
 
 /// Default `xtol`: a few ulps above `f64::EPSILON`, so the solver iterates until its steps are
@@ -184,6 +193,8 @@ impl LevenbergMarquardt {
             gradient: DVector::zeros(0),
             status: None,
             rows: 0,
+            dof: 0,
+            chi2_tol: 0.0,
         }
     }
 
@@ -219,6 +230,20 @@ impl LevenbergMarquardt {
         let ok = noise.is_finite() && (0.0..1.0).contains(&noise);
         check_option("cost_noise", noise, ok, "must be in [0, 1)")?;
         self.noise = noise;
+        Ok(self)
+    }
+
+    /// Also stop once the Gauss–Newton step from an accepted point predicts a decrease of
+    /// `χ² = ‖r‖²/s²` below `chi2`, with the residual variance `s² = ‖r‖²/dof`. What is left then
+    /// moves each parameter by at most `√chi2` of its standard error (Cauchy–Schwarz on
+    /// `δᵀJᵀJδ`), so iterating further changes digits the data do not determine; on millions of
+    /// residuals each iteration is a full model pass. `dof` 0 or `chi2` 0 turns it off (the
+    /// default: the solver iterates to rounding level, as NIST's certified values need).
+    pub fn with_statistical_tolerance(mut self, dof: usize, chi2: f64) -> Result<Self> {
+        let ok = chi2.is_finite() && chi2 >= 0.0;
+        check_option("chi2", chi2, ok, "must be finite and >= 0")?;
+        self.dof = dof;
+        self.chi2_tol = chi2;
         Ok(self)
     }
 

@@ -21,6 +21,9 @@ pub struct LmOptions {
     pub gtol: f64,
     /// Maximum number of trial steps (residual evaluations after the first).
     pub max_iters: u64,
+    /// Statistical stop: degrees of freedom and predicted-χ² tolerance (0: off).
+    pub dof: usize,
+    pub chi2: f64,
 }
 
 impl Default for LmOptions {
@@ -30,6 +33,8 @@ impl Default for LmOptions {
             xtol: DEFAULT_XTOL,
             gtol: 0.0,
             max_iters: 2000,
+            dof: 0,
+            chi2: 0.0,
         }
     }
 }
@@ -66,8 +71,9 @@ where
     O: Operator<Param = DVector<f64>, Output = DVector<f64>>
         + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
 {
-    let solver =
-        LevenbergMarquardt::new().with_tolerances(options.ftol, options.xtol, options.gtol)?;
+    let solver = LevenbergMarquardt::new()
+        .with_tolerances(options.ftol, options.xtol, options.gtol)?
+        .with_statistical_tolerance(options.dof, options.chi2)?;
     let res = Executor::new(problem, solver)
         .configure(|s| s.param(x0).max_iters(options.max_iters).counting(true))
         .run()
