@@ -125,8 +125,19 @@ fn fit_of_the_demo_csv_writes_the_contract_files() {
         hairfit::files::read_json(&fitdir.join("timing.json"), "timing.json").unwrap();
     assert!(timing.wall_time_s > 0.0, "{timing:?}");
     let stages: Vec<&str> = timing.stages.iter().map(|s| s.stage.as_str()).collect();
-    // `--intervals auto` profiles a fit this small, after the solver stages.
-    assert_eq!(stages, ["multistart", "polish", "profile"]);
+    // The solver stages, the statistics at the optimum, then `--intervals auto` profiles a fit
+    // this small.
+    assert_eq!(
+        stages,
+        [
+            "multistart",
+            "polish",
+            "standard_errors",
+            "verdict",
+            "curves",
+            "profile"
+        ]
+    );
     assert_eq!(v["status"], "converged", "{summary}");
     assert_eq!(v["data"]["n_samples"], 2340);
     assert_eq!(v["data"]["load_report"]["accepted"], 2340);

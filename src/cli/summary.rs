@@ -139,6 +139,17 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
             out.timing.stage(&t.stage)
         );
     }
+    // Timed steps that are not solver stages: the statistics after the fit, the profiles.
+    let after: Vec<String> = out
+        .timing
+        .stages
+        .iter()
+        .filter(|t| !j.trace.iter().any(|s| s.stage == t.stage))
+        .map(|t| format!("{} {:.2} s", t.stage.replace('_', " "), t.wall_s))
+        .collect();
+    if !after.is_empty() {
+        s += &format!("  then: {}\n", after.join(", "));
+    }
     for w in &j.warnings {
         s += &format!("warning: {w}\n");
     }

@@ -414,9 +414,18 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         options,
         mut warnings,
         trace,
-        stage_times,
+        mut stage_times,
         started,
     } = a;
+    // Each statistics step's wall time joins the solver stages' in timing.json.
+    let mut clock = Instant::now();
+    let mut lap = |stage: &str, times: &mut Vec<StageTiming>| {
+        times.push(StageTiming {
+            stage: stage.into(),
+            wall_s: clock.elapsed().as_secs_f64(),
+        });
+        clock = Instant::now();
+    };
     let nc = data.n_channels();
     let nf = ev.free.len();
     let x = ev.natural(&u[..nf]);
@@ -445,6 +454,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
     }
     let correlation = correlation_record(ev, &unc, nc);
     let residuals = residual_summary(ev, data, &e, &unc);
+    lap("standard_errors", &mut stage_times);
     // Everything fixed: no solver unknowns, the scales come in closed form (variable
     // projection). The solver has nothing to run on and says `failed`; the fit is complete.
     let status = if ev.n_params() == 0 && status == FitStatus::Failed && e.cost().is_finite() {
@@ -465,6 +475,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings: &warnings,
         dof: unc.dof,
     });
+    lap("verdict", &mut stage_times);
     let curves = curves_of(
         ev,
         data,
@@ -480,6 +491,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings
             .push("curves.csv: some fitted values are not finite; written as empty cells".into());
     }
+    lap("curves", &mut stage_times);
 
     let json = FitJson {
         hairfit_version: env!("CARGO_PKG_VERSION").into(),
