@@ -271,7 +271,7 @@ pub fn chiang_by_lobe(
     let n = params.sigma_a.len();
     let mut table = AzimuthalTable::zeros(n);
     let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    table.fill(params, &model.effects, &model.rule, angles.theta_r, phi);
+    table.fill(params, &model.effects, model.rule(), angles.theta_r, phi);
     let m = chiang::evaluator::longitudinal_terms(
         params,
         &model.effects,

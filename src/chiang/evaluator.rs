@@ -61,7 +61,7 @@ pub fn scattering<T: DualNum<f64>>(
 ) {
     let mut table = AzimuthalTable::zeros(params.sigma_a.len());
     let phi = wrap(angles.phi_r - angles.phi_i);
-    table.fill(params, &model.effects, &model.rule, angles.theta_r, phi);
+    table.fill(params, &model.effects, model.rule(), angles.theta_r, phi);
     scattering_from_table(
         params,
         &model.effects,
@@ -93,7 +93,7 @@ pub fn scattering_batch<T: DualNum<f64>>(
         let key = (a.theta_r.to_bits(), phi.to_bits());
         let slot = *index.entry(key).or_insert_with(|| {
             let mut table = AzimuthalTable::zeros(n);
-            table.fill(params, &model.effects, &model.rule, a.theta_r, phi);
+            table.fill(params, &model.effects, model.rule(), a.theta_r, phi);
             tables.push(table);
             tables.len() - 1
         });

@@ -272,7 +272,7 @@ pub fn batch(
             .as_ref()
             .is_none_or(|c| c.theta_r != theta_r.to_bits())
         {
-            column = Some(ExitColumn::new(params, effects, &model.rule, theta_r));
+            column = Some(ExitColumn::new(params, effects, model.rule(), theta_r));
         }
         let col = column.as_ref().expect("set above");
         let bits = (theta_r.to_bits(), phi.to_bits());

@@ -110,15 +110,21 @@ impl WidthRule {
         WidthRule { nodes }
     }
 
-    /// The shared rule for `n` nodes (built on first use, then cached for the process).
-    /// Errors if `n` is outside [`MIN_WIDTH_NODES`, `MAX_WIDTH_NODES`].
-    pub fn cached(n: usize) -> Result<Arc<WidthRule>> {
+    /// An error unless `n` is within [`MIN_WIDTH_NODES`, `MAX_WIDTH_NODES`].
+    pub fn check_nodes(n: usize) -> Result<()> {
         if !(MIN_WIDTH_NODES..=MAX_WIDTH_NODES).contains(&n) {
             return Err(Error::Other(format!(
                 "{n} width-quadrature nodes requested: the Chiang width integral takes between \
                  {MIN_WIDTH_NODES} and {MAX_WIDTH_NODES} nodes (1024 gives ~5e-7 relative error)"
             )));
         }
+        Ok(())
+    }
+
+    /// The shared rule for `n` nodes (built on first use, then cached for the process).
+    /// Errors if `n` is outside [`MIN_WIDTH_NODES`, `MAX_WIDTH_NODES`].
+    pub fn cached(n: usize) -> Result<Arc<WidthRule>> {
+        Self::check_nodes(n)?;
         static CACHE: OnceLock<Mutex<HashMap<usize, Arc<WidthRule>>>> = OnceLock::new();
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         // A poisoned lock only means another thread panicked mid-insert of an Arc: the map is intact.

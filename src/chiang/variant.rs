@@ -140,7 +140,7 @@ pub fn variant_scattering_batch<T: DualNum<f64>>(
         let key = (a.theta_r.to_bits(), phi.to_bits());
         let slot = *index.entry(key).or_insert_with(|| {
             let mut table = AzimuthalTable::zeros(n);
-            table.fill(chiang, &model.effects, &model.rule, a.theta_r, phi);
+            table.fill(chiang, &model.effects, model.rule(), a.theta_r, phi);
             tables.push(table);
             tables.len() - 1
         });

@@ -57,10 +57,8 @@ impl SourceModel {
         match self {
             SourceModel::Chiang { params, effects } => {
                 // The fit's terms (its S), at the default width rule (the renderer's reference).
-                let model = ChiangModel {
-                    effects: *effects,
-                    ..ChiangModel::default()
-                };
+                let model = ChiangModel::new(*effects, crate::chiang::DEFAULT_WIDTH_NODES)
+                    .expect("the default node count is in range");
                 crate::chiang::scattering_batch(params, &model, angles, &mut out);
             }
             SourceModel::Marschner { params, config } => {
