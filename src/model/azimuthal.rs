@@ -83,13 +83,13 @@ pub fn add_root_sum<T: ModelNum, S: Sink<T>>(
     }
 }
 
-/// The TRT caustic as the glint sees it: fade `t`, `φ_c`, `γ_c` (`h_c = sin γ_c`, in the
-/// scalar type `E` of the lobe's index) and `Δh`.
+/// The TRT caustic as the glint sees it: fade `t`, `φ_c`, `(h_c, cos γ_c) = (sin γ_c, cos γ_c)`
+/// (in the scalar type `E` of the lobe's index) and `Δh`.
 #[derive(Debug, Clone)]
 pub struct Glint<T, E> {
     pub t: T,
     pub phi_c: T,
-    pub gamma_c: E,
+    pub sin_cos_gc: (E, E),
     pub delta_h: T,
 }
 
@@ -121,7 +121,9 @@ pub fn glint_geometry<T: ModelNum>(
         if let Some(gc) = map.caustic() {
             let phi_c = wrap_t(map.value(&gc));
             let phi_c = if phi_c.re() < 0.0 { -phi_c } else { phi_c };
-            let d2 = map.curvature_at_caustic(&gc);
+            // sin/cos of γ_c once: the curvature and the glint's A(2, h_c) share them.
+            let sin_cos_gc = gc.sin_cos();
+            let d2 = map.curvature_at_caustic(&gc, &sin_cos_gc);
             let d2 = if d2.re() < 0.0 { -d2 } else { d2 };
             // Δh = min(Δh_M, 2·sqrt(2w_c/|Φ''|)), compared without dividing by a vanishing Φ''.
             let dhm = delta_h_m.re();
@@ -133,7 +135,7 @@ pub fn glint_geometry<T: ModelNum>(
             return Glint {
                 t: T::from(1.0),
                 phi_c: T::chain(&phi_c, eta),
-                gamma_c: gc,
+                sin_cos_gc,
                 delta_h,
             };
         }
@@ -142,7 +144,7 @@ pub fn glint_geometry<T: ModelNum>(
     Glint {
         t: -smoothstep(2.0, &upper, &T::chain(&map.eta_p, eta)) + 1.0,
         phi_c: T::from(0.0),
-        gamma_c: T::Scalar::from(0.0),
+        sin_cos_gc: (T::Scalar::from(0.0), T::Scalar::from(1.0)),
         delta_h: delta_h_m.clone(),
     }
 }
@@ -181,7 +183,7 @@ pub fn add_trt_with_glints<T: ModelNum, S: Sink<T>>(
         return;
     }
     // Glint lobes: A(2, h_c) with the exact γ_t at h_c.
-    let (h_c, cos_gc) = gl.gamma_c.sin_cos();
+    let (h_c, cos_gc) = gl.sin_cos_gc;
     let cos_gt = cos_gamma_t(&h_c, &br.eta_p);
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gc, &cos_gt);
     // g(x; w_c) = G(x)/(w_c·√(2π)): reuse the two G values of the fade.

@@ -115,13 +115,14 @@ impl<T: DualNum<f64>> ExitMap<T> {
         }
     }
 
-    /// `d²Φ/dh²` at a caustic `γ_c`: exact `2p·h/(η'²−h²)^{3/2} − 2h/(1−h²)^{3/2}`, cubic
-    /// `Φ̂''(γ_c)/cos²γ_c = 6aγ_c/cos²γ_c` (valid where `dΦ̂/dγ = 0`).
+    /// `d²Φ/dh²` at a caustic `γ_c` given with `(sin γ_c, cos γ_c)`: exact
+    /// `2p·h/(η'²−h²)^{3/2} − 2h/(1−h²)^{3/2}`, cubic `Φ̂''(γ_c)/cos²γ_c = 6aγ_c/cos²γ_c` (valid
+    /// where `dΦ̂/dγ = 0`).
     #[inline]
-    pub fn curvature_at_caustic(&self, g_c: &T) -> T {
+    pub fn curvature_at_caustic(&self, g_c: &T, (sin_gc, cos_gc): &(T, T)) -> T {
         match self.mode {
             RootMode::Exact => {
-                let h = g_c.sin();
+                let h = sin_gc.clone();
                 let h2 = h.clone() * h.clone();
                 let e2 = self.eta_p.clone() * self.eta_p.clone();
                 let t1 = h.clone() * (2.0 * self.p as f64) / (e2 - h2.clone()).powf(1.5);
@@ -129,8 +130,7 @@ impl<T: DualNum<f64>> ExitMap<T> {
                 t1 - t2
             }
             RootMode::Cubic => {
-                let c = g_c.cos();
-                self.a.clone() * g_c.clone() * 6.0 / (c.clone() * c)
+                self.a.clone() * g_c.clone() * 6.0 / (cos_gc.clone() * cos_gc.clone())
             }
         }
     }
