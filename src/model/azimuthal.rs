@@ -106,16 +106,37 @@ pub fn smoothstep<T: DualNum<f64>>(e0: f64, e1: &T, x: &T) -> T {
     }
 }
 
+/// The glint's parameters, with `1/w_c` computed once per batch.
+#[derive(Debug, Clone)]
+pub struct GlintParams<T> {
+    pub k_g: T,
+    pub w_c: T,
+    pub inv_w_c: T,
+    pub delta_eta_prime: T,
+    pub delta_h_m: T,
+}
+
+impl<T: DualNum<f64>> GlintParams<T> {
+    pub fn new(k_g: &T, w_c: &T, delta_eta_prime: &T, delta_h_m: &T) -> Self {
+        GlintParams {
+            k_g: k_g.clone(),
+            w_c: w_c.clone(),
+            inv_w_c: w_c.recip(),
+            delta_eta_prime: delta_eta_prime.clone(),
+            delta_h_m: delta_h_m.clone(),
+        }
+    }
+}
+
 /// Glint geometry of MODEL.md "TRT: glints": below the merge (η' < 2) the fold of the same map
 /// the roots use; at or past it `φ_c = h_c = 0`, `Δh = Δh_M`, `t = 1 − smoothstep(2, 2+Δη', η')`.
 /// `map` is at index `eta`.
 pub fn glint_geometry<T: ModelNum>(
     map: &ExitMap<T::Scalar>,
     eta: &T,
-    w_c: &T,
-    delta_eta_prime: &T,
-    delta_h_m: &T,
+    glint: &GlintParams<T>,
 ) -> Glint<T, T::Scalar> {
+    let (w_c, delta_h_m) = (&glint.w_c, &glint.delta_h_m);
     instrument::count_caustic();
     if map.eta_p.re() < 2.0 {
         if let Some(gc) = map.caustic() {
@@ -140,7 +161,7 @@ pub fn glint_geometry<T: ModelNum>(
             };
         }
     }
-    let upper = delta_eta_prime.clone() + 2.0;
+    let upper = glint.delta_eta_prime.clone() + 2.0;
     Glint {
         t: -smoothstep(2.0, &upper, &T::chain(&map.eta_p, eta)) + 1.0,
         phi_c: T::from(0.0),
@@ -149,10 +170,10 @@ pub fn glint_geometry<T: ModelNum>(
     }
 }
 
-/// Unnormalised `G(x) = exp(−x²/(2w_c²))`.
+/// Unnormalised `G(x) = exp(−x²/(2w_c²))`, from `1/w_c`.
 #[inline]
-fn bump<T: DualNum<f64>>(x: T, w_c: &T) -> T {
-    let z = x / w_c.clone();
+fn bump<T: DualNum<f64>>(x: T, inv_w_c: &T) -> T {
+    let z = x * inv_w_c.clone();
     (z.clone() * z * (-0.5)).exp()
 }
 
@@ -165,18 +186,15 @@ pub fn add_trt_with_glints<T: ModelNum, S: Sink<T>>(
     eta: &T,
     phi: f64,
     sigma_a: &[T],
-    k_g: &T,
-    w_c: &T,
-    delta_eta_prime: &T,
-    delta_h_m: &T,
+    glint: &GlintParams<T>,
     scale: &T,
     sink: &mut S,
 ) {
-    let gl = glint_geometry(map, eta, w_c, delta_eta_prime, delta_h_m);
+    let gl = glint_geometry(map, eta, glint);
     let dm = wrap_t(-gl.phi_c.clone() + phi);
     let dp = wrap_t(gl.phi_c.clone() + phi);
     // At φ = ±φ_c with t = 1 this factor is exactly 0, so N_2 (∞ there) contributes 0.
-    let (g_m, g_p) = (bump(dm, w_c), bump(dp, w_c));
+    let (g_m, g_p) = (bump(dm, &glint.inv_w_c), bump(dp, &glint.inv_w_c));
     let fade = (-(gl.t.clone() * g_m.clone()) + 1.0) * (-(gl.t.clone() * g_p.clone()) + 1.0);
     add_root_sum(2, map, br, eta, phi, sigma_a, &(fade * scale.clone()), sink);
     if gl.t.re() == 0.0 {
@@ -187,10 +205,10 @@ pub fn add_trt_with_glints<T: ModelNum, S: Sink<T>>(
     let cos_gt = cos_gamma_t(&h_c, &br.eta_p);
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gc, &cos_gt);
     // g(x; w_c) = G(x)/(w_c·√(2π)): reuse the two G values of the fade.
-    let lobes = (g_m + g_p) / w_c.clone() * INV_SQRT_TAU;
+    let lobes = (g_m + g_p) * glint.inv_w_c.clone() * INV_SQRT_TAU;
     let base = T::chain(&fresnel_attenuation(2, f), eta)
         * gl.t
-        * k_g.clone()
+        * glint.k_g.clone()
         * gl.delta_h
         * lobes
         * scale.clone();
