@@ -14,7 +14,9 @@ use crate::chiang::{
 use crate::error::{Error, Result};
 use crate::files::ParameterFile;
 use crate::model::angles::wrap;
-use crate::model::{scattering, scattering_by_lobe, Angles, ModelConfig, Params};
+use crate::model::{
+    scattering_batch as marschner_batch, scattering_by_lobe, Angles, ModelConfig, Params,
+};
 use crate::params::ParamFile;
 
 /// A model family: Marschner 2003 (MODEL.md) or Chiang 2016 (CHIANG.md).
@@ -237,11 +239,9 @@ impl FamilyModel {
     /// integral per exit direction.
     pub fn eval_batch(&self, angles: &[Angles], out: &mut [f64]) {
         match self {
+            // One batch: the parameter-only factors are prepared once, not per row.
             FamilyModel::Marschner { params, config } => {
-                let n = params.sigma_a.len();
-                for (a, o) in angles.iter().zip(out.chunks_mut(n)) {
-                    scattering(params, config, a, o);
-                }
+                marschner_batch(params, config, angles, out)
             }
             FamilyModel::Chiang { params, model } => scattering_batch(params, model, angles, out),
         }

@@ -6,9 +6,16 @@ use std::f64::consts::{PI, TAU};
 /// `wrap`: map an angle to `(−π, π]`.
 #[inline]
 pub fn wrap(x: f64) -> f64 {
-    // `x.rem_euclid(TAU)` without its fmod where |x| < 2π (there the fmod returns x): the same
+    // `x.rem_euclid(TAU)` without its fmod where the fmod is plain arithmetic: x itself where
+    // |x| < 2π, x − 2π on [2π, 4π) (exact by Sterbenz's lemma; TRT's Φ lives there). The same
     // bits, at a fraction of the cost on the per-sample path.
-    let r = if x.abs() < TAU { x } else { x % TAU };
+    let r = if x.abs() < TAU {
+        x
+    } else if (TAU..2.0 * TAU).contains(&x) {
+        x - TAU
+    } else {
+        x % TAU
+    };
     let y = if r < 0.0 { r + TAU } else { r };
     if y > PI {
         y - TAU

@@ -83,13 +83,13 @@ pub fn add_root_sum<T: ModelNum, S: Sink<T>>(
     }
 }
 
-/// The TRT caustic as the glint sees it: fade `t`, `φ_c`, `γ_c` (`h_c = sin γ_c`, in the
-/// scalar type `E` of the lobe's index) and `Δh`.
+/// The TRT caustic as the glint sees it: fade `t`, `φ_c`, `(h_c, cos γ_c) = (sin γ_c, cos γ_c)`
+/// (in the scalar type `E` of the lobe's index) and `Δh`.
 #[derive(Debug, Clone)]
 pub struct Glint<T, E> {
     pub t: T,
     pub phi_c: T,
-    pub gamma_c: E,
+    pub sin_cos_gc: (E, E),
     pub delta_h: T,
 }
 
@@ -106,22 +106,45 @@ pub fn smoothstep<T: DualNum<f64>>(e0: f64, e1: &T, x: &T) -> T {
     }
 }
 
+/// The glint's parameters, with `1/w_c` computed once per batch.
+#[derive(Debug, Clone)]
+pub struct GlintParams<T> {
+    pub k_g: T,
+    pub w_c: T,
+    pub inv_w_c: T,
+    pub delta_eta_prime: T,
+    pub delta_h_m: T,
+}
+
+impl<T: DualNum<f64>> GlintParams<T> {
+    pub fn new(k_g: &T, w_c: &T, delta_eta_prime: &T, delta_h_m: &T) -> Self {
+        GlintParams {
+            k_g: k_g.clone(),
+            w_c: w_c.clone(),
+            inv_w_c: w_c.recip(),
+            delta_eta_prime: delta_eta_prime.clone(),
+            delta_h_m: delta_h_m.clone(),
+        }
+    }
+}
+
 /// Glint geometry of MODEL.md "TRT: glints": below the merge (η' < 2) the fold of the same map
 /// the roots use; at or past it `φ_c = h_c = 0`, `Δh = Δh_M`, `t = 1 − smoothstep(2, 2+Δη', η')`.
 /// `map` is at index `eta`.
 pub fn glint_geometry<T: ModelNum>(
     map: &ExitMap<T::Scalar>,
     eta: &T,
-    w_c: &T,
-    delta_eta_prime: &T,
-    delta_h_m: &T,
+    glint: &GlintParams<T>,
 ) -> Glint<T, T::Scalar> {
+    let (w_c, delta_h_m) = (&glint.w_c, &glint.delta_h_m);
     instrument::count_caustic();
     if map.eta_p.re() < 2.0 {
         if let Some(gc) = map.caustic() {
             let phi_c = wrap_t(map.value(&gc));
             let phi_c = if phi_c.re() < 0.0 { -phi_c } else { phi_c };
-            let d2 = map.curvature_at_caustic(&gc);
+            // sin/cos of γ_c once: the curvature and the glint's A(2, h_c) share them.
+            let sin_cos_gc = gc.sin_cos();
+            let d2 = map.curvature_at_caustic(&gc, &sin_cos_gc);
             let d2 = if d2.re() < 0.0 { -d2 } else { d2 };
             // Δh = min(Δh_M, 2·sqrt(2w_c/|Φ''|)), compared without dividing by a vanishing Φ''.
             let dhm = delta_h_m.re();
@@ -133,24 +156,24 @@ pub fn glint_geometry<T: ModelNum>(
             return Glint {
                 t: T::from(1.0),
                 phi_c: T::chain(&phi_c, eta),
-                gamma_c: gc,
+                sin_cos_gc,
                 delta_h,
             };
         }
     }
-    let upper = delta_eta_prime.clone() + 2.0;
+    let upper = glint.delta_eta_prime.clone() + 2.0;
     Glint {
         t: -smoothstep(2.0, &upper, &T::chain(&map.eta_p, eta)) + 1.0,
         phi_c: T::from(0.0),
-        gamma_c: T::Scalar::from(0.0),
+        sin_cos_gc: (T::Scalar::from(0.0), T::Scalar::from(1.0)),
         delta_h: delta_h_m.clone(),
     }
 }
 
-/// Unnormalised `G(x) = exp(−x²/(2w_c²))`.
+/// Unnormalised `G(x) = exp(−x²/(2w_c²))`, from `1/w_c`.
 #[inline]
-fn bump<T: DualNum<f64>>(x: T, w_c: &T) -> T {
-    let z = x / w_c.clone();
+fn bump<T: DualNum<f64>>(x: T, inv_w_c: &T) -> T {
+    let z = x * inv_w_c.clone();
     (z.clone() * z * (-0.5)).exp()
 }
 
@@ -163,32 +186,29 @@ pub fn add_trt_with_glints<T: ModelNum, S: Sink<T>>(
     eta: &T,
     phi: f64,
     sigma_a: &[T],
-    k_g: &T,
-    w_c: &T,
-    delta_eta_prime: &T,
-    delta_h_m: &T,
+    glint: &GlintParams<T>,
     scale: &T,
     sink: &mut S,
 ) {
-    let gl = glint_geometry(map, eta, w_c, delta_eta_prime, delta_h_m);
+    let gl = glint_geometry(map, eta, glint);
     let dm = wrap_t(-gl.phi_c.clone() + phi);
     let dp = wrap_t(gl.phi_c.clone() + phi);
     // At φ = ±φ_c with t = 1 this factor is exactly 0, so N_2 (∞ there) contributes 0.
-    let (g_m, g_p) = (bump(dm, w_c), bump(dp, w_c));
+    let (g_m, g_p) = (bump(dm, &glint.inv_w_c), bump(dp, &glint.inv_w_c));
     let fade = (-(gl.t.clone() * g_m.clone()) + 1.0) * (-(gl.t.clone() * g_p.clone()) + 1.0);
     add_root_sum(2, map, br, eta, phi, sigma_a, &(fade * scale.clone()), sink);
     if gl.t.re() == 0.0 {
         return;
     }
     // Glint lobes: A(2, h_c) with the exact γ_t at h_c.
-    let (h_c, cos_gc) = gl.gamma_c.sin_cos();
+    let (h_c, cos_gc) = gl.sin_cos_gc;
     let cos_gt = cos_gamma_t(&h_c, &br.eta_p);
     let f = fresnel(&br.eta_p, &br.eta_pp, &cos_gc, &cos_gt);
     // g(x; w_c) = G(x)/(w_c·√(2π)): reuse the two G values of the fade.
-    let lobes = (g_m + g_p) / w_c.clone() * INV_SQRT_TAU;
+    let lobes = (g_m + g_p) * glint.inv_w_c.clone() * INV_SQRT_TAU;
     let base = T::chain(&fresnel_attenuation(2, f), eta)
         * gl.t
-        * k_g.clone()
+        * glint.k_g.clone()
         * gl.delta_h
         * lobes
         * scale.clone();

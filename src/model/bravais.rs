@@ -9,7 +9,7 @@ pub struct Bravais<T> {
     pub eta_p: T,
     /// `η'' = η² cos θ_d / sqrt(η² − sin²θ_d)`.
     pub eta_pp: T,
-    /// `cos θ_t = sqrt(1 − sin²θ_d / η²)`.
+    /// `cos θ_t = sqrt(1 − sin²θ_d / η²) = sqrt(η² − sin²θ_d) / η`.
     pub cos_theta_t: T,
 }
 
@@ -21,7 +21,8 @@ pub fn bravais_indices<T: DualNum<f64>>(eta: &T, sin_td: f64, cos_td: f64) -> Br
     let root = (eta2.clone() - s2).sqrt();
     Bravais {
         eta_p: root.clone() / cos_td,
-        eta_pp: eta2.clone() * cos_td / root,
-        cos_theta_t: (-(eta2.recip() * s2) + 1.0).sqrt(),
+        eta_pp: eta2 * cos_td / root.clone(),
+        // The root η' needs anyway, over η: one division instead of a reciprocal and a sqrt.
+        cos_theta_t: root / eta.clone(),
     }
 }

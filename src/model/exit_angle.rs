@@ -18,6 +18,8 @@ pub struct ExitMap<T> {
     /// Cubic coefficients `Φ̂ = aγ³ + bγ + pπ` (cubic mode only; zero in exact mode).
     pub a: T,
     pub b: T,
+    /// The caustic `γ_c` inside `(0, π/2)`, found once with the map (roots and glint share it).
+    caustic: Option<T>,
 }
 
 impl<T: DualNum<f64>> ExitMap<T> {
@@ -35,12 +37,14 @@ impl<T: DualNum<f64>> ExitMap<T> {
             }
             RootMode::Exact => (T::from(0.0), T::from(0.0)),
         };
+        let caustic = caustic_of(mode, p, &eta_p, &a, &b);
         ExitMap {
             mode,
             p,
             eta_p,
             a,
             b,
+            caustic,
         }
     }
 
@@ -53,6 +57,7 @@ impl<T: DualNum<f64>> ExitMap<T> {
             eta_p: self.eta_p.re(),
             a: self.a.re(),
             b: self.b.re(),
+            caustic: self.caustic.as_ref().map(|g| g.re()),
         }
     }
 
@@ -84,44 +89,20 @@ impl<T: DualNum<f64>> ExitMap<T> {
         }
     }
 
-    /// Caustic `γ_c > 0` where `dΦ/dγ = 0`, if it lies inside `(0, π/2)`: exact
-    /// `h_c = sqrt((p² − η'²)/(p² − 1))` (TRT: `sqrt((4 − η'²)/3)`), cubic `sqrt(−b/(3a))`.
+    /// Caustic `γ_c > 0` where `dΦ/dγ = 0`, if it lies inside `(0, π/2)` ([`caustic_of`]).
     #[inline]
     pub fn caustic(&self) -> Option<T> {
-        let g = match self.mode {
-            RootMode::Exact => {
-                if self.p < 2 {
-                    return None;
-                }
-                let p2 = (self.p * self.p) as f64;
-                let h2 = (-(self.eta_p.clone() * self.eta_p.clone()) + p2) / (p2 - 1.0);
-                if !(h2.re() > 0.0 && h2.re() < 1.0) {
-                    return None;
-                }
-                h2.sqrt().asin()
-            }
-            RootMode::Cubic => {
-                // b > 0 only when c = asin(1/η') is large enough, so a is far from 0 there.
-                if !(self.b.re() > 0.0 && self.a.re() < 0.0) {
-                    return None;
-                }
-                (-(self.b.clone() / (self.a.clone() * 3.0))).sqrt()
-            }
-        };
-        if g.re() < FRAC_PI_2 {
-            Some(g)
-        } else {
-            None
-        }
+        self.caustic.clone()
     }
 
-    /// `d²Φ/dh²` at a caustic `γ_c`: exact `2p·h/(η'²−h²)^{3/2} − 2h/(1−h²)^{3/2}`, cubic
-    /// `Φ̂''(γ_c)/cos²γ_c = 6aγ_c/cos²γ_c` (valid where `dΦ̂/dγ = 0`).
+    /// `d²Φ/dh²` at a caustic `γ_c` given with `(sin γ_c, cos γ_c)`: exact
+    /// `2p·h/(η'²−h²)^{3/2} − 2h/(1−h²)^{3/2}`, cubic `Φ̂''(γ_c)/cos²γ_c = 6aγ_c/cos²γ_c` (valid
+    /// where `dΦ̂/dγ = 0`).
     #[inline]
-    pub fn curvature_at_caustic(&self, g_c: &T) -> T {
+    pub fn curvature_at_caustic(&self, g_c: &T, (sin_gc, cos_gc): &(T, T)) -> T {
         match self.mode {
             RootMode::Exact => {
-                let h = g_c.sin();
+                let h = sin_gc.clone();
                 let h2 = h.clone() * h.clone();
                 let e2 = self.eta_p.clone() * self.eta_p.clone();
                 let t1 = h.clone() * (2.0 * self.p as f64) / (e2 - h2.clone()).powf(1.5);
@@ -129,9 +110,39 @@ impl<T: DualNum<f64>> ExitMap<T> {
                 t1 - t2
             }
             RootMode::Cubic => {
-                let c = g_c.cos();
-                self.a.clone() * g_c.clone() * 6.0 / (c.clone() * c)
+                self.a.clone() * g_c.clone() * 6.0 / (cos_gc.clone() * cos_gc.clone())
             }
         }
+    }
+}
+
+/// Caustic `γ_c > 0` of `Φ(p, ·)` where `dΦ/dγ = 0`, if it lies inside `(0, π/2)`: exact
+/// `h_c = sqrt((p² − η'²)/(p² − 1))` (TRT: `sqrt((4 − η'²)/3)`), cubic `sqrt(−b/(3a))`.
+#[inline]
+fn caustic_of<T: DualNum<f64>>(mode: RootMode, p: usize, eta_p: &T, a: &T, b: &T) -> Option<T> {
+    let g = match mode {
+        RootMode::Exact => {
+            if p < 2 {
+                return None;
+            }
+            let p2 = (p * p) as f64;
+            let h2 = (-(eta_p.clone() * eta_p.clone()) + p2) / (p2 - 1.0);
+            if !(h2.re() > 0.0 && h2.re() < 1.0) {
+                return None;
+            }
+            h2.sqrt().asin()
+        }
+        RootMode::Cubic => {
+            // b > 0 only when c = asin(1/η') is large enough, so a is far from 0 there.
+            if !(b.re() > 0.0 && a.re() < 0.0) {
+                return None;
+            }
+            (-(b.clone() / (a.clone() * 3.0))).sqrt()
+        }
+    };
+    if g.re() < FRAC_PI_2 {
+        Some(g)
+    } else {
+        None
     }
 }

@@ -9,10 +9,13 @@ use super::chain::ModelNum;
 #[inline]
 pub fn fresnel<T: DualNum<f64>>(eta_p: &T, eta_pp: &T, cos_gi: &T, cos_gt: &T) -> T {
     let a = eta_p.clone() * cos_gt.clone();
-    let rs = (cos_gi.clone() - a.clone()) / (cos_gi.clone() + a);
     let b = eta_pp.clone() * cos_gi.clone();
-    let rp = (b.clone() - cos_gt.clone()) / (b + cos_gt.clone());
-    (rs.clone() * rs + rp.clone() * rp) * 0.5
+    // r_s = n_s/d_s, r_p = n_p/d_p over one common denominator: one division, not two.
+    let (n_s, d_s) = (cos_gi.clone() - a.clone(), cos_gi.clone() + a);
+    let (n_p, d_p) = (b.clone() - cos_gt.clone(), b + cos_gt.clone());
+    let (s, q) = (n_s * d_p.clone(), n_p * d_s.clone());
+    let d = d_s * d_p;
+    (s.clone() * s + q.clone() * q) / (d.clone() * d) * 0.5
 }
 
 /// `cos γ_t = sqrt(1 − (h/η')²)`, the exact refracted angle (used in both root modes).

@@ -8,8 +8,14 @@ pub const INV_SQRT_TAU: f64 = 0.398_942_280_401_432_7;
 /// Unit-area Gaussian `g(x; s) = exp(−x²/(2s²)) / (s√(2π))`.
 #[inline]
 pub fn gaussian<T: DualNum<f64>>(x: T, s: &T) -> T {
-    let z = x / s.clone();
-    (z.clone() * z * (-0.5)).exp() / s.clone() * INV_SQRT_TAU
+    gaussian_inv(x, &s.recip())
+}
+
+/// [`gaussian`] from `1/s`: no division, for a width shared by a batch (`1/s` computed once).
+#[inline]
+pub fn gaussian_inv<T: DualNum<f64>>(x: T, inv_s: &T) -> T {
+    let z = x * inv_s.clone();
+    (z.clone() * z * (-0.5)).exp() * inv_s.clone() * INV_SQRT_TAU
 }
 
 /// Lobe shift and width `(α_p, β_p)`: `α_TT = −α_R/2, α_TRT = −3α_R/2, β_TT = β_R/2, β_TRT = 2β_R`.

@@ -28,11 +28,11 @@ pub mod parameters;
 pub mod roots;
 
 use angles::half_angles;
-use azimuthal::{add_r, add_root_sum, add_trt_with_glints, Sink};
+use azimuthal::{add_r, add_root_sum, add_trt_with_glints, GlintParams, Sink};
 use bravais::bravais_indices;
 use eccentricity::{eccentric_index_at, eccentric_terms};
 use exit_angle::ExitMap;
-use longitudinal::{gaussian, lobe_shape};
+use longitudinal::{gaussian_inv, lobe_shape};
 
 pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
@@ -418,28 +418,39 @@ impl<T: ModelNum> Sink<T> for ByLobe<'_, T> {
     }
 }
 
-/// The parameter-only factors of `S`, shared by every sample of a batch.
+/// The parameter-only factors of `S`, shared by every sample of a batch (reciprocals too, so
+/// the per-sample path divides less).
 struct Prepared<T> {
-    /// `(α_p, β_p)` of R, TT, TRT.
+    /// `(α_p, 1/β_p)` of R, TT, TRT.
     shapes: [(T, T); 3],
     /// The eccentric index's `(η*_1 + η*_2, η*_1 − η*_2)`.
     eccentric: (T, T),
+    glint: GlintParams<T>,
 }
 
 impl<T: ModelNum> Prepared<T> {
     fn new(params: &Params<T>) -> Self {
-        let shape = |p| lobe_shape(p, &params.alpha_r, &params.beta_r);
+        let shape = |p| {
+            let (alpha, beta) = lobe_shape(p, &params.alpha_r, &params.beta_r);
+            (alpha, beta.recip())
+        };
         Prepared {
             shapes: [shape(0), shape(1), shape(2)],
             eccentric: eccentric_terms(&params.eta, &params.eccentricity),
+            glint: GlintParams::new(
+                &params.k_g,
+                &params.w_c,
+                &params.delta_eta_prime,
+                &params.delta_h_m,
+            ),
         }
     }
 
     /// `M_p(θ_h)`, as [`longitudinal::longitudinal`].
     #[inline]
     fn longitudinal(&self, p: usize, theta_h: f64) -> T {
-        let (alpha, beta) = &self.shapes[p];
-        gaussian(-alpha.clone() + theta_h, beta)
+        let (alpha, inv_beta) = &self.shapes[p];
+        gaussian_inv(-alpha.clone() + theta_h, inv_beta)
     }
 }
 
@@ -486,10 +497,7 @@ fn evaluate<T: ModelNum, S: Sink<T>>(
                 &eta,
                 ha.phi,
                 &params.sigma_a,
-                &params.k_g,
-                &params.w_c,
-                &params.delta_eta_prime,
-                &params.delta_h_m,
+                &prepared.glint,
                 &m,
                 sink,
             );

@@ -1,9 +1,10 @@
 //! Roots of `Φ(p, γ) ≡ φ (mod 2π)` on `γ ∈ [−π/2, π/2]`: bracketing on the monotone pieces between
-//! the caustics, then safeguarded Newton, in f64; then one Newton step in the dual number type at
+//! the caustics, then safeguarded Newton, in f64 (cubic mode starts from the cubic's closed-form
+//! root, so one Newton step normally confirms it); then one Newton step in the dual number type at
 //! the converged root (implicit-function theorem: exact first derivatives).
 
 use num_dual::DualNum;
-use std::f64::consts::{FRAC_PI_2, TAU};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use super::angles::wrap;
 use super::exit_angle::ExitMap;
@@ -19,6 +20,19 @@ pub struct Roots {
     pub gamma: [f64; MAX_ROOTS],
     pub target: [f64; MAX_ROOTS],
     pub n: usize,
+}
+
+/// `1/(2π)`: the k range of a piece is found by multiplying (a division costs as much as the rest
+/// of the enumeration; it could differ only where a root sits exactly on a piece's end).
+const INV_TAU: f64 = 1.0 / TAU;
+
+/// The monotone pieces of the map, in γ order: below the caustic `−γ_c`, between `±γ_c` (the
+/// whole domain when there is no caustic inside it), above `γ_c`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Piece {
+    Lower,
+    Middle,
+    Upper,
 }
 
 /// Every root of `map(γ) = φ + 2πk` over all k, `γ ∈ [−π/2, π/2]`.
@@ -38,18 +52,18 @@ pub fn exit_roots(map: &ExitMap<f64>, phi: f64) -> Roots {
         }
     }
     let mut bounds = [-FRAC_PI_2, 0.0, 0.0, FRAC_PI_2];
-    let n_pieces = match map.caustic() {
+    let pieces: &[Piece] = match map.caustic() {
         Some(gc) if gc > 0.0 => {
             bounds = [-FRAC_PI_2, -gc, gc, FRAC_PI_2];
-            3
+            &[Piece::Lower, Piece::Middle, Piece::Upper]
         }
         _ => {
             bounds[1] = FRAC_PI_2;
-            1
+            &[Piece::Middle]
         }
     };
     let mut f_lo = map.value(&bounds[0]);
-    for i in 0..n_pieces {
+    for (i, &piece) in pieces.iter().enumerate() {
         let (lo, hi) = (bounds[i], bounds[i + 1]);
         let f_hi = map.value(&hi);
         let (vmin, vmax) = if f_lo <= f_hi {
@@ -57,7 +71,10 @@ pub fn exit_roots(map: &ExitMap<f64>, phi: f64) -> Roots {
         } else {
             (f_hi, f_lo)
         };
-        let (k_min, k_max) = (ceil_i64((vmin - phi) / TAU), floor_i64((vmax - phi) / TAU));
+        let (k_min, k_max) = (
+            ceil_i64((vmin - phi) * INV_TAU),
+            floor_i64((vmax - phi) * INV_TAU),
+        );
         for k in k_min..=k_max {
             let y = phi + TAU * k as f64;
             // A root exactly on a shared boundary belongs to the previous piece.
@@ -65,7 +82,11 @@ pub fn exit_roots(map: &ExitMap<f64>, phi: f64) -> Roots {
                 continue;
             }
             if roots.n < MAX_ROOTS {
-                roots.gamma[roots.n] = solve_monotone(map, lo, hi, f_lo, f_hi, y);
+                let start = match map.mode {
+                    RootMode::Cubic => cubic_root(map.a, map.b, map.p as f64 * PI - y, piece),
+                    RootMode::Exact => f64::NAN,
+                };
+                roots.gamma[roots.n] = solve_monotone(map, lo, hi, f_lo, f_hi, y, start);
                 roots.target[roots.n] = y;
                 roots.n += 1;
             }
@@ -122,8 +143,64 @@ fn tt_closed_form(map: &ExitMap<f64>, phi: f64) -> Option<f64> {
     }
 }
 
-/// Safeguarded Newton for `map(γ) = y` on `[lo, hi]` where the map is monotone and brackets `y`.
-fn solve_monotone(map: &ExitMap<f64>, lo: f64, hi: f64, f_lo: f64, f_hi: f64, y: f64) -> f64 {
+/// The real root on `piece` of Marschner's cubic `aγ³ + bγ + c₀ = 0` (`c₀ = pπ − y`, `a < 0`), in
+/// closed form: with `P = b/a`, `Q = c₀/a` and `Δ = (Q/2)² + (P/3)³`, the one real root for Δ > 0
+/// (Cardano, as `u − P/(3u)`, `u = ∛(−Q/2 ± √Δ)` with the sign that avoids cancellation), else
+/// Viète's `2r·cos((acos(−Q/(2r³)) − 2πj)/3)`, `r = √(−P/3)`: j = 0, 1, 2 give the upper, middle
+/// and lower root (`±r = ±γ_c` separate them). Accurate to rounding away from folds; a start only
+/// (next to a fold the acos argument loses digits, and the bracketed solve still decides).
+pub fn cubic_root(a: f64, b: f64, c0: f64, piece: Piece) -> f64 {
+    let p3 = b / a * (1.0 / 3.0);
+    let half_q = 0.5 * c0 / a;
+    let disc = half_q * half_q + p3 * p3 * p3;
+    if disc > 0.0 {
+        let u = cube_root_start(-half_q - disc.sqrt().copysign(half_q));
+        if u == 0.0 {
+            0.0
+        } else {
+            u - p3 / u
+        }
+    } else {
+        let r = (-p3).sqrt();
+        let third = (-half_q / (r * r * r)).clamp(-1.0, 1.0).acos() * (1.0 / 3.0);
+        let j = match piece {
+            Piece::Upper => 0.0,
+            Piece::Middle => 1.0,
+            Piece::Lower => 2.0,
+        };
+        2.0 * r * (third - j * (TAU / 3.0)).cos()
+    }
+}
+
+/// `∛s` to ~1e-14 relative for `1e-90 < |s| < 1e90` (a Newton start needs no more; outside that
+/// range it is only a start too): the exponent divided by 3 through the bits, then two Halley
+/// steps `u ← u(u³ + 2s)/(2u³ + s)`. A quarter of the cost of `f64::cbrt`, which is correctly
+/// rounded and was the solve's largest single cost.
+fn cube_root_start(s: f64) -> f64 {
+    if s == 0.0 || !s.is_finite() {
+        return s;
+    }
+    let m = s.abs();
+    let halley = |u: f64| {
+        let u3 = u * u * u;
+        u * (u3 + 2.0 * m) / (2.0 * u3 + m)
+    };
+    // Bits of m/3 plus a third of the exponent bias (tuned: the first guess is within 3.2%).
+    let u = f64::from_bits(m.to_bits() / 3 + 0x2A9F_7893_0000_0000);
+    halley(halley(u)).copysign(s)
+}
+
+/// Safeguarded Newton for `map(γ) = y` on `[lo, hi]` where the map is monotone and brackets `y`,
+/// from `start` if it lies inside, else from the secant through the piece's ends.
+fn solve_monotone(
+    map: &ExitMap<f64>,
+    lo: f64,
+    hi: f64,
+    f_lo: f64,
+    f_hi: f64,
+    y: f64,
+    start: f64,
+) -> f64 {
     if y == f_lo {
         return lo;
     }
@@ -132,8 +209,11 @@ fn solve_monotone(map: &ExitMap<f64>, lo: f64, hi: f64, f_lo: f64, f_hi: f64, y:
     }
     let increasing = f_hi > f_lo;
     let (mut a, mut b) = (lo, hi);
-    // Start from the secant through the piece's ends.
-    let mut x = lo + (y - f_lo) / (f_hi - f_lo) * (hi - lo);
+    let mut x = if start > lo && start < hi {
+        start
+    } else {
+        lo + (y - f_lo) / (f_hi - f_lo) * (hi - lo)
+    };
     if !(x > lo && x < hi) {
         x = 0.5 * (lo + hi);
     }
@@ -226,6 +306,60 @@ mod tests {
             }
         }
         assert!(checked > 5000, "only {checked} roots checked");
+    }
+
+    /// The closed-form cubic root solves the cubic on its own piece: residual within 1e-13 (a few
+    /// ulps of the O(10) terms) and on the right side of ±γ_c, over TT and TRT maps and targets
+    /// spanning each piece's whole range (including wrapped ones).
+    #[test]
+    fn cubic_closed_form_solves_the_cubic_on_its_piece() {
+        let mut checked = 0;
+        for i in 0..60 {
+            let eta_p = 1.02 + 0.05 * i as f64;
+            for p in [1, 2] {
+                let map = ExitMap::new(RootMode::Cubic, p, eta_p);
+                let gc = map.caustic();
+                for j in 0..=400 {
+                    let g = -FRAC_PI_2 + PI * j as f64 / 400.0;
+                    let piece = match gc {
+                        Some(c) if g < -c => Piece::Lower,
+                        Some(c) if g > c => Piece::Upper,
+                        _ => Piece::Middle,
+                    };
+                    if gc.is_some_and(|c| (g.abs() - c).abs() < 1e-3) {
+                        continue;
+                    }
+                    let y = map.value(&g);
+                    let root = cubic_root(map.a, map.b, p as f64 * PI - y, piece);
+                    assert!(
+                        (map.value(&root) - y).abs() <= 1e-13,
+                        "η'={eta_p} p={p} γ={g}: root {root}"
+                    );
+                    // The residual over |Φ'| (≥ ~1e-3 a step away from the fold).
+                    assert!((root - g).abs() <= 1e-11, "η'={eta_p} p={p} γ={g}: {root}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 40_000, "only {checked} checked");
+    }
+
+    /// The Newton start for `∛s` is within 1e-14 of `f64::cbrt` over the range the cubic sees
+    /// (and far beyond), keeps the sign and maps 0 to 0.
+    #[test]
+    fn cube_root_start_matches_cbrt() {
+        let mut s = 1e-90;
+        while s < 1e90 {
+            for v in [s, -s, 1.37 * s, -2.9 * s] {
+                let (got, want) = (cube_root_start(v), v.cbrt());
+                assert!(
+                    (got - want).abs() <= 1e-14 * want.abs(),
+                    "{v}: {got} vs {want}"
+                );
+            }
+            s *= 1.01;
+        }
+        assert_eq!(cube_root_start(0.0), 0.0);
     }
 
     /// The libm-free rounding agrees with `floor`/`ceil` at integers, halves, tiny and negative
