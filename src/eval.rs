@@ -18,7 +18,9 @@ use crate::family::{FamilyModel, FamilyParams};
 use crate::model::Angles;
 
 mod plain_row;
+mod shortest;
 use plain_row::PlainRow;
+use shortest::push_shortest;
 
 /// Rows evaluated per parallel chunk: large enough to amortise the rayon fork, small enough that
 /// memory does not grow with the file.
@@ -438,9 +440,9 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 self.request,
             ));
         }
-        // Values are appended with ryu's shortest round-trip digits, all into one buffer.
-        let mut digits = ryu::Buffer::new();
-        // The longest value ryu writes is 24 bytes.
+        // Values are appended as shortest round-trip text, all into one buffer.
+        let mut digits = zmij::Buffer::new();
+        // The longest value is 24 bytes.
         self.out
             .reserve(self.passthrough.len() + self.values.len() * 25 + self.angles.len());
         let mut start = 0;
@@ -453,8 +455,7 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             start = end;
             for &v in vals {
                 self.out.push(b',');
-                self.out
-                    .extend_from_slice(digits.format_finite(v).as_bytes());
+                push_shortest(&mut self.out, &mut digits, v);
             }
             self.out.push(b'\n');
         }
