@@ -4,7 +4,8 @@
 //! Eval throughput on one thread: a 1-million-row angles CSV through `eval_stream` into a sink,
 //! with the real model (3 channels) and with a trivial stand-in model, so the second number is
 //! the CSV reading, number parsing and formatting alone (what is left to the model is the
-//! difference).
+//! difference). The I/O alone also on angles written to full precision (17 significant digits,
+//! as a program printing its f64s writes them): each digit costs parse time.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -68,8 +69,9 @@ fn bench_load(c: &mut Criterion) {
 
 const EVAL_ROWS: u64 = 1_000_000;
 
-/// Angles rows like a measured file: six decimals, every angle in range.
-fn generate_angles(path: &Path, rows: u64) {
+/// Angles rows like a measured file: six decimals (or, `full_precision`, the shortest text that
+/// round-trips, mostly 16–17 significant digits), every angle in range.
+fn generate_angles(path: &Path, rows: u64, full_precision: bool) {
     let mut w = BufWriter::with_capacity(1 << 20, std::fs::File::create(path).unwrap());
     writeln!(w, "theta_i,phi_i,theta_r,phi_r").unwrap();
     let mut h: u64 = 0x2545_F491_4F6C_DD1D;
@@ -81,7 +83,11 @@ fn generate_angles(path: &Path, rows: u64) {
     };
     for _ in 0..rows {
         let (ti, pi, tr, pr) = (next(160.0), next(360.0), next(160.0), next(360.0));
-        writeln!(w, "{ti:.6},{pi:.6},{tr:.6},{pr:.6}").unwrap();
+        if full_precision {
+            writeln!(w, "{ti},{pi},{tr},{pr}").unwrap();
+        } else {
+            writeln!(w, "{ti:.6},{pi:.6},{tr:.6},{pr:.6}").unwrap();
+        }
     }
     w.flush().unwrap();
 }
@@ -89,7 +95,9 @@ fn generate_angles(path: &Path, rows: u64) {
 fn bench_eval(c: &mut Criterion) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("angles.csv");
-    generate_angles(&path, EVAL_ROWS);
+    generate_angles(&path, EVAL_ROWS, false);
+    let full_path = dir.path().join("angles_full_precision.csv");
+    generate_angles(&full_path, EVAL_ROWS, true);
     let params_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/true_rgb.json");
     let file = FamilyParams::load(&params_path, ModelFamily::Marschner).unwrap();
     let request = EvalRequest {
@@ -114,17 +122,21 @@ fn bench_eval(c: &mut Criterion) {
         .unwrap();
     // CPU time per run as well: on a shared machine wall time says more about the other
     // processes than about this code.
-    for (what, with_model) in [("3 channels", true), ("I/O only", false)] {
+    for (what, with_model, path) in [
+        ("3 channels", true, &path),
+        ("I/O only", false, &path),
+        ("I/O only, 17-digit angles", false, &full_path),
+    ] {
         let runs = 3;
         let before = cpu_seconds();
         for _ in 0..runs {
             one_thread.install(|| {
-                let input = std::fs::File::open(&path).unwrap();
+                let input = std::fs::File::open(path).unwrap();
                 let sink = &mut std::io::sink();
                 if with_model {
-                    eval_stream(input, &path, sink, &request).unwrap();
+                    eval_stream(input, path, sink, &request).unwrap();
                 } else {
-                    eval_stream_with(input, &path, sink, &request, &stand_in).unwrap();
+                    eval_stream_with(input, path, sink, &request, &stand_in).unwrap();
                 }
             })
         }

@@ -11,11 +11,18 @@ use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::data::lines::{csv_error, read_error, LineCounter, TextGuard};
-use crate::data::records::{count_lines, for_each_line, needs_csv_parser, parse_f64, Blocks};
+use crate::data::records::{needs_csv_parser, Blocks};
 use crate::data::AngleUnit;
 use crate::error::{Error, Result};
 use crate::family::{FamilyModel, FamilyParams};
 use crate::model::Angles;
+
+mod angles;
+mod plain_row;
+mod shortest;
+use angles::{locate_angle_columns, parse_angles, to_angles, unit_limit};
+use plain_row::PlainRow;
+use shortest::push_shortest;
 
 /// Rows evaluated per parallel chunk: large enough to amortise the rayon fork, small enough that
 /// memory does not grow with the file.
@@ -104,9 +111,10 @@ pub fn eval_file(
 
 /// Evaluate a CSV stream; `source` names the input in error messages.
 ///
-/// Quote-free input is split by hand in large blocks and copied through verbatim; from the first
-/// block with a quote or a lone carriage return on, the csv crate reads the rest (the output is
-/// the same either way).
+/// Quote-free input is read by hand in large blocks and copied through verbatim (plain data lines
+/// parsed in place by [`PlainRow`], any other line split at its commas); from the first block
+/// with a quote or a lone carriage return on, the csv crate reads the rest (the output is the
+/// same either way).
 pub fn eval_stream<R: Read, W: Write + ?Sized>(
     input: R,
     source: &Path,
@@ -142,14 +150,26 @@ pub fn eval_stream_with<R: Read, W: Write + ?Sized>(
             block = block.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(block);
             first_block = false;
         }
-        let mut result = Ok(());
-        for_each_line(block, |index, line| {
-            let split = SplitLine::new(line, &mut starts);
-            result = eval.record(line_base + index + 1, &split, Some(line));
-            result.is_ok()
-        });
-        result?;
-        line_base += count_lines(block);
+        // Lines as `for_each_line` hands them out, counted from 1 in the block.
+        let mut pos = 0;
+        let mut index = 0u64;
+        while pos < block.len() {
+            index += 1;
+            if let Some(row) = eval.header.as_ref().and_then(|h| h.plain.read(block, pos)) {
+                eval.data_row(row.values, &block[pos..row.end])?;
+                pos = row.next;
+                continue;
+            }
+            let end = memchr::memchr(b'\n', &block[pos..]).map_or(block.len(), |i| pos + i);
+            let line = &block[pos..end];
+            let line = line.strip_suffix(b"\r").unwrap_or(line);
+            if !line.is_empty() && line[0] != b'#' {
+                let split = SplitLine::new(line, &mut starts);
+                eval.record(line_base + index, &split, Some(line))?;
+            }
+            pos = end + 1;
+        }
+        line_base += index;
     }
     if eval.header.is_none() {
         // No header at all: the error names the missing columns at the last line.
@@ -242,6 +262,8 @@ impl Fields for SplitLine<'_> {
 struct Header {
     names: Vec<String>,
     angle_index: [usize; 4],
+    /// The fast path for its data lines.
+    plain: PlainRow,
 }
 
 /// An evaluation in progress: rows gathered into chunks, each evaluated in parallel and written
@@ -309,14 +331,15 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 ),
             ));
         }
-        self.angles.push(parse_angles(
+        let values = parse_angles(
             self.source,
             line,
             fields,
             &header.angle_index,
             &header.names,
             self.unit,
-        )?);
+        )?;
+        self.angles.push(to_angles(values, self.unit));
         match raw {
             Some(raw) => self.passthrough.extend_from_slice(raw),
             None => {
@@ -328,6 +351,18 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 }
             }
         }
+        self.end_row()
+    }
+
+    /// Take a data row the fast path read: its angles (in the file's unit) and its text.
+    fn data_row(&mut self, values: [f64; 4], raw: &[u8]) -> Result<()> {
+        self.angles.push(to_angles(values, self.unit));
+        self.passthrough.extend_from_slice(raw);
+        self.end_row()
+    }
+
+    /// Close the row just taken; evaluate and write the chunk once it is full.
+    fn end_row(&mut self) -> Result<()> {
         self.passthrough_ends.push(self.passthrough.len());
         if self.angles.len() == self.chunk_rows {
             self.flush_chunk()?;
@@ -373,7 +408,12 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             push_csv_field(&mut self.out, name.as_bytes());
         }
         self.out.push(b'\n');
-        self.header = Some(Header { names, angle_index });
+        let plain = PlainRow::new(names.len(), &angle_index, unit_limit(self.unit).0);
+        self.header = Some(Header {
+            names,
+            angle_index,
+            plain,
+        });
         Ok(())
     }
 
@@ -402,8 +442,11 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 self.request,
             ));
         }
-        // Values are appended with ryu's shortest round-trip digits, all into one buffer.
-        let mut digits = ryu::Buffer::new();
+        // Values are appended as shortest round-trip text, all into one buffer.
+        let mut digits = zmij::Buffer::new();
+        // The longest value is 24 bytes.
+        self.out
+            .reserve(self.passthrough.len() + self.values.len() * 25 + self.angles.len());
         let mut start = 0;
         for (&end, vals) in self
             .passthrough_ends
@@ -414,8 +457,7 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             start = end;
             for &v in vals {
                 self.out.push(b',');
-                self.out
-                    .extend_from_slice(digits.format_finite(v).as_bytes());
+                push_shortest(&mut self.out, &mut digits, v);
             }
             self.out.push(b'\n');
         }
@@ -463,116 +505,6 @@ fn push_csv_field(out: &mut Vec<u8>, field: &[u8]) {
     } else {
         out.extend_from_slice(field);
     }
-}
-
-/// Indices of the four angle columns, or an error naming the missing ones.
-fn locate_angle_columns(source: &Path, header_line: u64, headers: &[String]) -> Result<[usize; 4]> {
-    let mut index = [0usize; 4];
-    let mut missing = Vec::new();
-    for (slot, name) in index.iter_mut().zip(ANGLE_COLUMNS) {
-        match headers.iter().position(|h| h == name) {
-            Some(i) => *slot = i,
-            None => missing.push(name),
-        }
-    }
-    if missing.is_empty() {
-        Ok(index)
-    } else {
-        Err(Error::input(
-            source,
-            header_line,
-            1,
-            format!(
-                "missing column(s) {}; the header must name theta_i,phi_i,theta_r,phi_r (degrees), found: {}",
-                missing.join(", "),
-                headers.join(",")
-            ),
-        ))
-    }
-}
-
-/// Parse one row's angles (in `unit`) with errors naming line and column.
-fn parse_angles(
-    source: &Path,
-    line: u64,
-    record: &impl Fields,
-    index: &[usize; 4],
-    headers: &[String],
-    unit: AngleUnit,
-) -> Result<Angles> {
-    let (theta_limit, unit_name) = match unit {
-        AngleUnit::Deg => (90.0, "degrees"),
-        AngleUnit::Rad => (std::f64::consts::FRAC_PI_2, "radians"),
-    };
-    let mut deg = [0.0f64; 4];
-    for (k, &col) in index.iter().enumerate() {
-        let field = record.field(col);
-        // Fast path: plain ASCII digits parse exactly as `str::parse` reads them after `trim`.
-        let value = match parse_f64(field.trim_ascii()) {
-            Some(v) => v,
-            None => parse_text(source, line, field, col, &headers[col], unit_name)?,
-        };
-        if !value.is_finite() {
-            let text = String::from_utf8_lossy(field);
-            return Err(Error::input(
-                source,
-                line,
-                col as u64 + 1,
-                format!(
-                    "`{}` is not finite (column `{}`)",
-                    text.trim(),
-                    headers[col]
-                ),
-            ));
-        }
-        let is_theta = k % 2 == 0;
-        if is_theta && value.abs() >= theta_limit {
-            return Err(Error::input(
-                source,
-                line,
-                col as u64 + 1,
-                format!(
-                    "{} = {value} {unit_name} lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90° (π/2)",
-                    headers[col]
-                ),
-            ));
-        }
-        deg[k] = value;
-    }
-    Ok(match unit {
-        AngleUnit::Deg => Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]),
-        AngleUnit::Rad => Angles {
-            theta_i: deg[0],
-            phi_i: deg[1],
-            theta_r: deg[2],
-            phi_r: deg[3],
-        },
-    })
-}
-
-/// The slow path of a field the fast parser refused: UTF-8 text, trimmed of any whitespace,
-/// through `str::parse` (the errors name line and column).
-fn parse_text(
-    source: &Path,
-    line: u64,
-    field: &[u8],
-    col: usize,
-    header: &str,
-    unit_name: &str,
-) -> Result<f64> {
-    let text = std::str::from_utf8(field)
-        .map_err(|_| Error::input(source, line, col as u64 + 1, "the field is not valid UTF-8"))?;
-    text.trim().parse().map_err(|_| {
-        Error::input(
-            source,
-            line,
-            col as u64 + 1,
-            format!(
-                "`{}` is not a number (column `{header}`, {unit_name})",
-                text.trim()
-            ),
-        )
-    })
 }
 
 /// A non-finite S is an error naming the row (its fields as written out) and the parameters,

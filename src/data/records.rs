@@ -9,10 +9,9 @@ use std::io::Read;
 /// fields may hold delimiters and line breaks) or a carriage return not followed by a line feed
 /// (csv ends a record there; here it would be part of a field).
 pub(crate) fn needs_csv_parser(block: &[u8]) -> bool {
-    if memchr::memchr(b'"', block).is_some() {
-        return true;
-    }
-    memchr::memchr_iter(b'\r', block).any(|i| block.get(i + 1) != Some(&b'\n'))
+    // One pass for both bytes: with `\n` line ends neither occurs, and the block is read once.
+    memchr::memchr2_iter(b'"', b'\r', block)
+        .any(|i| block[i] == b'"' || block.get(i + 1) != Some(&b'\n'))
 }
 
 /// A field's number from its bytes, exactly as `str::parse::<f64>` would read them (the same
@@ -20,6 +19,13 @@ pub(crate) fn needs_csv_parser(block: &[u8]) -> bool {
 /// `None` where `parse` fails.
 pub(crate) fn parse_f64(bytes: &[u8]) -> Option<f64> {
     fast_float2::parse::<f64, _>(bytes).ok()
+}
+
+/// The number at the start of `bytes` and how many bytes it takes; `None` when `bytes` does not
+/// start with one. [`parse_f64`] is this parse plus the check that it took every byte, so when
+/// the number ends where its field does, the value is the field's `parse_f64` value.
+pub(crate) fn parse_f64_prefix(bytes: &[u8]) -> Option<(f64, usize)> {
+    fast_float2::parse_partial::<f64, _>(bytes).ok()
 }
 
 /// The lines of `block` as csv reads records from quote-free text: `f(line index, line)` for
