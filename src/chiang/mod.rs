@@ -394,7 +394,7 @@ impl ChiangParams<f64> {
 
 /// What one evaluation computes: the effect switches and the width-quadrature rule. The rule
 /// is built on first use: every command carries a `ChiangModel`, and a Marschner run should not
-/// pay for 1024 Gauss–Legendre nodes it never reads (~18 ms, 4% of a 1M-row `eval`).
+/// pay for 1024 Gauss–Legendre nodes it never reads (~18 ms, 3% of a 1M-row `eval`).
 #[derive(Debug, Clone)]
 pub struct ChiangModel {
     pub effects: ChiangEffects,

@@ -419,8 +419,8 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
     } = a;
     // Each statistics step's wall time joins the solver stages' in timing.json.
     let mut clock = Instant::now();
-    let mut lap = |stage: &str, times: &mut Vec<StageTiming>| {
-        times.push(StageTiming {
+    let mut lap = |stage: &str| {
+        stage_times.push(StageTiming {
             stage: stage.into(),
             wall_s: clock.elapsed().as_secs_f64(),
         });
@@ -454,7 +454,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
     }
     let correlation = correlation_record(ev, &unc, nc);
     let residuals = residual_summary(ev, data, &e, &unc);
-    lap("standard_errors", &mut stage_times);
+    lap("standard_errors");
     // Everything fixed: no solver unknowns, the scales come in closed form (variable
     // projection). The solver has nothing to run on and says `failed`; the fit is complete.
     let status = if ev.n_params() == 0 && status == FitStatus::Failed && e.cost().is_finite() {
@@ -475,7 +475,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings: &warnings,
         dof: unc.dof,
     });
-    lap("verdict", &mut stage_times);
+    lap("verdict");
     let curves = curves_of(
         ev,
         data,
@@ -491,7 +491,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings
             .push("curves.csv: some fitted values are not finite; written as empty cells".into());
     }
-    lap("curves", &mut stage_times);
+    lap("curves");
 
     let json = FitJson {
         hairfit_version: env!("CARGO_PKG_VERSION").into(),

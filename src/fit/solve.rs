@@ -116,10 +116,10 @@ pub struct LocalRun {
     pub wall_s: f64,
 }
 
-/// Relative cost-reduction tolerance of the fit's LM runs. At 1e-12 a noisy fit stops when a
-/// further step would move parameters by ~1e-5 standard errors, and a parameter creeping onto a
-/// bound (the sin transform flattens there) stops instead of exhausting the iteration limit;
-/// noise-free fits are unaffected (their cost falls by O(1) factors down to rounding).
+/// Relative cost-reduction tolerance of the fit's LM runs. Noisy fits normally stop earlier, by
+/// [`PREDICTED_CHI2`]; this one still ends a parameter creeping onto a bound (the sin transform
+/// flattens there) instead of exhausting the iteration limit, and runs without degrees of
+/// freedom; noise-free fits are unaffected (their cost falls by O(1) factors down to rounding).
 pub const FTOL: f64 = 1e-12;
 
 /// The fit's runs stop once the Gauss–Newton step predicts a χ² decrease below this: what is

@@ -66,7 +66,7 @@ pub fn add_root_sum<T: ModelNum, S: Sink<T>>(
     let roots = exit_roots(&map_f, phi);
     for i in 0..roots.n {
         let g0 = roots.gamma[i];
-        let g = lift_root(map, g0, roots.target[i], map_f.slope(&g0));
+        let g = lift_root(map, g0, roots.target[i], || map_f.slope(&g0));
         let (h, cos_gi) = g.sin_cos();
         let slope = map.slope(&g);
         let mut denom = if slope.re() < 0.0 { -slope } else { slope } * 2.0;

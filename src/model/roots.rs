@@ -247,10 +247,20 @@ fn solve_monotone(
 }
 
 /// Lift a converged f64 root into `T`: one Newton step `γ − (Φ_T(γ) − y)/Φ'(γ)` whose dual part is
-/// the implicit-function derivative `−∂Φ/∂θ / Φ'`. For plain f64 (`NDERIV == 0`) it is the root.
+/// the implicit-function derivative `−∂Φ/∂θ / Φ'`. For plain f64 (`NDERIV == 0`) it is the root,
+/// and `slope` (the f64 `Φ'(γ)`) is never evaluated: the f64 path computes its slope once, after.
 #[inline]
-pub fn lift_root<T: DualNum<f64>>(map_t: &ExitMap<T>, gamma: f64, target: f64, slope: f64) -> T {
-    if T::NDERIV == 0 || slope.abs() < 1e-300 {
+pub fn lift_root<T: DualNum<f64>>(
+    map_t: &ExitMap<T>,
+    gamma: f64,
+    target: f64,
+    slope: impl FnOnce() -> f64,
+) -> T {
+    if T::NDERIV == 0 {
+        return T::from(gamma);
+    }
+    let slope = slope();
+    if slope.abs() < 1e-300 {
         return T::from(gamma);
     }
     let g = T::from(gamma);
