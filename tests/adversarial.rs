@@ -405,6 +405,24 @@ fn a_billion_starts_is_refused() {
     assert_fails_with(&out, &["--starts 1000000000", "at most"]);
 }
 
+/// Zero starts, subsample or polish runs used to be raised to one without a word.
+#[test]
+fn zero_starts_subsample_or_polish_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for option in ["--starts", "--subsample", "--polish"] {
+        let out = hairfit(&[
+            "fit",
+            "data/sphere_1ch.csv",
+            option,
+            "0",
+            "--out",
+            s(&dir.path().join("fit")),
+        ]);
+        assert_fails_with(&out, &[&format!("{option} 0"), "at least 1"]);
+        assert!(!dir.path().join("fit").exists(), "{option} 0 wrote output");
+    }
+}
+
 #[test]
 fn contradicting_or_repeated_fixes_are_refused() {
     let dir = tempfile::tempdir().unwrap();

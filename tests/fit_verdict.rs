@@ -149,7 +149,7 @@ fn the_shipped_noisy_file_is_a_poor_fit_and_cauchy_repairs_it() {
     assert!(j["reasons"][0].as_str().unwrap().contains("reduced chi2"));
     assert!(suggested(&j, "--loss cauchy"), "{}", j["suggestions"]);
     let (f, _) = fit(dir.path(), "strict", data, &["--strict"]);
-    assert_eq!(f.status.code(), Some(2), "--strict makes poor_fit exit 2");
+    assert_eq!(f.status.code(), Some(3), "--strict makes poor_fit exit 3");
     let (_, c) = fit(dir.path(), "cauchy", data, &["--loss", "cauchy"]);
     assert_ne!(verdict(&c), "poor_fit", "{}", c["reasons"]);
     assert!(

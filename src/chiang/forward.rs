@@ -46,6 +46,9 @@ impl FitParam for ChiangParamName {
         let (a, b) = self.fact().typical;
         (a / self.file_factor(), b / self.file_factor())
     }
+    fn check_domain(self, report_value: f64) -> std::result::Result<(), String> {
+        self.fact().check(report_value)
+    }
     fn channel(self) -> Option<usize> {
         match self {
             ChiangParamName::SigmaA(c) => Some(c),

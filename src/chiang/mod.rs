@@ -196,6 +196,20 @@ impl ParamFact {
         x.is_finite() && lo && hi
     }
 
+    /// Check a file-unit value against the domain; `Err` names it.
+    pub fn check(&self, x: f64) -> std::result::Result<(), String> {
+        if self.contains(x) {
+            Ok(())
+        } else {
+            Err(format!(
+                "{} must be finite and in {} ({})",
+                self.meaning,
+                self.domain(),
+                self.unit
+            ))
+        }
+    }
+
     /// The domain as text, e.g. `(0, 1]`.
     pub fn domain(&self) -> String {
         let fmt = |v: f64| {
@@ -374,17 +388,11 @@ impl ChiangParams<f64> {
                 .map(|(c, &s)| (ChiangParamName::SigmaA(c), s)),
         );
         for (name, value) in checks {
-            let fact = name.fact();
-            if !fact.contains(value) {
+            if let Err(message) = name.fact().check(value) {
                 return Err(Error::Parameter {
                     name: name.json_name(),
                     value,
-                    message: format!(
-                        "{} must be finite and in {} ({})",
-                        fact.meaning,
-                        fact.domain(),
-                        fact.unit
-                    ),
+                    message,
                 });
             }
         }

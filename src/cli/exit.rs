@@ -13,9 +13,13 @@ their noise and every free parameter is determined), poor_fit (a goodness-of-fit
 sigma column, else structure along scans, outliers or lack of fit against replicates), undetermined (a free parameter \
 is not determined by the data), failed (the numbers are not a fit), interrupted (stopped by a signal; best so far).
 
-Exit codes: 0 good, poor_fit or undetermined (a usable result with its reasons); 1 failed or an error; 2 poor_fit or \
-undetermined with --strict; 130 after SIGINT (Ctrl-C), 143 after SIGTERM (the best so far is written first). A second \
+Exit codes: 0 good, poor_fit or undetermined (a usable result with its reasons); 1 failed or an error; 2 a usage \
+error (unknown option, bad value); 3 poor_fit or undetermined with --strict; 130 after SIGINT (Ctrl-C), 143 after SIGTERM (the best so far is written first). A second \
 Ctrl-C exits at once.";
+
+/// The exit code of a usable but not good fit under `--strict`: not 2, which clap gives a usage
+/// error, so a script tells a mistyped command from a poor fit.
+pub const STRICT_EXIT: u8 = 3;
 
 /// The exit code of a finished fit with `verdict`; `signal` is the signal that stopped it, if
 /// one did.
@@ -25,7 +29,7 @@ pub fn exit_code(verdict: Verdict, strict: bool, signal: Option<i32>) -> u8 {
     }
     match verdict {
         Verdict::Good => 0,
-        Verdict::PoorFit | Verdict::Undetermined if strict => 2,
+        Verdict::PoorFit | Verdict::Undetermined if strict => STRICT_EXIT,
         Verdict::PoorFit | Verdict::Undetermined => 0,
         Verdict::Failed => 1,
         // Interrupted without a recorded signal (the flag set by a caller): as Ctrl-C.
@@ -112,8 +116,8 @@ mod tests {
         assert_eq!(exit_code(Verdict::Good, true, None), 0);
         assert_eq!(exit_code(Verdict::PoorFit, false, None), 0);
         assert_eq!(exit_code(Verdict::Undetermined, false, None), 0);
-        assert_eq!(exit_code(Verdict::PoorFit, true, None), 2);
-        assert_eq!(exit_code(Verdict::Undetermined, true, None), 2);
+        assert_eq!(exit_code(Verdict::PoorFit, true, None), 3);
+        assert_eq!(exit_code(Verdict::Undetermined, true, None), 3);
         assert_eq!(exit_code(Verdict::Failed, false, None), 1);
         assert_eq!(exit_code(Verdict::Interrupted, false, Some(2)), 130);
         assert_eq!(exit_code(Verdict::Interrupted, false, Some(15)), 143);

@@ -146,6 +146,26 @@ impl FitArgs {
                 )));
             }
         }
+        // Zero of these would be silently raised to one: say so instead.
+        for (option, value, what) in [
+            ("--starts", self.starts, "multi-start points"),
+            (
+                "--subsample",
+                self.subsample,
+                "samples in the multi-start stage",
+            ),
+            (
+                "--polish",
+                self.polish,
+                "multi-start results polished on all data",
+            ),
+        ] {
+            if value == 0 {
+                return Err(Error::Other(format!(
+                    "{option} 0: the fit needs at least 1 ({what}); leave the option out for its default"
+                )));
+            }
+        }
         // Each start is an LM run on the subsample; a billion aborted allocating the design.
         const MAX_STARTS: usize = 100_000;
         if self.starts > MAX_STARTS {
@@ -158,7 +178,7 @@ impl FitArgs {
             space: self.space,
             loss: self.loss,
             loss_scale: self.loss_scale,
-            starts: self.starts.max(1),
+            starts: self.starts,
             seed: self.seed,
             global: self.global,
             fix: self.fix.clone(),
@@ -166,8 +186,8 @@ impl FitArgs {
             effects,
             mode: cfg.mode,
             measurement: self.measurement.measurement,
-            subsample: self.subsample.max(1),
-            polish: self.polish.max(1),
+            subsample: self.subsample,
+            polish: self.polish,
             start_iters: self.start_iters,
             polish_iters: self.polish_iters,
             cancel,

@@ -3,11 +3,11 @@
 //! check and report fixes one way.
 
 use crate::error::{Error, Result};
-use crate::fit::bounds::Bound;
 use crate::fit::problem::FitParam;
 
 /// Parse `--fix NAME=VALUE` items (reporting units; `sigma_a=v` fixes every channel) into
-/// natural-unit values inside the fit bounds. `all` is the family's parameters, `what` names
+/// natural-unit values inside the model's domain (a fixed parameter need not lie within the
+/// fit bounds, which only limit where a fit moves the free ones). `all` is the family's parameters, `what` names
 /// them in errors (`parameter`, `Chiang parameter`), `example` is a valid item for the hint.
 pub fn parse_fixes<P: FitParam>(
     items: &[String],
@@ -49,11 +49,12 @@ pub fn parse_fixes<P: FitParam>(
         };
         for p in names {
             let x = v / p.report_factor();
-            if !v.is_finite() || p.bound().clamp(x) != x {
+            // A fixed parameter does not move, so the model's domain applies, not the fit bound.
+            if let Err(why) = p.check_domain(v) {
                 return Err(Error::Parameter {
                     name: p.json_name(),
                     value: v,
-                    message: format!("--fix value is outside the valid range {}", bound_text(p)),
+                    message: format!("--fix value outside the model's domain: {why}"),
                 });
             }
             if let Some((_, earlier)) = out.iter().find(|(q, _)| *q == p) {
@@ -67,16 +68,6 @@ pub fn parse_fixes<P: FitParam>(
         }
     }
     Ok(out)
-}
-
-/// The valid range of `p` in reporting units, for messages.
-fn bound_text<P: FitParam>(p: P) -> String {
-    let f = p.report_factor();
-    match p.bound() {
-        Bound::Free => "(-inf, inf)".into(),
-        Bound::Lower(lo) => format!("[{}, inf)", lo * f),
-        Bound::Both(lo, hi) => format!("[{}, {}]", lo * f, hi * f),
-    }
 }
 
 /// The parameters a fit varies and the values of the others.
@@ -159,7 +150,23 @@ mod tests {
         assert!(e(&["k_g=2"]).contains("unknown Chiang parameter `k_g`"));
         assert!(e(&["beta_n=x"]).contains("`x` is not a number"));
         assert!(e(&["beta_n=0.3", "beta_n=0.4"]).contains("already fixed (to 0.3)"));
-        assert!(e(&["beta_n=1e9"]).contains("outside the valid range"));
+        assert!(e(&["beta_n=1e9"]).contains("outside the model's domain"));
+    }
+
+    /// A fixed parameter does not move: any value the model accepts is a valid fix, even one
+    /// outside the fit bound (η = 3 > 2.5), and the message for one it does not accept names
+    /// the domain rather than the fit bound.
+    #[test]
+    fn a_fix_may_lie_anywhere_in_the_domain() {
+        let all = crate::fit::all_parameters(1);
+        let fixes = parse_fixes(&items(&["eta=3", "sigma_a=60"]), &all, "parameter", "").unwrap();
+        assert_eq!(fixes[0], (ParamName::Eta, 3.0));
+        assert_eq!(fixes[1], (ParamName::SigmaA(0), 60.0));
+        let e = parse_fixes(&items(&["eta=11"]), &all, "parameter", "")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("(1, 10]"), "{e}");
+        assert!(!e.contains("2.5"), "{e}");
     }
 
     #[test]

@@ -29,6 +29,9 @@ pub trait FitParam: Copy + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     fn report_factor(self) -> f64;
     /// The typical range (natural units): the start design's box.
     fn typical_range(self) -> (f64, f64);
+    /// Check a reporting-unit value against the model's domain (wider than the fit bound: a
+    /// `--fix` may hold a parameter anywhere the model accepts); `Err` names the domain.
+    fn check_domain(self, report_value: f64) -> std::result::Result<(), String>;
     /// The one channel this parameter acts on (`σ_a[c]`), `None` when every channel depends on it.
     fn channel(self) -> Option<usize> {
         None
@@ -54,6 +57,9 @@ impl FitParam for ParamName {
     }
     fn typical_range(self) -> (f64, f64) {
         crate::fit::bounds::typical_range(self)
+    }
+    fn check_domain(self, report_value: f64) -> std::result::Result<(), String> {
+        self.spec().check(report_value)
     }
     fn channel(self) -> Option<usize> {
         match self {
