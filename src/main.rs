@@ -76,11 +76,15 @@ enum Command {
     after_help = "The manifest is a CSV with the header `name,data` and then optional columns named after \
 `hairfit fit` options without their dashes (e.g. loss,mode,fix; repeat values with `;`), or a JSON array of \
 objects with the same keys. Data paths are relative to the manifest. Item NAME is written to --out/NAME exactly \
-as `hairfit fit DATA --out DIR/NAME` would. Items already finished with the same options are skipped.
+as `hairfit fit DATA --out DIR/NAME` would. --out must be a new or empty directory, or one `hairfit batch` made; \
+merge never replaces a summary.csv or index.html it did not write. Items already finished with the same options \
+and the same, unchanged data file (size and modification time) are skipped; items that failed or were \
+interrupted run again; --force runs every item again.
 
 \
-Exit codes: 0 all items ran; 1 an item failed or its verdict is `failed` (the others still ran) or, with --merge, an item \
-is missing; 2 with --strict when an item's verdict is poor_fit or undetermined; 130 after SIGINT, 143 after SIGTERM."
+Exit codes: 0 all items ran; 1 an item failed or its verdict is `failed` (the others still ran; the failed ones are \
+named) or, with --merge, an item is missing, failed or interrupted (summary.csv and index.html are still written); \
+2 with --strict when an item's verdict is poor_fit or undetermined; 130 after SIGINT, 143 after SIGTERM."
 )]
 struct BatchArgs {
     /// Manifest (CSV `name,data,OPTION…`, or .json).
@@ -96,9 +100,13 @@ struct BatchArgs {
     /// Do not fit: write DIR/summary.csv and DIR/index.html from the items' fit.json files.
     #[arg(long)]
     merge: bool,
-    /// Exit 2 when an item's verdict is poor_fit or undetermined.
+    /// Exit 2 when an item's verdict is poor_fit or undetermined (with --merge: any item's);
+    /// every item is fitted as `hairfit fit --strict` would.
     #[arg(long)]
     strict: bool,
+    /// Fit every item of the shard again, even those already finished.
+    #[arg(long, conflicts_with = "merge")]
+    force: bool,
 }
 
 #[derive(clap::Args)]
@@ -296,7 +304,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
 
 /// `hairfit batch`: run a shard of a manifest, or merge the results.
 fn batch(a: BatchArgs) -> anyhow::Result<u8> {
-    use hairfit::batch::{merge, run_batch, ItemOutcome, Manifest, Shard};
+    use hairfit::batch::{merge, run_batch, ItemOutcome, Manifest, RunOptions, Shard};
     let manifest = Manifest::load(&a.manifest)?;
     if a.merge {
         let m = merge::merge(&manifest, &a.out)?;
@@ -306,39 +314,44 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
             a.out.join("summary.csv").display(),
             a.out.join("index.html").display()
         );
-        for (name, e) in &m.unreadable {
-            eprintln!("hairfit: item `{name}`: unreadable fit.json: {e}");
-        }
-        if !m.missing.is_empty() || !m.unreadable.is_empty() {
+        let problems = m.problems();
+        if !problems.is_empty() {
+            for line in &problems {
+                eprintln!("hairfit: {line}");
+            }
+            let bad = m.failed.len() + m.interrupted.len() + m.unreadable.len() + m.missing.len();
             anyhow::bail!(
-                "{} of {} items have no result yet ({}); run their shards, then merge again",
-                m.missing.len() + m.unreadable.len(),
-                m.items,
-                m.missing.join(", ")
+                "{bad} of {} items have no usable result (listed above)",
+                m.items
             );
         }
-        return Ok(0);
+        return Ok(strict_exit(a.strict, &m.not_good));
     }
     let shard = match &a.shard {
         Some(s) => Shard::parse(s)?,
         None => Shard::ALL,
     };
     let stop = ctrl_c_flag();
-    let mut verdicts = Vec::new();
+    let options = RunOptions {
+        strict: a.strict,
+        rerun: a.force,
+    };
     let run = run_batch(
         &manifest,
         &a.out,
         shard,
+        options,
         Some(stop.flag.clone()),
         |item, outcome| {
             let what = match outcome {
-                ItemOutcome::Fitted { status, report } => {
-                    let verdict = merge::fit_verdict(&a.out.join(&item.name));
-                    verdicts.extend(verdict);
-                    let verdict = verdict.map_or("unknown".into(), |v| v.to_string());
-                    format!("{verdict} ({status}); {report}")
+                ItemOutcome::Fitted {
+                    verdict,
+                    status,
+                    report,
+                } => format!("{verdict} ({status}); {report}"),
+                ItemOutcome::Skipped(v) => {
+                    format!("skipped (already finished with these options and data: {v})")
                 }
-                ItemOutcome::Skipped => "skipped (already finished with these options)".into(),
                 ItemOutcome::Failed(e) => format!("FAILED: {e}"),
                 ItemOutcome::Interrupted => "interrupted".into(),
             };
@@ -349,16 +362,34 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
     if run.interrupted() || stop.received().is_some() {
         return Ok(exit_code(Verdict::Interrupted, a.strict, stop.received()));
     }
-    let failed = run.count(|o| matches!(o, ItemOutcome::Failed(_)))
-        + verdicts.iter().filter(|v| **v == Verdict::Failed).count();
-    if failed > 0 {
-        anyhow::bail!("{failed} items failed (listed above); the others are written");
+    let failed = run.failed_names();
+    if !failed.is_empty() {
+        anyhow::bail!(
+            "{} items failed: {} (their errors are above; the others are written)",
+            failed.len(),
+            failed.join(", ")
+        );
     }
-    Ok(verdicts
+    let not_good: Vec<String> = run
+        .outcomes
         .iter()
-        .map(|&v| exit_code(v, a.strict, None))
-        .max()
-        .unwrap_or(0))
+        .filter(|(_, o)| matches!(o.verdict(), Some(Verdict::PoorFit | Verdict::Undetermined)))
+        .map(|(n, _)| n.clone())
+        .collect();
+    Ok(strict_exit(a.strict, &not_good))
+}
+
+/// `--strict` of a batch: 2 when an item's verdict is poor_fit or undetermined (named).
+fn strict_exit(strict: bool, not_good: &[String]) -> u8 {
+    if !strict || not_good.is_empty() {
+        return 0;
+    }
+    eprintln!(
+        "hairfit: --strict: {} items are poor_fit or undetermined: {}",
+        not_good.len(),
+        not_good.join(", ")
+    );
+    2
 }
 
 /// The fit's summary, then where its plotted report is.

@@ -102,26 +102,92 @@ fn absolute(path: &Path) -> Result<PathBuf> {
     Ok(out)
 }
 
+/// `dir` made absolute, or an error naming `--out` when it cannot be an output directory: the
+/// file system's root, the current directory or one holding it, or an existing file. `why`
+/// says what the command does with the directory.
+pub fn check_out_path(dir: &Path, why: &str) -> Result<PathBuf> {
+    let abs = absolute(dir)?;
+    let refuse = |what: &str| {
+        Err(Error::Other(format!(
+            "--out {}: {what}, and {why}; name a directory of its own, e.g. fits/NAME",
+            dir.display()
+        )))
+    };
+    if abs.parent().is_none() || abs.file_name().is_none() {
+        return refuse("that is the file system's root");
+    }
+    let cwd = std::env::current_dir()
+        .ok()
+        .and_then(|c| c.canonicalize().ok());
+    if cwd.as_ref().is_some_and(|c| c.starts_with(&abs)) {
+        return refuse("that is the current directory (or holds it)");
+    }
+    if std::fs::metadata(&abs).is_ok_and(|m| !m.is_dir()) {
+        return refuse("that is a file, not a directory");
+    }
+    Ok(abs)
+}
+
+/// Whether `name` is one of the hidden files hairfit keeps beside its outputs (a lock, a
+/// staging directory, the marker).
+fn is_hairfit_bookkeeping(name: &str) -> bool {
+    name == MARKER
+        || (name.starts_with('.')
+            && (name.ends_with(".hairfit-lock") || name.contains(".hairfit-stage-")))
+}
+
+/// Claim `dir` for a command that adds to it rather than replacing it (`hairfit batch`: one
+/// sub-directory per item, written by concurrent shards): refused as [`check_out_path`] does,
+/// and when it holds files hairfit did not write (no marker, and none of `legacy`, names an
+/// older hairfit wrote there). Creates it with its marker.
+pub fn claim_shared_dir(dir: &Path, command: &str, legacy: &[&str]) -> Result<()> {
+    let abs = check_out_path(dir, &format!("{command} writes its results into it"))?;
+    match std::fs::read_dir(&abs) {
+        Ok(entries) => {
+            let names: Vec<String> = entries
+                .filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            let ours = names
+                .iter()
+                .any(|n| n == MARKER || legacy.contains(&n.as_str()));
+            let foreign: Vec<&str> = names
+                .iter()
+                .map(String::as_str)
+                .filter(|n| !is_hairfit_bookkeeping(n))
+                .collect();
+            if !ours && !foreign.is_empty() {
+                let mut shown: Vec<&str> = foreign.iter().copied().take(3).collect();
+                shown.sort();
+                return Err(Error::Other(format!(
+                    "--out {}: the directory holds files hairfit did not write ({}{}); choose a new or empty directory (e.g. fits/batch) so none of them is overwritten",
+                    dir.display(),
+                    shown.join(", "),
+                    if foreign.len() > 3 { ", …" } else { "" }
+                )));
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(&abs).map_err(|e| Error::io(dir, e))?;
+        }
+        Err(e) => return Err(Error::io(dir, e)),
+    }
+    let marker = abs.join(MARKER);
+    if !marker.exists() {
+        std::fs::write(&marker, format!("written by {command}\n"))
+            .map_err(|e| Error::io(&marker, e))?;
+    }
+    Ok(())
+}
+
 impl OutputSet {
     /// Lock `dir` and open a staging directory beside it for `command` (e.g. `hairfit fit`).
     /// `inputs` are the files the run reads: none may lie inside `dir`, which is replaced whole.
     pub fn begin(dir: &Path, command: &str, force: bool, inputs: &[&Path]) -> Result<OutputSet> {
-        let abs = absolute(dir)?;
-        let cwd = std::env::current_dir()
-            .ok()
-            .and_then(|c| c.canonicalize().ok());
+        let abs = check_out_path(dir, "the output directory is replaced as a whole")?;
         let (Some(parent), Some(name)) = (abs.parent(), abs.file_name()) else {
-            return Err(Error::Other(format!(
-                "--out {}: the output directory is replaced as a whole; name a directory of its own, e.g. fits/NAME",
-                dir.display()
-            )));
+            unreachable!("check_out_path refuses the root");
         };
-        if cwd.as_ref().is_some_and(|c| c.starts_with(&abs)) {
-            return Err(Error::Other(format!(
-                "--out {}: that is the current directory (or holds it), and the output directory is replaced as a whole; name a directory of its own, e.g. fits/NAME",
-                dir.display()
-            )));
-        }
         for input in inputs {
             let input_abs = absolute(input)?;
             if input_abs.starts_with(&abs) {
@@ -315,11 +381,15 @@ fn lock(parent: &Path, name: &str, dir: &Path) -> Result<File> {
     match file.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => {
+            // The holder writes its name just after taking the lock: it may not be there yet.
             let holder = std::fs::read_to_string(&path).unwrap_or_default();
+            let holder = match holder.trim() {
+                "" => String::new(),
+                h => format!(" ({h})"),
+            };
             return Err(Error::Other(format!(
-                "--out {}: another hairfit run is writing there ({}); wait for it, or choose another --out",
+                "--out {}: another hairfit run is writing there{holder}; wait for it, or choose another --out",
                 dir.display(),
-                holder.trim()
             )));
         }
         Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(&path, e)),

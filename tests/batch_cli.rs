@@ -113,7 +113,11 @@ fn concurrent_shards_equal_one_process_and_the_fit_command() {
         .map(|l| l.split(',').next().unwrap())
         .collect();
     assert_eq!(names, ["sphere", "rgb", "long"]);
-    assert!(a.lines().next().unwrap().starts_with("name,data,status,"));
+    assert!(a
+        .lines()
+        .next()
+        .unwrap()
+        .starts_with("name,data,model,status,"));
     let html = std::fs::read_to_string(whole.join("index.html")).unwrap();
     for name in ["sphere", "rgb", "long"] {
         assert!(
@@ -179,7 +183,7 @@ fn bad_manifests_and_items_say_where_and_exit_1() {
     assert_eq!(r.status.code(), Some(1));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(
-        err.contains("bad.csv:2:3") && err.contains("`los`"),
+        err.contains("bad.csv:1:3") && err.contains("`los`"),
         "{err}"
     );
 

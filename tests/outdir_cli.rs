@@ -320,7 +320,28 @@ fn batch_items_are_published_as_sets() {
     )
     .unwrap();
     let out = tmp.path().join("runs");
-    // A foreign item directory is refused (the others still run), as `fit` would.
+    // The batch's own directory (a folder of the user's files is refused whole)...
+    let first = tmp.path().join("first.csv");
+    std::fs::write(
+        &first,
+        format!(
+            "name,data\nrgb,{}\n",
+            shipped("azimuthal_rgb.csv").display()
+        ),
+    )
+    .unwrap();
+    let f = run_hairfit(
+        &[
+            "batch",
+            first.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        &[],
+        Duration::from_secs(300),
+    );
+    assert_eq!(f.status.code(), Some(0), "{}", f.stderr);
+    // ...where a foreign item directory is refused (the others still run), as `fit` would.
     std::fs::create_dir_all(out.join("one")).unwrap();
     std::fs::write(out.join("one/notes.txt"), "mine").unwrap();
     let f = run_hairfit(

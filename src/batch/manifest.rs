@@ -27,22 +27,79 @@ pub struct Item {
     pub name: String,
     /// Line of the manifest the item is on (1-based; the element index + 1 for JSON).
     pub line: u64,
+    /// The `data` cell as the manifest writes it (summary.csv shows this text).
+    pub data: String,
     /// `hairfit fit` arguments without `--out`: the data path (relative to the manifest's
     /// directory, as a user in the current directory would type it) and the options.
     pub argv: Vec<String>,
 }
 
 impl Item {
-    /// The parsed `hairfit fit` arguments writing into `out`.
-    pub fn fit_args(&self, out: &Path) -> Result<FitCommandArgs> {
+    /// The parsed `hairfit fit` arguments writing into `out` (`strict`: `hairfit batch
+    /// --strict`, a run-level option every item then gets).
+    pub fn fit_args(&self, out: &Path, strict: bool) -> Result<FitCommandArgs> {
         let mut argv = self.argv.clone();
+        if strict {
+            argv.push("--strict".into());
+        }
         argv.push("--out".into());
         argv.push(out.display().to_string());
         FitCommandLine::try_parse_from(&argv)
             .map(|c| c.args)
             .map_err(|e| Error::Other(format!("item `{}`: {}", self.name, e.render())))
     }
+
+    /// The fit options without the data path (what a re-run compares).
+    pub fn options(&self) -> &[String] {
+        &self.argv[1..]
+    }
 }
+
+/// Where a manifest error is: CSV line and column, or JSON item and key.
+#[derive(Debug, Clone, Copy)]
+struct Place<'a> {
+    json: bool,
+    /// CSV line, or JSON item number (1-based).
+    line: u64,
+    column: u64,
+    key: &'a str,
+}
+
+impl Place<'_> {
+    fn error(&self, path: &Path, message: impl Into<String>) -> Error {
+        let message = message.into();
+        if !self.json {
+            return Error::input(path, self.line, self.column, message);
+        }
+        let key = if self.key.is_empty() {
+            String::new()
+        } else {
+            format!(", key `{}`", self.key)
+        };
+        Error::Other(format!(
+            "{}: item {}{key}: {message}",
+            path.display(),
+            self.line
+        ))
+    }
+}
+
+/// Item names `hairfit batch` writes itself into `--out` (case-insensitive: some file systems
+/// are).
+pub const RESERVED_NAMES: [&str; 4] = ["summary.csv", "index.html", ".batch", ".hairfit"];
+
+/// Fit options that are the whole run's, not an item's: a column naming one is an error
+/// that says how to give it instead.
+const RUN_LEVEL: [(&str, &str); 2] = [
+    (
+        "strict",
+        "pass `hairfit batch --strict`: it applies to every item of the run and to --merge",
+    ),
+    (
+        "out",
+        "the output directory is --out of `hairfit batch` plus the item's name",
+    ),
+];
 
 /// A loaded manifest.
 #[derive(Debug, Clone)]
@@ -60,33 +117,43 @@ struct Cell<'a> {
 
 impl Manifest {
     /// Read a manifest (`.json` by extension, CSV otherwise); every error names the manifest's
-    /// line and column and what to write instead.
+    /// line and column (JSON: item and key) and what to write instead. Every item's options
+    /// are checked here, before anything runs.
     pub fn load(path: &Path) -> Result<Manifest> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let is_json = path
+        let json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        let rows = if is_json {
-            json_rows(path, &text)?
+        let options = fit_options();
+        let rows = if json {
+            json_rows(path, &text, &options)?
         } else {
-            csv_rows(path, &text)?
+            csv_rows(path, &text, &options)?
         };
         let base = path.parent().unwrap_or(Path::new(""));
-        let options = fit_options();
         let mut items: Vec<Item> = Vec::with_capacity(rows.len());
         for (line, cells) in rows {
-            let item = item_from_cells(path, base, &options, line, &cells)?;
+            let item = item_from_cells(path, json, base, &options, line, &cells)?;
             if let Some(first) = items
                 .iter()
                 .find(|i| i.name.eq_ignore_ascii_case(&item.name))
             {
-                return Err(Error::input(
-                    path,
+                let earlier = if json {
+                    format!("item {}", first.line)
+                } else {
+                    format!("line {}", first.line)
+                };
+                let place = Place {
+                    json,
                     line,
-                    1,
+                    column: 1,
+                    key: "name",
+                };
+                return Err(place.error(
+                    path,
                     format!(
-                        "item name `{}` is already used on line {} (names are output directories and must differ, ignoring case)",
-                        item.name, first.line
+                        "item name `{}` is already used by {earlier} (names are output directories and must differ, ignoring case)",
+                        item.name
                     ),
                 ));
             }
@@ -102,10 +169,12 @@ impl Manifest {
     }
 }
 
-/// An option `hairfit fit` takes: its long name and whether it takes a value.
+/// An option `hairfit fit` takes: its long name, whether it takes a value, and whether it
+/// may be given more than once (`fix`, `free`: `;` separates the values in one cell).
 struct FitOption {
     long: String,
     takes_value: bool,
+    repeatable: bool,
 }
 
 fn fit_options() -> Vec<FitOption> {
@@ -116,19 +185,36 @@ fn fit_options() -> Vec<FitOption> {
             (long != "out" && long != "help").then(|| FitOption {
                 long: long.to_string(),
                 takes_value: a.get_action().takes_values(),
+                repeatable: matches!(a.get_action(), clap::ArgAction::Append),
             })
         })
         .collect()
 }
 
+/// Why a column (CSV header) or key (JSON) cannot name an item's option, if it cannot.
+fn check_key(key: &str, options: &[FitOption], json: bool) -> Option<String> {
+    if let Some((_, how)) = RUN_LEVEL.iter().find(|(k, _)| *k == key) {
+        return Some(format!("`{key}` is not an item's option: {how}"));
+    }
+    if key == "name" || key == "data" || options.iter().any(|o| o.long == key) {
+        return None;
+    }
+    Some(unknown_column(key, options, json))
+}
+
 /// A manifest row: its line and its (column name, cell) pairs.
 type Row = (u64, Vec<(String, String)>);
 
-fn csv_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
+fn csv_rows(path: &Path, text: &str, options: &[FitOption]) -> Result<Vec<Row>> {
     let mut reader = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
+    let header_line = reader
+        .headers()
+        .map_err(|e| csv_error(path, e))?
+        .position()
+        .map_or(1, |p| p.line());
     let header: Vec<String> = reader
         .headers()
         .map_err(|e| csv_error(path, e))?
@@ -138,13 +224,25 @@ fn csv_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
     if header.len() < 2 || header[0] != "name" || header[1] != "data" {
         return Err(Error::input(
             path,
-            1,
+            header_line,
             1,
             format!(
                 "the header must start with `name,data` (found `{}`), then optional columns named after `hairfit fit` options without their dashes, e.g. `name,data,loss,mode,fix`",
                 header.join(",")
             ),
         ));
+    }
+    // The header's own mistakes point at the header, before any item.
+    for (i, key) in header.iter().enumerate() {
+        let at = |m: String| Error::input(path, header_line, i as u64 + 1, m);
+        if let Some(m) = check_key(key, options, false) {
+            return Err(at(m));
+        }
+        if header[..i].contains(key) {
+            return Err(at(format!(
+                "column `{key}` appears twice; give it once (repeated values go in one cell, separated by `;`)"
+            )));
+        }
     }
     let mut rows = Vec::new();
     for record in reader.records() {
@@ -165,25 +263,32 @@ fn csv_error(path: &Path, e: csv::Error) -> Error {
     Error::input(path, line, 1, format!("not a valid CSV manifest: {e}"))
 }
 
-fn json_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
+fn json_rows(path: &Path, text: &str, options: &[FitOption]) -> Result<Vec<Row>> {
     let value: serde_json::Value = serde_json::from_str(text)
         .map_err(|e| Error::input(path, e.line() as u64, e.column() as u64, e.to_string()))?;
     let array = value.as_array().ok_or_else(|| {
-        Error::input(
-            path,
-            1,
-            1,
-            "a JSON manifest is an array of objects like {\"name\": \"a\", \"data\": \"a.csv\", \"loss\": \"cauchy\"}",
-        )
+        Error::Other(format!(
+            "{}: a JSON manifest is an array of objects like {{\"name\": \"a\", \"data\": \"a.csv\", \"loss\": \"cauchy\"}}",
+            path.display()
+        ))
     })?;
     let mut rows = Vec::new();
     for (i, element) in array.iter().enumerate() {
         let at = i as u64 + 1;
+        let place = |key| Place {
+            json: true,
+            line: at,
+            column: 0,
+            key,
+        };
         let object = element
             .as_object()
-            .ok_or_else(|| Error::input(path, at, 1, format!("element {at} is not an object")))?;
+            .ok_or_else(|| place("").error(path, "not an object"))?;
         let mut cells = Vec::new();
         for (key, v) in object {
+            if let Some(m) = check_key(key, options, true) {
+                return Err(place(key).error(path, m));
+            }
             let text = match v {
                 serde_json::Value::String(s) => s.clone(),
                 serde_json::Value::Bool(b) => b.to_string(),
@@ -198,12 +303,8 @@ fn json_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
                     .collect::<Vec<_>>()
                     .join(&REPEAT_SEPARATOR.to_string()),
                 serde_json::Value::Object(_) => {
-                    return Err(Error::input(
-                        path,
-                        at,
-                        1,
-                        format!("element {at}: `{key}` is an object; give a string, number, boolean or array"),
-                    ))
+                    return Err(place(key)
+                        .error(path, "an object; give a string, number, boolean or array"))
                 }
             };
             cells.push((key.clone(), text));
@@ -221,6 +322,7 @@ fn json_rows(path: &Path, text: &str) -> Result<Vec<Row>> {
 
 fn item_from_cells(
     path: &Path,
+    json: bool,
     base: &Path,
     options: &[FitOption],
     line: u64,
@@ -235,17 +337,18 @@ fn item_from_cells(
             value: v.clone(),
         })
         .collect();
+    let place = |column, key| Place {
+        json,
+        line,
+        column,
+        key,
+    };
     let find = |key: &str| cells.iter().find(|c| c.key == key);
     let name = find("name").map(|c| c.value.clone()).unwrap_or_default();
-    check_name(&name).map_err(|m| Error::input(path, line, 1, m))?;
+    check_name(&name).map_err(|m| place(1, "name").error(path, m))?;
     let data = find("data").map(|c| c.value.clone()).unwrap_or_default();
     if data.is_empty() {
-        return Err(Error::input(
-            path,
-            line,
-            2,
-            format!("item `{name}` has no data file"),
-        ));
+        return Err(place(2, "data").error(path, format!("item `{name}` has no data file")));
     }
     let data_path = if Path::new(&data).is_absolute() {
         PathBuf::from(&data)
@@ -254,40 +357,41 @@ fn item_from_cells(
     };
     let mut argv = vec![data_path.display().to_string()];
     for cell in cells.iter().filter(|c| c.key != "name" && c.key != "data") {
+        let at = place(cell.column, cell.key);
         let Some(option) = options.iter().find(|o| o.long == cell.key) else {
-            return Err(Error::input(
-                path,
-                line,
-                cell.column,
-                unknown_column(cell.key, options),
-            ));
+            return Err(at.error(path, unknown_column(cell.key, options, json)));
         };
         let words = option_words(option, &cell.value)
-            .map_err(|m| Error::input(path, line, cell.column, format!("`{}`: {m}", cell.key)))?;
+            .map_err(|m| at.error(path, format!("`{}`: {m}", cell.key)))?;
         // Check each cell alone so an error points at its column.
         let mut alone = vec![argv[0].clone()];
         alone.extend(words.iter().cloned());
-        alone.extend(["--out".to_string(), "x".to_string()]);
-        if let Err(e) = FitCommandLine::try_parse_from(&alone) {
-            return Err(Error::input(
-                path,
-                line,
-                cell.column,
-                format!(
-                    "`{}` = `{}`: {}",
-                    cell.key,
-                    cell.value,
-                    first_line(&e.render().to_string())
-                ),
-            ));
-        }
+        check_fit_words(&alone)
+            .map_err(|m| at.error(path, format!("`{}` = `{}`: {m}", cell.key, cell.value)))?;
         argv.extend(words);
     }
-    let item = Item { name, line, argv };
     // The options together (e.g. a conflict between two columns).
-    item.fit_args(Path::new("x"))
-        .map_err(|e| Error::input(path, line, 1, e.to_string()))?;
-    Ok(item)
+    check_fit_words(&argv).map_err(|m| {
+        place(1, "").error(path, format!("item `{name}`: {}", as_manifest_words(&m)))
+    })?;
+    Ok(Item {
+        name,
+        line,
+        data,
+        argv,
+    })
+}
+
+/// Parse `words` (a data path and options) as `hairfit fit` would and check the options'
+/// values (fixes, effects, model options) without loading the data: the first line of what
+/// is wrong, in the manifest's words.
+fn check_fit_words(words: &[String]) -> std::result::Result<(), String> {
+    let mut argv = words.to_vec();
+    argv.extend(["--out".to_string(), "x".to_string()]);
+    let args = FitCommandLine::try_parse_from(&argv)
+        .map_err(|e| first_line(&e.render().to_string()))?
+        .args;
+    args.fit.check().map_err(|e| e.to_string())
 }
 
 /// The command-line words for one cell: nothing for an empty cell or a false flag.
@@ -301,6 +405,23 @@ fn option_words(option: &FitOption, value: &str) -> std::result::Result<Vec<Stri
                 "`{other}` is not a switch value: write true or false"
             )),
         };
+    }
+    if !option.repeatable && value.contains(REPEAT_SEPARATOR) {
+        let list = value
+            .split(REPEAT_SEPARATOR)
+            .map(str::trim)
+            .collect::<Vec<_>>()
+            .join(",");
+        return Err(format!(
+            "takes one value, and `;` only separates the values of repeatable options (fix, free); for a list write it comma-separated, quoted in a CSV cell: \"{list}\""
+        ));
+    }
+    if !option.repeatable {
+        return Ok(if value.trim().is_empty() {
+            vec![]
+        } else {
+            vec![flag, value.trim().to_string()]
+        });
     }
     Ok(value
         .split(REPEAT_SEPARATOR)
@@ -317,28 +438,69 @@ fn check_name(name: &str) -> std::result::Result<(), String> {
         && name
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'));
-    if ok {
-        Ok(())
-    } else {
-        Err(format!(
+    if !ok {
+        return Err(format!(
             "item name `{name}` is not a plain directory name: use 1–100 letters, digits, `.`, `_` or `-`, not starting with `.`"
-        ))
+        ));
     }
+    if RESERVED_NAMES.iter().any(|r| r.eq_ignore_ascii_case(name)) {
+        return Err(format!(
+            "item name `{name}` is reserved: `hairfit batch` writes {} in --out itself; choose another name",
+            RESERVED_NAMES.join(", ")
+        ));
+    }
+    Ok(())
 }
 
-fn unknown_column(key: &str, options: &[FitOption]) -> String {
+/// Why `key` names no option, and which names do (`json`: the place already names the key).
+fn unknown_column(key: &str, options: &[FitOption], json: bool) -> String {
     let dashed = key.trim_start_matches('-').replace('_', "-");
     let hint = if options.iter().any(|o| o.long == dashed) {
         format!(" (did you mean `{dashed}`?)")
-    } else if key == "out" {
-        " (the output directory is --out of `hairfit batch` plus the item's name)".into()
     } else {
         String::new()
     };
-    let names: Vec<&str> = options.iter().map(|o| o.long.as_str()).collect();
+    let names: Vec<&str> = options
+        .iter()
+        .map(|o| o.long.as_str())
+        .filter(|n| !RUN_LEVEL.iter().any(|(k, _)| k == n))
+        .collect();
+    if json {
+        format!(
+            "not a `hairfit fit` option{hint}; keys besides name and data are options without their dashes: {}",
+            names.join(", ")
+        )
+    } else {
+        format!(
+            "column `{key}` is not a `hairfit fit` option{hint}; columns after name,data are options without their dashes: {}",
+            names.join(", ")
+        )
+    }
+}
+
+/// A `hairfit fit` message in a manifest's words: the options it names (`--space linear`)
+/// are columns of the manifest, so say which.
+pub fn as_manifest_words(message: &str) -> String {
+    let options = fit_options();
+    let mut named: Vec<&str> = Vec::new();
+    for o in &options {
+        let flag = format!("--{}", o.long);
+        let mentioned = message.match_indices(&flag).any(|(i, _)| {
+            let after = message[i + flag.len()..].chars().next();
+            !after.is_some_and(|c| c.is_ascii_alphanumeric() || c == '-')
+        });
+        if mentioned && !named.contains(&o.long.as_str()) {
+            named.push(&o.long);
+        }
+    }
+    if named.is_empty() {
+        return message.to_string();
+    }
+    let columns: Vec<String> = named.iter().map(|n| format!("`{n}`")).collect();
     format!(
-        "column `{key}` is not a `hairfit fit` option{hint}; columns after name,data are options without their dashes: {}",
-        names.join(", ")
+        "{message} [in the manifest: the column{} {}]",
+        if columns.len() > 1 { "s" } else { "" },
+        columns.join(", ")
     )
 }
 
@@ -415,9 +577,10 @@ mod tests {
 
     #[test]
     fn errors_name_line_and_column() {
+        // A misspelt column is the header's mistake: line 1.
         let e = load("name,data,los\na,a.csv,cauchy\n", "csv").unwrap_err();
         let s = e.to_string();
-        assert!(s.contains(":2:3:") && s.contains("`los`"), "{s}");
+        assert!(s.contains(":1:3:") && s.contains("`los`"), "{s}");
         let e = load("name,data,loss\na,a.csv,cauchyy\n", "csv").unwrap_err();
         assert!(e.to_string().contains(":2:3:"), "{e}");
         let e = load("name,data\na,a.csv\nA,b.csv\n", "csv").unwrap_err();

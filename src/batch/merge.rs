@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::files::FitJson;
+use crate::files::{FitJson, Verdict};
 
 use super::Manifest;
 
@@ -65,12 +65,64 @@ pub fn fit_verdict(dir: &Path) -> Option<crate::files::Verdict> {
     Some(FitJson::load(&dir.join("fit.json")).ok()?.verdict)
 }
 
-/// What `--merge` found.
-#[derive(Debug, Clone)]
+/// What `--merge` found: the items that are not a usable result, by kind, and those whose
+/// verdict `--strict` refuses.
+#[derive(Debug, Clone, Default)]
 pub struct MergeSummary {
     pub items: usize,
+    /// Not run yet.
     pub missing: Vec<String>,
+    /// fit.json could not be read: (name, error).
     pub unreadable: Vec<(String, String)>,
+    /// The last run ended in an error (name, error), or the verdict is `failed` (name, "").
+    pub failed: Vec<(String, String)>,
+    /// Stopped by a signal: its best so far is there.
+    pub interrupted: Vec<String>,
+    /// Verdict poor_fit or undetermined (an error with `--strict`).
+    pub not_good: Vec<String>,
+}
+
+impl MergeSummary {
+    /// What is wrong with the batch as one sentence per kind, or nothing when every item has a
+    /// usable result.
+    pub fn problems(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        if !self.failed.is_empty() {
+            let named: Vec<String> = self
+                .failed
+                .iter()
+                .map(|(n, e)| match e.as_str() {
+                    "" => format!("{n} (verdict failed: see its report)"),
+                    e => format!("{n} ({e})"),
+                })
+                .collect();
+            lines.push(format!("failed: {}", named.join("; ")));
+        }
+        if !self.interrupted.is_empty() {
+            lines.push(format!(
+                "interrupted (run their shards again to finish them): {}",
+                self.interrupted.join(", ")
+            ));
+        }
+        if !self.unreadable.is_empty() {
+            let named: Vec<String> = self
+                .unreadable
+                .iter()
+                .map(|(n, e)| format!("{n} ({e})"))
+                .collect();
+            lines.push(format!(
+                "unreadable fit.json (run their shards again): {}",
+                named.join("; ")
+            ));
+        }
+        if !self.missing.is_empty() {
+            lines.push(format!(
+                "missing, not run yet (run their shards, then merge again): {}",
+                self.missing.join(", ")
+            ));
+        }
+        lines
+    }
 }
 
 /// Every digit (shortest round trip), in exponent form where plain digits would run long.
@@ -78,9 +130,10 @@ fn number(x: Option<f64>) -> String {
     x.map(crate::error::readable).unwrap_or_default()
 }
 
-const FIXED_COLUMNS: [&str; 9] = [
+const FIXED_COLUMNS: [&str; 11] = [
     "name",
     "data",
+    "model",
     "status",
     "verdict",
     "n_samples",
@@ -88,33 +141,52 @@ const FIXED_COLUMNS: [&str; 9] = [
     "rms",
     "dof",
     "warnings",
+    "error",
 ];
+
+/// The position of fixed column `name`.
+fn col(name: &str) -> usize {
+    FIXED_COLUMNS
+        .iter()
+        .position(|c| *c == name)
+        .expect("a fixed column")
+}
+
+/// One item as merge finds it.
+enum Found {
+    Missing,
+    /// The last run ended in this error (its record says so).
+    Error(String),
+    Unreadable(String),
+    Fit(Box<FitJson>),
+}
+
+fn find_item(manifest_item: &super::Item, out: &Path) -> Found {
+    if let Some(e) = super::ItemRecord::error_of(out, manifest_item) {
+        return Found::Error(e);
+    }
+    let path = out.join(&manifest_item.name).join("fit.json");
+    if !path.exists() {
+        return Found::Missing;
+    }
+    match FitJson::load(&path) {
+        Ok(f) => Found::Fit(Box::new(f)),
+        Err(e) => Found::Unreadable(e.to_string()),
+    }
+}
 
 /// Build the summary table of every manifest item under `out`.
 pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSummary) {
-    // One entry per item, in manifest order: `None` when it has no fit.json yet.
-    let mut missing = Vec::new();
-    let mut unreadable = Vec::new();
-    let fits: Vec<Option<Result<FitJson>>> = manifest
-        .items
-        .iter()
-        .map(|item| {
-            let path = out.join(&item.name).join("fit.json");
-            if !path.exists() {
-                missing.push(item.name.clone());
-                return None;
-            }
-            let fit = FitJson::load(&path);
-            if let Err(e) = &fit {
-                unreadable.push((item.name.clone(), e.to_string()));
-            }
-            Some(fit)
-        })
-        .collect();
+    let found: Vec<Found> = manifest.items.iter().map(|i| find_item(i, out)).collect();
+    let mut summary = MergeSummary {
+        items: manifest.items.len(),
+        ..MergeSummary::default()
+    };
     // Columns: the fixed ones, then every parameter and scale channel in order of first use.
     let mut params: Vec<String> = Vec::new();
     let mut channels: Vec<String> = Vec::new();
-    for f in fits.iter().flatten().flatten() {
+    for f in &found {
+        let Found::Fit(f) = f else { continue };
         for p in &f.parameters {
             if !params.contains(&p.name) {
                 params.push(p.name.clone());
@@ -134,59 +206,103 @@ pub fn summary_table(manifest: &Manifest, out: &Path) -> (SummaryTable, MergeSum
         header.extend([format!("scale_{c}"), format!("scale_{c}_se")]);
     }
     let mut rows = Vec::new();
-    for (item, fit) in manifest.items.iter().zip(&fits) {
-        let data = item.argv.first().cloned().unwrap_or_default();
+    for (item, found) in manifest.items.iter().zip(&found) {
         let mut row = vec![String::new(); header.len()];
-        row[0] = item.name.clone();
-        row[1] = data;
-        match fit {
-            None => row[2] = "missing".into(),
-            Some(Err(_)) => row[2] = "unreadable".into(),
-            Some(Ok(f)) => {
-                row[2] = f.status.as_str().into();
-                row[3] = f.verdict.as_str().into();
-                row[4] = f.data.n_samples.to_string();
-                row[5] = number(f.residuals.reduced_chi2);
-                row[6] = number(f.residuals.rms);
-                row[7] = f.residuals.dof.to_string();
-                row[8] = f.warnings.len().to_string();
-                let base = FIXED_COLUMNS.len();
-                for p in &f.parameters {
-                    let k = base + 3 * params.iter().position(|n| n == &p.name).unwrap_or(0);
-                    row[k] = number(p.value);
-                    row[k + 1] = number(p.std_error);
-                    row[k + 2] = p.status.as_str().into();
+        row[col("name")] = item.name.clone();
+        row[col("data")] = item.data.clone();
+        let name = item.name.clone();
+        match found {
+            Found::Missing => {
+                row[col("status")] = "missing".into();
+                summary.missing.push(name);
+            }
+            Found::Error(e) => {
+                row[col("status")] = "failed".into();
+                row[col("verdict")] = "failed".into();
+                row[col("error")] = e.clone();
+                summary.failed.push((name, e.clone()));
+            }
+            Found::Unreadable(e) => {
+                row[col("status")] = "unreadable".into();
+                row[col("error")] = e.clone();
+                summary.unreadable.push((name, e.clone()));
+            }
+            Found::Fit(f) => {
+                match f.verdict {
+                    Verdict::Failed => summary.failed.push((name, String::new())),
+                    Verdict::Interrupted => summary.interrupted.push(name),
+                    Verdict::PoorFit | Verdict::Undetermined => summary.not_good.push(name),
+                    Verdict::Good => {}
                 }
-                let base = base + 3 * params.len();
-                for s in &f.scale {
-                    let k = base + 2 * channels.iter().position(|n| n == &s.channel).unwrap_or(0);
-                    row[k] = number(s.value);
-                    row[k + 1] = number(s.std_error);
-                }
+                fit_cells(&mut row, f, &params, &channels);
             }
         }
         rows.push(row);
     }
-    let items = manifest.items.len();
-    (
-        SummaryTable { header, rows },
-        MergeSummary {
-            items,
-            missing,
-            unreadable,
-        },
-    )
+    (SummaryTable { header, rows }, summary)
 }
 
-/// Write `out/summary.csv` and `out/index.html` for every item of `manifest`.
+/// The cells of a row that come from the item's fit.json.
+fn fit_cells(row: &mut [String], f: &FitJson, params: &[String], channels: &[String]) {
+    row[col("model")] = f.family().as_str().into();
+    row[col("status")] = f.status.as_str().into();
+    row[col("verdict")] = f.verdict.as_str().into();
+    row[col("n_samples")] = f.data.n_samples.to_string();
+    row[col("reduced_chi2")] = number(f.residuals.reduced_chi2);
+    row[col("rms")] = number(f.residuals.rms);
+    row[col("dof")] = f.residuals.dof.to_string();
+    row[col("warnings")] = f.warnings.len().to_string();
+    let base = FIXED_COLUMNS.len();
+    for p in &f.parameters {
+        let k = base + 3 * params.iter().position(|n| n == &p.name).unwrap_or(0);
+        row[k] = number(p.value);
+        row[k + 1] = number(p.std_error);
+        row[k + 2] = p.status.as_str().into();
+    }
+    let base = base + 3 * params.len();
+    for s in &f.scale {
+        let k = base + 2 * channels.iter().position(|n| n == &s.channel).unwrap_or(0);
+        row[k] = number(s.value);
+        row[k + 1] = number(s.std_error);
+    }
+}
+
+/// The `<title>` prefix of every index.html merge writes: how it knows its own page.
+const PAGE_TITLE: &str = "<title>hairfit batch: ";
+
+/// Refuse to replace `path` unless it is absent or merge wrote it (`ours` recognises its text):
+/// merge must never overwrite a file of the user's.
+fn check_ours(path: &Path, ours: impl Fn(&str) -> bool) -> Result<()> {
+    match std::fs::read(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io(path, e)),
+        Ok(bytes) if ours(&String::from_utf8_lossy(&bytes)) => Ok(()),
+        Ok(_) => Err(Error::Other(format!(
+            "{}: not written by `hairfit batch --merge`, which would replace it; move it away, or merge into another --out",
+            path.display()
+        ))),
+    }
+}
+
+/// Whether `text` is a summary.csv merge wrote (its header starts with the fixed columns).
+fn is_our_summary(text: &str) -> bool {
+    let first = text.lines().next().unwrap_or("");
+    first.starts_with("name,data,") && first.contains(",status,verdict,n_samples,")
+}
+
+/// Write `out/summary.csv` and `out/index.html` for every item of `manifest`, never over a
+/// file merge did not write.
 pub fn merge(manifest: &Manifest, out: &Path) -> Result<MergeSummary> {
+    super::claim_out_dir(out)?;
+    let (csv_path, html_path) = (out.join("summary.csv"), out.join("index.html"));
+    check_ours(&csv_path, is_our_summary)?;
+    check_ours(&html_path, |t| t.contains(PAGE_TITLE))?;
     let (table, summary) = summary_table(manifest, out);
-    table.write(&out.join("summary.csv"))?;
+    table.write(&csv_path)?;
     let html = index_html(manifest, &table);
-    let path = out.join("index.html");
-    write_atomically(&path, |w| {
+    write_atomically(&html_path, |w| {
         w.write_all(html.as_bytes())
-            .map_err(|e| Error::io(&path, e))
+            .map_err(|e| Error::io(&html_path, e))
     })?;
     Ok(summary)
 }
@@ -194,19 +310,19 @@ pub fn merge(manifest: &Manifest, out: &Path) -> Result<MergeSummary> {
 fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
     use crate::plot::escape;
     let shown: Vec<usize> = (0..table.header.len())
-        .filter(|&c| c != 1 && !table.header[c].ends_with("_status"))
+        .filter(|&c| c != col("data") && !table.header[c].ends_with("_status"))
         .collect();
     let mut s = String::new();
     s += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n";
     s += &format!(
-        "<title>hairfit batch: {}</title>\n",
+        "{PAGE_TITLE}{}</title>\n",
         escape(&manifest.path.display().to_string())
     );
     s += "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}\
           td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;font-size:90%;white-space:nowrap}\
           td:first-child,th:first-child{text-align:left}\
           .missing,.unreadable,.failed,.interrupted,.v-failed,.v-interrupted{color:#b00}\
-          .v-poor_fit td:nth-child(3),.v-undetermined td:nth-child(3){background:#fff3cd}</style></head><body>\n";
+          .v-poor_fit td:nth-child(4),.v-undetermined td:nth-child(4){background:#fff3cd}</style></head><body>\n";
     s += &format!(
         "<h1>hairfit batch</h1>\n<p>Manifest <code>{}</code>: {} items. Each name links to the item's report; the whole table is <a href=\"summary.csv\">summary.csv</a>.</p>\n<table>\n<tr>",
         escape(&manifest.path.display().to_string()),
@@ -217,13 +333,19 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
     }
     s += "</tr>\n";
     for row in &table.rows {
-        let status = &row[2];
-        let verdict = &row[3];
+        let status = &row[col("status")];
+        let verdict = &row[col("verdict")];
+        let has_report = !row[col("model")].is_empty();
         s += &format!("<tr class=\"{} v-{}\">", escape(status), escape(verdict));
         for &c in &shown {
             let cell = &row[c];
-            if c == 0 && status != "missing" {
+            if c == col("name") && has_report {
                 s += &format!("<td><a href=\"{0}/index.html\">{0}</a></td>", escape(cell));
+            } else if c == col("error") {
+                s += &format!(
+                    "<td style=\"text-align:left;white-space:normal\">{}</td>",
+                    escape(cell)
+                );
             } else if let Ok(x) = cell.parse::<f64>() {
                 s += &format!("<td>{}</td>", escape(&short(x, cell)));
             } else {
@@ -235,7 +357,6 @@ fn index_html(manifest: &Manifest, table: &SummaryTable) -> String {
     s += "</table>\n</body></html>\n";
     s
 }
-
 /// A readable number for the page (the CSV keeps every digit).
 fn short(x: f64, text: &str) -> String {
     if !(text.contains('.') || text.contains('e')) {

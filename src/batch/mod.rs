@@ -14,25 +14,75 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
+use crate::files::Verdict;
 pub use manifest::{Item, Manifest};
 pub use shard::Shard;
 
-/// Where a batch writes the record of how each finished item was run.
+/// Where a batch writes the record of how each item was last run.
 const STAMP_DIR: &str = ".batch";
 
-/// `DIR/.batch/NAME.json`: the arguments an item's result was made with, so a re-run skips it
-/// only while the manifest still asks for the same fit.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ItemStamp {
-    pub argv: Vec<String>,
+/// What `hairfit batch` names its output directory's marker after.
+pub const COMMAND: &str = "hairfit batch";
+
+/// Make `out` the batch's output directory (see [`crate::outdir::claim_shared_dir`]): never
+/// `.`, a file, or a directory of the user's own files. A directory holding `.batch` was made
+/// by a batch before the marker existed.
+pub fn claim_out_dir(out: &Path) -> Result<()> {
+    crate::outdir::claim_shared_dir(out, COMMAND, &[STAMP_DIR])
 }
 
-impl ItemStamp {
+/// Which data file an item's result was fitted to: its canonical path (the same from any
+/// current directory), size and modification time. Size and time, not a content hash: a
+/// resubmitted array job checks every item, and hashing gigabytes of data each time would
+/// cost more than small fits; an instrument rewriting a file changes its time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DataIdentity {
+    pub path: String,
+    pub size: u64,
+    /// Nanoseconds since the Unix epoch (0 where the file system keeps no time).
+    pub modified_ns: u64,
+}
+
+impl DataIdentity {
+    /// The identity of `path` now, if it can be read.
+    pub fn of(path: &Path) -> Option<DataIdentity> {
+        let canonical = path.canonicalize().ok()?;
+        let meta = std::fs::metadata(&canonical).ok()?;
+        let modified_ns = meta
+            .modified()
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+        Some(DataIdentity {
+            path: canonical.display().to_string(),
+            size: meta.len(),
+            modified_ns,
+        })
+    }
+}
+
+/// `DIR/.batch/NAME.json`: how an item was last run (its options and data file) and, when it
+/// ended in an error before or after writing a result, the error. A re-run skips the item only
+/// while the manifest asks for the same fit of the same, unchanged data; `--merge` shows the
+/// error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ItemRecord {
+    /// The `hairfit fit` options (without the data path and `--out`).
+    pub options: Vec<String>,
+    /// The data file as it was when the item ran (absent when it could not be read).
+    pub data: Option<DataIdentity>,
+    /// Why the last run of the item failed, if it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+impl ItemRecord {
     fn path(out: &Path, name: &str) -> PathBuf {
         out.join(STAMP_DIR).join(format!("{name}.json"))
     }
 
-    fn read(out: &Path, name: &str) -> Option<ItemStamp> {
+    /// The record of `name`, if there is a readable one (an older format reads as none).
+    pub fn read(out: &Path, name: &str) -> Option<ItemRecord> {
         let text = std::fs::read_to_string(Self::path(out, name)).ok()?;
         serde_json::from_str(&text).ok()
     }
@@ -44,20 +94,47 @@ impl ItemStamp {
                 .map_err(|e| Error::Other(format!("{}: {e}", path.display())))
         })
     }
+
+    /// The error of `item`'s last run, if its record is of the item's current options.
+    pub fn error_of(out: &Path, item: &Item) -> Option<String> {
+        ItemRecord::read(out, &item.name)
+            .filter(|r| r.options == item.options())
+            .and_then(|r| r.error)
+    }
 }
 
 /// What happened to one item of this shard.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ItemOutcome {
-    /// Fitted now; the fit's status (`converged`, …) and the report's line (where it is, or
-    /// why it could not be drawn), as `hairfit fit` prints it.
-    Fitted { status: String, report: String },
-    /// A finished result made with the same arguments was already there.
-    Skipped,
-    /// The fit could not run (bad data file, …): the error.
+    /// Fitted now: the verdict, the fit's status (`converged`, …) and the report's line (where
+    /// it is), as `hairfit fit` prints them.
+    Fitted {
+        verdict: Verdict,
+        status: String,
+        report: String,
+    },
+    /// A finished result of the same fit of the same data was already there: its verdict.
+    Skipped(Verdict),
+    /// The fit could not run (bad data file, …), or its report could not be drawn: the error.
     Failed(String),
     /// Ctrl-C/SIGTERM stopped the item; the batch stops after it.
     Interrupted,
+}
+
+impl ItemOutcome {
+    /// The item's verdict, if it has a result.
+    pub fn verdict(&self) -> Option<Verdict> {
+        match self {
+            ItemOutcome::Fitted { verdict, .. } | ItemOutcome::Skipped(verdict) => Some(*verdict),
+            ItemOutcome::Failed(_) => None,
+            ItemOutcome::Interrupted => Some(Verdict::Interrupted),
+        }
+    }
+
+    /// An error, or a result whose verdict is `failed`.
+    pub fn failed(&self) -> bool {
+        matches!(self, ItemOutcome::Failed(_)) || self.verdict() == Some(Verdict::Failed)
+    }
 }
 
 /// The shard's run: every item it owns with its outcome.
@@ -79,8 +156,8 @@ impl BatchRun {
             self.shard,
             self.outcomes.len(),
             self.count(|o| matches!(o, ItemOutcome::Fitted { .. })),
-            self.count(|o| matches!(o, ItemOutcome::Skipped)),
-            self.count(|o| matches!(o, ItemOutcome::Failed(_))),
+            self.count(|o| matches!(o, ItemOutcome::Skipped(_))),
+            self.count(ItemOutcome::failed),
             if self.interrupted() {
                 ", interrupted"
             } else {
@@ -94,13 +171,39 @@ impl BatchRun {
             .iter()
             .any(|(_, o)| matches!(o, ItemOutcome::Interrupted))
     }
+
+    /// The names of the items that failed.
+    pub fn failed_names(&self) -> Vec<&str> {
+        self.outcomes
+            .iter()
+            .filter(|(_, o)| o.failed())
+            .map(|(n, _)| n.as_str())
+            .collect()
+    }
 }
 
-/// Whether `out/name` holds a finished fit (not interrupted) made with `item`'s arguments.
-fn already_finished(out: &Path, item: &Item) -> bool {
-    let stamp_matches = ItemStamp::read(out, &item.name).is_some_and(|s| s.argv == item.argv);
-    stamp_matches
-        && merge::fit_status(&out.join(&item.name)).is_some_and(|status| status != "interrupted")
+/// How a shard runs: `strict` is `hairfit batch --strict` (every item gets `--strict`),
+/// `rerun` is `--force` (fit every item again, finished or not).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOptions {
+    pub strict: bool,
+    pub rerun: bool,
+}
+
+/// The verdict of `out/name`'s finished result of `item`, if it has one: the record says the
+/// same options and the same, unchanged data file, and fit.json holds a verdict other than
+/// failed or interrupted (those run again).
+fn finished_verdict(out: &Path, item: &Item) -> Option<Verdict> {
+    let record = ItemRecord::read(out, &item.name)?;
+    let same = record.error.is_none()
+        && record.options == item.options()
+        && record.data.is_some()
+        && record.data == DataIdentity::of(Path::new(&item.argv[0]));
+    if !same {
+        return None;
+    }
+    merge::fit_verdict(&out.join(&item.name))
+        .filter(|v| !matches!(v, Verdict::Failed | Verdict::Interrupted))
 }
 
 /// Run this shard's items of `manifest` into `out/NAME`, one after another (each fit uses every
@@ -109,9 +212,11 @@ pub fn run_batch(
     manifest: &Manifest,
     out: &Path,
     shard: Shard,
+    options: RunOptions,
     cancel: Option<Arc<AtomicBool>>,
     mut on_item: impl FnMut(&Item, &ItemOutcome),
 ) -> Result<BatchRun> {
+    claim_out_dir(out)?;
     let mut outcomes = Vec::new();
     for (i, item) in manifest.items.iter().enumerate() {
         if !shard.owns(i) {
@@ -120,10 +225,14 @@ pub fn run_batch(
         if cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)) {
             break;
         }
-        let outcome = if already_finished(out, item) {
-            ItemOutcome::Skipped
+        let finished = if options.rerun {
+            None
         } else {
-            run_item(item, out, cancel.clone())
+            finished_verdict(out, item)
+        };
+        let outcome = match finished {
+            Some(verdict) => ItemOutcome::Skipped(verdict),
+            None => run_item(item, out, options.strict, cancel.clone()),
         };
         on_item(item, &outcome);
         let stop = matches!(outcome, ItemOutcome::Interrupted);
@@ -135,32 +244,45 @@ pub fn run_batch(
     Ok(BatchRun { shard, outcomes })
 }
 
-fn run_item(item: &Item, out: &Path, cancel: Option<Arc<AtomicBool>>) -> ItemOutcome {
+fn run_item(item: &Item, out: &Path, strict: bool, cancel: Option<Arc<AtomicBool>>) -> ItemOutcome {
     let dir = out.join(&item.name);
-    let result = item.fit_args(&dir).and_then(|a| {
+    // Taken before the fit: a file rewritten while it runs then differs next time.
+    let data = DataIdentity::of(Path::new(&item.argv[0]));
+    let result = item.fit_args(&dir, strict).and_then(|a| {
         crate::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel.clone())
     });
-    match result {
-        Err(e) => ItemOutcome::Failed(e.to_string()),
-        Ok(run) => {
-            let status = merge::fit_status(&dir).unwrap_or_else(|| "unknown".into());
-            if status == "interrupted" {
-                return ItemOutcome::Interrupted;
-            }
-            // As `hairfit fit`, an item whose report could not be drawn failed (and reruns).
-            if let Err(e) = run.report_result(&dir) {
-                return ItemOutcome::Failed(e.to_string());
-            }
-            let stamp = ItemStamp {
-                argv: item.argv.clone(),
-            };
-            match stamp.write(out, &item.name) {
-                Ok(()) => ItemOutcome::Fitted {
-                    status,
-                    report: run.report_line(&dir).trim_end().to_string(),
-                },
-                Err(e) => ItemOutcome::Failed(format!("fitted, but {e}")),
-            }
+    let record = |error: Option<String>| ItemRecord {
+        options: item.options().to_vec(),
+        data: data.clone(),
+        error,
+    };
+    let failed = |message: String| {
+        let message = manifest::as_manifest_words(&message);
+        match record(Some(message.clone())).write(out, &item.name) {
+            Ok(()) => ItemOutcome::Failed(message),
+            Err(e) => ItemOutcome::Failed(format!("{message} (and its record: {e})")),
         }
+    };
+    let run = match result {
+        Err(e) => return failed(e.to_string()),
+        Ok(run) => run,
+    };
+    let verdict = run.outcome.json.verdict;
+    if verdict == Verdict::Interrupted {
+        // Its best so far is written; the record says which fit it was (it runs again).
+        let _ = record(None).write(out, &item.name);
+        return ItemOutcome::Interrupted;
+    }
+    // As `hairfit fit`, an item whose report could not be drawn failed (and reruns).
+    if let Err(e) = run.report_result(&dir) {
+        return failed(e.to_string());
+    }
+    match record(None).write(out, &item.name) {
+        Ok(()) => ItemOutcome::Fitted {
+            verdict,
+            status: run.outcome.json.status.as_str().to_string(),
+            report: run.report_line(&dir).trim_end().to_string(),
+        },
+        Err(e) => ItemOutcome::Failed(format!("fitted, but {e}")),
     }
 }

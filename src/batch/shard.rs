@@ -50,8 +50,8 @@ impl Shard {
         Ok(Shard { index, count })
     }
 
-    /// The shard a scheduler assigned: Slurm's `SLURM_ARRAY_TASK_ID` − `SLURM_ARRAY_TASK_MIN`
-    /// of `SLURM_ARRAY_TASK_COUNT`, or Kubernetes' `JOB_COMPLETION_INDEX` of
+    /// The shard a scheduler assigned: Slurm's (`SLURM_ARRAY_TASK_ID` − `SLURM_ARRAY_TASK_MIN`)
+    /// / `SLURM_ARRAY_TASK_STEP` of `SLURM_ARRAY_TASK_COUNT`, or Kubernetes' `JOB_COMPLETION_INDEX` of
     /// `HAIRFIT_SHARD_COUNT` (Indexed Jobs do not expose their completion count; the shipped
     /// recipe sets it). `HAIRFIT_SHARD_COUNT` also overrides Slurm's count.
     pub fn from_env(var: impl Fn(&str) -> Option<String>) -> Result<Shard> {
@@ -72,11 +72,19 @@ impl Shard {
             let count = count_override.or(num("SLURM_ARRAY_TASK_COUNT")?).ok_or_else(|| {
                 Error::Other("--shard auto: SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not (set HAIRFIT_SHARD_COUNT, or pass --shard K/N)".into())
             })?;
-            let index = id.checked_sub(min).ok_or_else(|| {
+            let step = num("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1).max(1);
+            let offset = id.checked_sub(min).ok_or_else(|| {
                 Error::Other(format!(
                     "--shard auto: SLURM_ARRAY_TASK_ID={id} is below SLURM_ARRAY_TASK_MIN={min}"
                 ))
             })?;
+            // A stepped array (`--array=0-12:4`) numbers its tasks min, min+step, …
+            if offset % step != 0 {
+                return Err(Error::Other(format!(
+                    "--shard auto: SLURM_ARRAY_TASK_ID={id} is not SLURM_ARRAY_TASK_MIN={min} plus a multiple of SLURM_ARRAY_TASK_STEP={step}; pass --shard K/N"
+                )));
+            }
+            let index = offset / step;
             (index, count, "Slurm")
         } else if let Some(index) = num("JOB_COMPLETION_INDEX")? {
             let count = count_override.ok_or_else(|| {
@@ -149,6 +157,17 @@ mod tests {
         assert_eq!(
             Shard::from_env(slurm).unwrap(),
             Shard { index: 4, count: 8 }
+        );
+        // `--array=0-4:4`: tasks 0 and 4 are shards 0 and 1 of 2.
+        let stepped = env(&[
+            ("SLURM_ARRAY_TASK_ID", "4"),
+            ("SLURM_ARRAY_TASK_MIN", "0"),
+            ("SLURM_ARRAY_TASK_STEP", "4"),
+            ("SLURM_ARRAY_TASK_COUNT", "2"),
+        ]);
+        assert_eq!(
+            Shard::from_env(stepped).unwrap(),
+            Shard { index: 1, count: 2 }
         );
         let k8s = env(&[("JOB_COMPLETION_INDEX", "2"), ("HAIRFIT_SHARD_COUNT", "3")]);
         assert_eq!(Shard::from_env(k8s).unwrap(), Shard { index: 2, count: 3 });

@@ -93,6 +93,20 @@ pub struct FitArgs {
 }
 
 impl FitArgs {
+    /// Check these options without the data (for `hairfit batch`, before any item runs): what
+    /// [`FitArgs::options`] checks, and every `--fix` name and value. Per-channel names are
+    /// checked against any channel count; the data's own count is checked when it loads.
+    pub fn check(&self) -> Result<()> {
+        const ANY_CHANNELS: usize = 64;
+        self.options(None)?;
+        let parse = |nc| match self.model.family {
+            ModelFamily::Marschner => crate::fit::parse_fixes(&self.fix, nc).map(drop),
+            ModelFamily::Chiang => crate::chiang::fit::parse_fixes(&self.fix, nc).map(drop),
+        };
+        // The message of one channel lists the names without 64 of sigma_a[c].
+        parse(ANY_CHANNELS).map_err(|e| parse(1).err().unwrap_or(e))
+    }
+
     /// The fit options these arguments ask for.
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
         self.model.check_family_options()?;
