@@ -84,7 +84,7 @@ interrupted run again; --force runs every item again.
 \
 Exit codes: 0 all items ran; 1 an item failed or its verdict is `failed` (the others still ran; the failed ones are \
 named) or, with --merge, an item is missing, failed or interrupted (summary.csv and index.html are still written); \
-2 with --strict when an item's verdict is poor_fit or undetermined; 130 after SIGINT, 143 after SIGTERM."
+2 a usage error; 3 with --strict when an item's verdict is poor_fit or undetermined; 130 after SIGINT, 143 after SIGTERM."
 )]
 struct BatchArgs {
     /// Manifest (CSV `name,data,OPTION…`, or .json).
@@ -379,7 +379,8 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
     Ok(strict_exit(a.strict, &not_good))
 }
 
-/// `--strict` of a batch: 2 when an item's verdict is poor_fit or undetermined (named).
+/// `--strict` of a batch: as `fit --strict` when an item's verdict is poor_fit or undetermined
+/// (named).
 fn strict_exit(strict: bool, not_good: &[String]) -> u8 {
     if !strict || not_good.is_empty() {
         return 0;
@@ -389,7 +390,7 @@ fn strict_exit(strict: bool, not_good: &[String]) -> u8 {
         not_good.len(),
         not_good.join(", ")
     );
-    2
+    hairfit::cli::exit::STRICT_EXIT
 }
 
 /// The fit's summary, then where its plotted report is.

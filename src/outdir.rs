@@ -25,11 +25,13 @@ pub fn remove_in_flight() {
     let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
     for p in list.iter() {
         // The run's other threads may still be creating files in it (remove_dir_all then
-        // fails with "directory not empty"): try again a few times.
-        for _ in 0..20 {
+        // fails with "directory not empty"): try again, pausing so a writer that is mid-file
+        // finishes (back to back, 20 tries lost the race about once in ten under load).
+        for attempt in 0..50 {
             if std::fs::remove_dir_all(p).is_ok() || !p.exists() {
                 break;
             }
+            std::thread::sleep(std::time::Duration::from_millis(2 * attempt.min(5)));
         }
     }
 }

@@ -117,23 +117,23 @@ fn out_dot_files_and_user_folders_are_refused_and_merge_keeps_user_files() {
 }
 
 #[test]
-fn strict_exits_2_for_runs_reruns_and_merges_and_is_not_a_column() {
+fn strict_exits_3_for_runs_reruns_and_merges_and_is_not_a_column() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     // The shipped RGB scan leaves a parameter undetermined (its verdict, not an error).
     std::fs::copy(shipped("azimuthal_rgb.csv"), dir.join("rgb.csv")).unwrap();
     write(dir, "m.csv", "name,data,no-progress\nrgb,rgb.csv,true\n");
     let first = run_in(dir, &["batch", "m.csv", "--out", "o", "--strict"]);
-    assert_eq!(code(&first), Some(2), "{}", cli::stderr(&first));
+    assert_eq!(code(&first), Some(3), "{}", cli::stderr(&first));
     assert!(cli::stderr(&first).contains("undetermined"));
     let again = run_in(dir, &["batch", "m.csv", "--out", "o", "--strict"]);
     assert!(cli::stderr(&again).contains("rgb: skipped"));
-    assert_eq!(code(&again), Some(2), "a skipped item keeps its verdict");
+    assert_eq!(code(&again), Some(3), "a skipped item keeps its verdict");
     let r = run_in(
         dir,
         &["batch", "m.csv", "--out", "o", "--merge", "--strict"],
     );
-    assert_eq!(code(&r), Some(2), "{}", cli::stderr(&r));
+    assert_eq!(code(&r), Some(3), "{}", cli::stderr(&r));
     assert!(cli::stderr(&r).contains("rgb"));
     // Without --strict an undetermined verdict is a usable result.
     cli::succeeded(run_in(dir, &["batch", "m.csv", "--out", "o"]), &["batch"]);
