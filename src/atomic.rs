@@ -152,6 +152,43 @@ impl Drop for StagedFiles {
     }
 }
 
+/// True when writing `output` would replace the existing file `input`: both resolved through
+/// links and `..`. `output` need not exist yet (its directory is resolved instead); an `input`
+/// that does not exist cannot be replaced.
+pub fn same_file(input: &Path, output: &Path) -> bool {
+    let Ok(input) = input.canonicalize() else {
+        return false;
+    };
+    let output = output.canonicalize().ok().or_else(|| {
+        let dir = match output.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        Some(dir.canonicalize().ok()?.join(output.file_name()?))
+    });
+    output.is_some_and(|o| o == input)
+}
+
+/// Refuse to write `output` (the option `output_flag`) over one of the files the command reads
+/// (`inputs`: option and path): the run would destroy its own input.
+pub fn refuse_replacing_inputs(
+    output_flag: &str,
+    output: &Path,
+    inputs: &[(&str, &Path)],
+) -> Result<()> {
+    for (flag, input) in inputs {
+        if same_file(input, output) {
+            return Err(Error::Other(format!(
+                "{output_flag} {} would replace {flag} {}, which this command reads: write the \
+                 output under another name",
+                output.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -12,7 +12,8 @@ use rayon::prelude::*;
 use crate::atomic::write_atomically;
 use crate::data::lines::{csv_error, read_error, LineCounter, TextGuard};
 use crate::data::records::{needs_csv_parser, Blocks};
-use crate::data::AngleUnit;
+use crate::data::unit::{RadiansEvidence, UnitLine};
+use crate::data::{repeated_column, repeated_column_message, AngleUnit};
 use crate::error::{Error, Result};
 use crate::family::{FamilyModel, FamilyParams};
 use crate::model::Angles;
@@ -20,7 +21,7 @@ use crate::model::Angles;
 mod angles;
 mod plain_row;
 mod shortest;
-use angles::{locate_angle_columns, parse_angles, to_angles, unit_limit};
+use angles::{locate_angle_columns, parse_angles, to_angles};
 use plain_row::PlainRow;
 use shortest::push_shortest;
 
@@ -46,8 +47,9 @@ pub struct EvalRequest {
     pub output_columns: Vec<String>,
     /// The parameters as read, for error messages.
     pub params: FamilyParams,
-    /// `--angles`: the input's angle unit; the file's `# angles:` line decides when absent
-    /// (degrees when neither says).
+    /// `--angles`: the input's angle unit; the file's `# angles:` line decides when absent.
+    /// When neither says, degrees are assumed and the summary warns if the angles look like
+    /// radians (the loader's rule, applied to every row read).
     pub angles: Option<AngleUnit>,
 }
 
@@ -55,6 +57,9 @@ pub struct EvalRequest {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EvalSummary {
     pub rows: u64,
+    /// Things that may make the output wrong (e.g. angles that look like radians read as
+    /// degrees); known only once every row is read, so they come after the output.
+    pub warnings: Vec<String>,
 }
 
 /// Output column names: `s` for a scalar `sigma_a`, `s_0…s_{N−1}` for N channels.
@@ -79,20 +84,24 @@ pub fn eval_file(
             input.display()
         )));
     }
+    if let Some(out) = output {
+        refuse_directory_output(out)?;
+    }
     let file = TextGuard::new(file);
-    // The unit line is read before the stream, so `eval_stream` sees the settled unit.
+    // The unit line is read before the stream, so `eval_stream` sees the settled unit (`None`
+    // when neither the line nor `--angles` states one).
     let directive = crate::data::unit::file_directive(input, 1)?;
+    crate::data::unit::resolve(request.angles, directive, input)?;
     let request = &EvalRequest {
-        angles: Some(crate::data::unit::resolve(
-            request.angles,
-            directive,
-            input,
-        )?),
+        angles: request.angles.or(directive.map(|(unit, _)| unit)),
         ..request.clone()
     };
     match output {
         Some(out) => {
-            let mut summary = EvalSummary { rows: 0 };
+            let mut summary = EvalSummary {
+                rows: 0,
+                warnings: Vec::new(),
+            };
             write_atomically(out, |w| {
                 summary = eval_stream(file, input, w, request)?;
                 Ok(())
@@ -107,6 +116,20 @@ pub fn eval_file(
             Ok(summary)
         }
     }
+}
+
+/// `--output` must name a file: an existing directory, or a path ending in `/`, is refused
+/// before any work (the rename at the end would fail with "Not a directory").
+fn refuse_directory_output(out: &Path) -> Result<()> {
+    let text = out.as_os_str().to_string_lossy();
+    if out.is_dir() || text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
+        let dir = text.trim_end_matches(['/', std::path::MAIN_SEPARATOR]);
+        return Err(Error::Other(format!(
+            "--output {text}: that is a directory; --output names the CSV file to write, \
+             e.g. --output {dir}/eval.csv"
+        )));
+    }
+    Ok(())
 }
 
 /// Evaluate a CSV stream; `source` names the input in error messages.
@@ -274,6 +297,9 @@ struct Evaluation<'a, W: ?Sized> {
     request: &'a EvalRequest,
     model: &'a (dyn Fn(&[Angles], &mut [f64]) + Sync),
     unit: AngleUnit,
+    /// What the rows say about their unit, when degrees were assumed (`--angles` absent, no
+    /// unit line).
+    radians: Option<RadiansEvidence>,
     header: Option<Header>,
     n_channels: usize,
     chunk_rows: usize,
@@ -301,6 +327,7 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             request,
             model,
             unit: request.angles.unwrap_or(AngleUnit::Deg),
+            radians: request.angles.is_none().then(RadiansEvidence::default),
             header: None,
             n_channels,
             chunk_rows,
@@ -384,6 +411,14 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 name.trim().to_string()
             })
             .collect();
+        if let Some(k) = repeated_column(names.iter().map(String::as_str)) {
+            return Err(Error::input(
+                self.source,
+                line,
+                1 + k as u64,
+                repeated_column_message(&names[k]),
+            ));
+        }
         let angle_index = locate_angle_columns(self.source, line, &names)?;
         for name in &self.request.output_columns {
             if let Some(k) = names.iter().position(|h| h == name) {
@@ -397,6 +432,11 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 ));
             }
         }
+        // Radians say so in the output too, or it would read back as degrees.
+        if self.unit == AngleUnit::Rad {
+            self.out
+                .extend_from_slice(format!("{}\n", UnitLine(AngleUnit::Rad)).as_bytes());
+        }
         let all = names
             .iter()
             .map(String::as_str)
@@ -408,7 +448,7 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             push_csv_field(&mut self.out, name.as_bytes());
         }
         self.out.push(b'\n');
-        let plain = PlainRow::new(names.len(), &angle_index, unit_limit(self.unit).0);
+        let plain = PlainRow::new(names.len(), &angle_index, self.unit);
         self.header = Some(Header {
             names,
             angle_index,
@@ -419,6 +459,15 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
 
     /// Evaluate the gathered rows and write them.
     fn flush_chunk(&mut self) -> Result<()> {
+        if let Some(evidence) = &mut self.radians {
+            // Degrees beyond ±π settle it at the first such row: the rest costs one test a chunk.
+            for a in &self.angles {
+                if evidence.settled() {
+                    break;
+                }
+                evidence.add([a.theta_i, a.phi_i, a.theta_r, a.phi_r]);
+            }
+        }
         let n_channels = self.n_channels;
         let model = self.model;
         self.values.clear();
@@ -483,7 +532,11 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         }
         self.write_out()?;
         self.output.flush().map_err(|e| Error::io("<output>", e))?;
-        Ok(EvalSummary { rows: self.rows })
+        let warnings = self.radians.and_then(|e| e.warning()).into_iter().collect();
+        Ok(EvalSummary {
+            rows: self.rows,
+            warnings,
+        })
     }
 }
 

@@ -69,6 +69,37 @@ impl From<ChiangParamFile> for FamilyParams {
     }
 }
 
+/// A fit.json or truth.json given where a parameter file goes: both hold the parameters under
+/// `"params"` beside the model options they were made with, and `"model"` there is those
+/// options, not a family. Refused with where the parameters are (not read from inside: the
+/// options recorded there could silently disagree with this command's).
+fn refuse_result_file(value: &serde_json::Value, path: &Path) -> Result<()> {
+    let is_result = value.get("hairfit_version").is_some() && value.get("params").is_some();
+    if !is_result {
+        return Ok(());
+    }
+    let message = if value.get("verdict").is_some() {
+        let beside = path.with_file_name("params.json");
+        format!(
+            "{}: this is a fit result (fit.json), not a parameter file: pass its params.json \
+             (written beside it{})",
+            path.display(),
+            if beside.exists() {
+                format!(": {}", beside.display())
+            } else {
+                String::new()
+            }
+        )
+    } else {
+        format!(
+            "{}: this is a synth truth file, not a parameter file: its parameters are its \
+             \"params\" object; save that object as a file of its own and pass that",
+            path.display()
+        )
+    };
+    Err(Error::Other(message))
+}
+
 impl FamilyParams {
     /// Which family the file belongs to.
     pub fn family(&self) -> ModelFamily {
@@ -127,6 +158,15 @@ impl FamilyParams {
         }
     }
 
+    /// Values that look like a mistake though they are in the domain (radians in a degrees
+    /// key), for the command to print as warnings.
+    pub fn warnings(&self) -> Vec<String> {
+        match self {
+            FamilyParams::Marschner(p) => p.radians_in_degrees_keys(),
+            FamilyParams::Chiang(_) => Vec::new(),
+        }
+    }
+
     /// The parameters as one JSON line (for error messages).
     pub fn json_line(&self) -> String {
         serde_json::to_string(self).unwrap_or_default()
@@ -137,9 +177,11 @@ impl FamilyParams {
     /// `"model": "marschner"`, which is checked and dropped.
     pub fn load(path: &Path, family: ModelFamily) -> Result<FamilyParams> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let tag = serde_json::from_str::<serde_json::Value>(&text)
-            .ok()
-            .and_then(|v| v.get("model").cloned());
+        let value = serde_json::from_str::<serde_json::Value>(&text).ok();
+        if let Some(value) = &value {
+            refuse_result_file(value, path)?;
+        }
+        let tag = value.and_then(|v| v.get("model").cloned());
         if let Some(tag) = &tag {
             let named = tag.as_str().unwrap_or_default();
             if named != family.as_str() {

@@ -120,13 +120,14 @@ struct DemoArgs {
 
 #[derive(clap::Args)]
 struct EvalArgs {
-    /// Parameter file (JSON, MODEL.md's names; CHIANG.md's with --model chiang).
+    /// Parameter file (JSON, MODEL.md's names; CHIANG.md's with --model chiang), e.g. a fit's
+    /// params.json (not its fit.json).
     #[arg(long)]
     params: PathBuf,
     /// Angles CSV with a header; other columns are carried through.
     #[arg(long)]
     input: PathBuf,
-    /// Output CSV (written atomically); stdout when absent.
+    /// Output CSV file (written atomically; never --input or --params); stdout when absent.
     #[arg(long)]
     output: Option<PathBuf>,
     #[command(flatten)]
@@ -181,8 +182,18 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Eval(args) => {
             remove_partial_output_on_interrupt();
             args.model.check_family_options()?;
+            if let Some(out) = &args.output {
+                hairfit::atomic::refuse_replacing_inputs(
+                    "--output",
+                    out,
+                    &[("--input", &args.input), ("--params", &args.params)],
+                )?;
+            }
             let file = FamilyParams::load(&args.params, args.model.family)
                 .map_err(|e| name_parameter_file(e, &args.params))?;
+            for warning in file.warnings() {
+                eprintln!("hairfit: warning: {}: {warning}", args.params.display());
+            }
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
                 model: FamilyModel::new(&file, args.model.config()?, &args.model.chiang()?),
@@ -190,6 +201,9 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
                 angles: args.angles,
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
+            for warning in &summary.warnings {
+                eprintln!("hairfit: warning: {}: {warning}", args.input.display());
+            }
             if let Some(out) = args.output {
                 eprintln!(
                     "hairfit: evaluated {} rows into {}",

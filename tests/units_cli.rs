@@ -237,6 +237,8 @@ fn eval_honours_the_unit_line_and_takes_angles() {
         assert!(o.status.success(), "{}", stderr(&o));
         String::from_utf8_lossy(&o.stdout)
             .lines()
+            // A radians output starts with its `# angles: rad` line, then the header.
+            .filter(|l| !l.starts_with('#'))
             .skip(1)
             .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
             .collect()

@@ -115,6 +115,22 @@ fn separator_hint(header: &csv::StringRecord) -> &'static str {
     }
 }
 
+/// The first column whose name (in any case) an earlier column already has: every reader of a
+/// header (the loader, eval) refuses it, since which of the two counts would be a guess.
+pub(crate) fn repeated_column<'a>(header: impl IntoIterator<Item = &'a str>) -> Option<usize> {
+    // Hash lookups keep a header of many columns linear (a list search was quadratic: 100k
+    // columns took 14 s).
+    let mut seen: HashSet<String> = HashSet::new();
+    header
+        .into_iter()
+        .position(|name| !seen.insert(name.to_ascii_lowercase()))
+}
+
+/// The error text for [`repeated_column`]'s column.
+pub(crate) fn repeated_column_message(name: &str) -> String {
+    format!("column `{name}` appears twice in the header: rename or remove one")
+}
+
 /// Assign a role to every header column and check the set is complete and consistent.
 fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Result<Columns> {
     let err = |col: usize, msg: String| Error::input(path, line, col as u64 + 1, msg);
@@ -132,17 +148,11 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
     let mut sigma_cols: Vec<(usize, Option<String>)> = Vec::new();
     let mut weight_cols: Vec<(usize, Option<String>)> = Vec::new();
     let mut ignored = Vec::new();
-    // Hash lookups keep a header of many columns linear (a list search was quadratic: 100k
-    // columns took 14 s).
-    let mut seen: HashSet<String> = HashSet::with_capacity(header.len());
+    if let Some(k) = repeated_column(header.iter()) {
+        return Err(err(k, repeated_column_message(&header[k])));
+    }
     for (k, name) in header.iter().enumerate() {
         let lower = name.to_ascii_lowercase();
-        if !seen.insert(lower.clone()) {
-            return Err(err(
-                k,
-                format!("column `{name}` appears twice in the header"),
-            ));
-        }
         let suffix = |prefix: &str| {
             lower
                 .strip_prefix(prefix)

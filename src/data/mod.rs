@@ -34,6 +34,8 @@ mod rows;
 mod scan;
 pub(crate) mod unit;
 
+pub(crate) use self::csv::{repeated_column, repeated_column_message};
+
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -241,6 +243,26 @@ impl Format {
 pub enum AngleUnit {
     Deg,
     Rad,
+}
+
+impl AngleUnit {
+    /// The exclusive bound on |θ|: 90° (π/2), the fiber axis.
+    pub fn theta_limit(self) -> f64 {
+        match self {
+            AngleUnit::Deg => 90.0,
+            AngleUnit::Rad => std::f64::consts::FRAC_PI_2,
+        }
+    }
+
+    /// The inclusive bound on |φ|: two turns either way (720°, 4π) covers every convention
+    /// (−180..180, 0..360, unwrapped sweeps); beyond it a value is meaningless after wrapping
+    /// (at `1e20` one ulp is many turns).
+    pub fn phi_limit(self) -> f64 {
+        match self {
+            AngleUnit::Deg => 720.0,
+            AngleUnit::Rad => 4.0 * std::f64::consts::PI,
+        }
+    }
 }
 
 /// Options for [`load`]; every command that reads data flattens these into its arguments.

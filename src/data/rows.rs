@@ -1,8 +1,6 @@
 //! Row validation shared by every format: each parsed row is accepted into the [`Dataset`] or
 //! rejected with a [`RejectReason`]; duplicates and kept negatives are settled in [`Rows::finish`].
 
-use std::f64::consts::{FRAC_PI_2, PI};
-
 use rayon::slice::ParallelSliceMut;
 
 use super::report::{LoadReport, RejectReason, FIRST_LINES};
@@ -128,21 +126,14 @@ impl Rows {
         if all().any(|c| !c.unwrap_or(0.0).is_finite()) {
             return Some(RejectReason::NonFinite);
         }
-        let theta_limit = match self.unit {
-            AngleUnit::Deg => 90.0,
-            AngleUnit::Rad => FRAC_PI_2,
-        };
+        let theta_limit = self.unit.theta_limit();
         if [angles[0], angles[2]]
             .iter()
             .any(|t| t.unwrap_or(0.0).abs() >= theta_limit)
         {
             return Some(RejectReason::ThetaOutOfRange);
         }
-        // Two turns either way covers every convention (−180..180, 0..360, unwrapped sweeps).
-        let phi_limit = match self.unit {
-            AngleUnit::Deg => 720.0,
-            AngleUnit::Rad => 4.0 * PI,
-        };
+        let phi_limit = self.unit.phi_limit();
         if [angles[1], angles[3]]
             .iter()
             .any(|p| p.unwrap_or(0.0).abs() > phi_limit)

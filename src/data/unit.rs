@@ -1,6 +1,6 @@
-//! The angle unit of a CSV or scan file: the `# angles: deg|rad` line (any case, anywhere
-//! before the first data row; two that disagree are an error), `--angles`, and the warning when
-//! degrees were assumed but every angle lies within ±π.
+//! The angle unit of a CSV or scan file: the `# angles: deg|rad` line ([`UnitLine`], any case,
+//! anywhere before the first data row; two that disagree are an error), `--angles`, and the
+//! warning when degrees were assumed but every angle lies within ±π ([`RadiansEvidence`]).
 
 use std::path::Path;
 
@@ -8,24 +8,37 @@ use super::lines::next_line;
 use super::{AngleUnit, Dataset};
 use crate::error::{Error, Result};
 
-/// The unit a `# angles: …` comment states, if the comment is a unit line.
-fn directive(comment: &str, path: &Path, line: u64) -> Result<Option<AngleUnit>> {
-    let body = comment.trim_start_matches('#').trim().to_ascii_lowercase();
-    let Some(rest) = body.strip_prefix("angles") else {
-        return Ok(None);
-    };
-    let Some(value) = rest.trim_start().strip_prefix(':') else {
-        return Ok(None);
-    };
-    match value.trim() {
-        "deg" | "degree" | "degrees" => Ok(Some(AngleUnit::Deg)),
-        "rad" | "radian" | "radians" => Ok(Some(AngleUnit::Rad)),
-        other => Err(Error::input(
-            path,
-            line,
-            1,
-            format!("unit line `angles: {other}`: write `# angles: deg` or `# angles: rad`"),
-        )),
+/// The unit line `# angles: deg|rad`: read by [`UnitLine::parse`], written by its `Display`
+/// (eval writes it into an output whose angles are radians, so the output reads back right).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct UnitLine(pub AngleUnit);
+
+impl std::fmt::Display for UnitLine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "# angles: {}", name(self.0))
+    }
+}
+
+impl UnitLine {
+    /// The unit a `# angles: …` comment states, if the comment is a unit line.
+    fn parse(comment: &str, path: &Path, line: u64) -> Result<Option<AngleUnit>> {
+        let body = comment.trim_start_matches('#').trim().to_ascii_lowercase();
+        let Some(rest) = body.strip_prefix("angles") else {
+            return Ok(None);
+        };
+        let Some(value) = rest.trim_start().strip_prefix(':') else {
+            return Ok(None);
+        };
+        match value.trim() {
+            "deg" | "degree" | "degrees" => Ok(Some(AngleUnit::Deg)),
+            "rad" | "radian" | "radians" => Ok(Some(AngleUnit::Rad)),
+            other => Err(Error::input(
+                path,
+                line,
+                1,
+                format!("unit line `angles: {other}`: write `# angles: deg` or `# angles: rad`"),
+            )),
+        }
     }
 }
 
@@ -51,7 +64,7 @@ pub(crate) fn file_directive(path: &Path, header_lines: u64) -> Result<Option<(A
             headers_left -= 1;
             continue;
         }
-        if let Some(unit) = directive(t, path, line)? {
+        if let Some(unit) = UnitLine::parse(t, path, line)? {
             match found {
                 Some((earlier, at)) if earlier != unit => {
                     return Err(Error::input(
@@ -111,18 +124,59 @@ pub const RADIANS_WARNING: &str = "angles look like radians: pass --angles rad";
 /// accepted sample lies within ±π (as degrees, a scan of a few degrees at most — as radians, a
 /// whole scan). A dataset of one direction, or all zeros, says nothing.
 pub(crate) fn radians_warning(ds: &Dataset) -> Option<String> {
-    let columns = [&ds.theta_i, &ds.phi_i, &ds.theta_r, &ds.phi_r];
-    // Stored as radians of the degrees read: compare the degrees.
-    let limit = std::f64::consts::PI.to_radians() * (1.0 + 1e-12);
-    let within = columns.iter().all(|c| c.iter().all(|x| x.abs() <= limit));
-    let varied = columns.iter().any(|c| c.iter().any(|&x| x != c[0]));
-    let nonzero = columns.iter().any(|c| c.iter().any(|&x| x != 0.0));
-    (ds.len() >= 2 && within && varied && nonzero).then(|| {
-        format!(
-            "{RADIANS_WARNING} (every angle lies within ±3.1416 while the unit is degrees; \
-             add a `# angles: deg` line or pass --angles deg if they really are degrees)"
-        )
-    })
+    let mut evidence = RadiansEvidence::default();
+    for i in 0..ds.len() {
+        if evidence.settled() {
+            break;
+        }
+        evidence.add([ds.theta_i[i], ds.phi_i[i], ds.theta_r[i], ds.phi_r[i]]);
+    }
+    evidence.warning()
+}
+
+/// The rule of [`radians_warning`] taken one row at a time, so a reader that streams (eval)
+/// applies it to every row it reads, as the loader does to a whole dataset.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RadiansEvidence {
+    rows: u64,
+    first: [f64; 4],
+    /// Some angle lies beyond ±π (as degrees): no warning, whatever follows.
+    beyond_pi: bool,
+    varied: bool,
+    nonzero: bool,
+}
+
+impl RadiansEvidence {
+    /// Take one row's θ_i, φ_i, θ_r, φ_r (radians of the degrees read).
+    pub(crate) fn add(&mut self, angles: [f64; 4]) {
+        // Stored as radians of the degrees read: compare the degrees.
+        let limit = std::f64::consts::PI.to_radians() * (1.0 + 1e-12);
+        if self.beyond_pi || angles.iter().any(|x| x.abs() > limit) {
+            self.beyond_pi = true;
+            return;
+        }
+        if self.rows == 0 {
+            self.first = angles;
+        }
+        self.varied |= angles != self.first;
+        self.nonzero |= angles.iter().any(|&x| x != 0.0);
+        self.rows += 1;
+    }
+
+    /// True once no later row can bring a warning (some angle lay beyond ±π).
+    pub(crate) fn settled(&self) -> bool {
+        self.beyond_pi
+    }
+
+    /// The warning, if the rows taken so far look like radians.
+    pub(crate) fn warning(&self) -> Option<String> {
+        (!self.beyond_pi && self.rows >= 2 && self.varied && self.nonzero).then(|| {
+            format!(
+                "{RADIANS_WARNING} (every angle lies within ±3.1416 while the unit is degrees; \
+                 add a `# angles: deg` line or pass --angles deg if they really are degrees)"
+            )
+        })
+    }
 }
 
 #[cfg(test)]
@@ -139,11 +193,23 @@ mod tests {
             ("# angles in degrees", None),
             ("# a comment", None),
         ] {
-            assert_eq!(directive(text, p, 1).unwrap(), unit, "{text}");
+            assert_eq!(UnitLine::parse(text, p, 1).unwrap(), unit, "{text}");
         }
-        assert!(directive("# angles: gradians", p, 3)
+        assert!(UnitLine::parse("# angles: gradians", p, 3)
             .unwrap_err()
             .to_string()
             .contains("gradians"));
+    }
+
+    /// The line eval writes is the line every reader reads back.
+    #[test]
+    fn a_written_unit_line_reads_back() {
+        for unit in [AngleUnit::Deg, AngleUnit::Rad] {
+            let text = UnitLine(unit).to_string();
+            assert_eq!(
+                UnitLine::parse(&text, Path::new("f.csv"), 1).unwrap(),
+                Some(unit)
+            );
+        }
     }
 }

@@ -1,5 +1,6 @@
 //! The four angle columns of an eval input: finding them in the header, reading a row's angles
-//! with errors naming line and column, the unit's bound on θ, and the conversion to model angles.
+//! with errors naming line and column, the unit's bounds on θ and φ, and the conversion to model
+//! angles.
 
 use std::path::Path;
 
@@ -39,11 +40,11 @@ pub(super) fn locate_angle_columns(
     }
 }
 
-/// The exclusive bound on |θ| in `unit`, and the unit's name.
-pub(super) fn unit_limit(unit: AngleUnit) -> (f64, &'static str) {
+/// The unit's name in messages.
+fn unit_name(unit: AngleUnit) -> &'static str {
     match unit {
-        AngleUnit::Deg => (90.0, "degrees"),
-        AngleUnit::Rad => (std::f64::consts::FRAC_PI_2, "radians"),
+        AngleUnit::Deg => "degrees",
+        AngleUnit::Rad => "radians",
     }
 }
 
@@ -69,7 +70,8 @@ pub(super) fn parse_angles(
     headers: &[String],
     unit: AngleUnit,
 ) -> Result<[f64; 4]> {
-    let (theta_limit, unit_name) = unit_limit(unit);
+    let (theta_limit, phi_limit, unit_name) =
+        (unit.theta_limit(), unit.phi_limit(), unit_name(unit));
     let mut values = [0.0f64; 4];
     for (k, &col) in index.iter().enumerate() {
         let field = record.field(col);
@@ -99,6 +101,18 @@ pub(super) fn parse_angles(
                 col as u64 + 1,
                 format!(
                     "{} = {value} {unit_name} lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90° (π/2)",
+                    headers[col]
+                ),
+            ));
+        }
+        if !is_theta && value.abs() > phi_limit {
+            return Err(Error::input(
+                source,
+                line,
+                col as u64 + 1,
+                format!(
+                    "{} = {value} {unit_name} is more than two turns; azimuths must satisfy \
+                     |φ| ≤ 720° (4π), as the loader requires",
                     headers[col]
                 ),
             ));

@@ -1,10 +1,11 @@
 //! The fast path of an eval data line: each angle field parsed where it lies, the field ends and
 //! the line end found by the parse itself, with no splitting of the line first. It takes only
 //! lines the general path reads to the same values; any other line (a comment, a blank, spaces
-//! around a number, a wrong field count, a bad or out-of-range angle) is left to the general
+//! around a number, a wrong field count, a bad or out-of-range θ or φ) is left to the general
 //! path, which reads it as before and names the error.
 
 use crate::data::records::parse_f64_prefix;
+use crate::data::AngleUnit;
 
 /// How a data line maps to the angles, from the header.
 pub(super) struct PlainRow {
@@ -12,6 +13,8 @@ pub(super) struct PlainRow {
     slots: Vec<Option<usize>>,
     /// |θ| must stay below this, in the file's unit.
     theta_limit: f64,
+    /// |φ| must not exceed this, in the file's unit.
+    phi_limit: f64,
 }
 
 /// A line the fast path read.
@@ -25,13 +28,17 @@ pub(super) struct PlainLine {
 }
 
 impl PlainRow {
-    /// For a header of `n_fields` fields with the angles at `angle_index`.
-    pub(super) fn new(n_fields: usize, angle_index: &[usize; 4], theta_limit: f64) -> Self {
+    /// For a header of `n_fields` fields with the angles at `angle_index`, in `unit`.
+    pub(super) fn new(n_fields: usize, angle_index: &[usize; 4], unit: AngleUnit) -> Self {
         let mut slots = vec![None; n_fields];
         for (angle, &field) in angle_index.iter().enumerate() {
             slots[field] = Some(angle);
         }
-        PlainRow { slots, theta_limit }
+        PlainRow {
+            slots,
+            theta_limit: unit.theta_limit(),
+            phi_limit: unit.phi_limit(),
+        }
     }
 
     /// Read the line at `block[start..]` (`block`: whole lines with no quote and no lone `\r`,
@@ -72,7 +79,9 @@ impl PlainRow {
         };
         let in_range = values.iter().all(|v| v.is_finite())
             && values[0].abs() < self.theta_limit
-            && values[2].abs() < self.theta_limit;
+            && values[2].abs() < self.theta_limit
+            && values[1].abs() <= self.phi_limit
+            && values[3].abs() <= self.phi_limit;
         in_range.then_some(PlainLine { values, end, next })
     }
 }
@@ -94,7 +103,12 @@ mod tests {
             if let Some(angle) = *slot {
                 let v = parse_f64(field.trim_ascii())?;
                 let theta = angle % 2 == 0;
-                if !v.is_finite() || (theta && v.abs() >= row.theta_limit) {
+                let out_of_range = if theta {
+                    v.abs() >= row.theta_limit
+                } else {
+                    v.abs() > row.phi_limit
+                };
+                if !v.is_finite() || out_of_range {
                     return None;
                 }
                 values[angle] = v;
@@ -109,8 +123,8 @@ mod tests {
     #[test]
     fn the_fast_path_reads_what_the_general_path_reads_or_leaves_the_line() {
         let layouts = [
-            PlainRow::new(4, &[0, 1, 2, 3], 90.0),
-            PlainRow::new(6, &[5, 1, 3, 0], 90.0),
+            PlainRow::new(4, &[0, 1, 2, 3], AngleUnit::Deg),
+            PlainRow::new(6, &[5, 1, 3, 0], AngleUnit::Deg),
         ];
         let lines: &[&[u8]] = &[
             b"1,2,3,4",
@@ -137,6 +151,9 @@ mod tests {
             b"90,0,0,0",
             b"-89.99999999999999,0,89.9,0",
             b"0,0,90.0,0",
+            b"0,720,0,-720",
+            b"0,720.0000000001,0,0",
+            b"0,0,0,-800",
             b"1,2,3,4\r",
             b"a,b,c,d,e,f",
             b"1,2,x,3,y,4",

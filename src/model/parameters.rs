@@ -430,6 +430,21 @@ impl ParamSpec {
         }
     }
 
+    /// True when `file_value` of a degrees parameter is more likely radians written by mistake
+    /// (`beta_r_deg: 0.14`, i.e. 8°): nonzero and under a tenth of the typical range's end
+    /// nearest zero. Every typical value written in radians falls under it (the largest,
+    /// w_c's 25° = 0.44, against 1.0), while a tenth of the typical smallest is already an
+    /// implausible value in degrees. A typical range that holds zero never warns.
+    pub fn looks_like_radians(&self, file_value: f64) -> bool {
+        let (a, b) = self.typical;
+        let spans_zero = a <= 0.0 && b >= 0.0;
+        let nearest = a.abs().min(b.abs());
+        self.unit == Unit::Degrees
+            && !spans_zero
+            && file_value != 0.0
+            && file_value.abs() < 0.1 * nearest
+    }
+
     /// The default in model units, if the file may omit the parameter.
     pub fn default_value(&self) -> Option<f64> {
         self.default.map(|v| self.unit.to_model(v))
@@ -478,6 +493,21 @@ fn expand<'a>(specs: impl Iterator<Item = &'a ParamSpec>, n_channels: usize) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The whole typical range written in radians is caught; the typical range in degrees and
+    /// zero are not.
+    #[test]
+    fn radians_in_a_degrees_key_look_like_radians() {
+        for s in TABLE.iter().filter(|s| s.unit == Unit::Degrees) {
+            let (a, b) = s.typical;
+            for deg in [a, b, 0.5 * (a + b)] {
+                assert!(s.looks_like_radians(deg.to_radians()), "{} {deg}", s.json);
+                assert!(!s.looks_like_radians(deg), "{} {deg}", s.json);
+            }
+            assert!(!s.looks_like_radians(0.0), "{}", s.json);
+        }
+        assert!(!ParamName::KG.spec().looks_like_radians(0.01));
+    }
 
     #[test]
     fn every_fit_bound_and_typical_range_lies_inside_the_domain() {

@@ -412,24 +412,11 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
 }
 
 /// `--params X.truth.json --output X.csv` would replace the parameter file being read (or the
-/// CSV itself): refuse.
+/// CSV itself): refuse, by the rule `eval` applies too.
 fn refuse_overwriting_input(params: &Path, output: &Path) -> Result<()> {
-    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
-    };
-    for target in [output.to_path_buf(), truth_path(output)] {
-        if same(params, &target) {
-            return Err(Error::Other(format!(
-                "--output {} would replace --params {} (the truth goes to {}): write the new \
-                 dataset under another name",
-                output.display(),
-                params.display(),
-                truth_path(output).display()
-            )));
-        }
-    }
-    Ok(())
+    let inputs = [("--params", params)];
+    crate::atomic::refuse_replacing_inputs("--output", output, &inputs)?;
+    crate::atomic::refuse_replacing_inputs("--output's truth file", &truth_path(output), &inputs)
 }
 
 /// An error about the staged temporary file `tmp`, worded about the file the user asked for.
