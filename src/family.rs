@@ -206,7 +206,7 @@ impl FamilyParams {
                 if tag.is_none() && text.contains("\"alpha_r_deg\"") {
                     return Err(Error::Other(format!(
                         "{}: this is a Marschner parameter file (it has alpha_r_deg) but --model \
-                         is chiang: pass --model marschner, or write CHIANG.md's keys eta, \
+                         is chiang: pass --model marschner, or write docs/chiang.md's keys eta, \
                          sigma_a, beta_m, beta_n, alpha_deg",
                         path.display()
                     )));

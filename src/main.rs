@@ -120,7 +120,7 @@ struct DemoArgs {
 
 #[derive(clap::Args)]
 struct EvalArgs {
-    /// Parameter file (JSON, MODEL.md's names; CHIANG.md's with --model chiang), e.g. a fit's
+    /// Parameter file (JSON, docs/model.md's names; docs/chiang.md's with --model chiang), e.g. a fit's
     /// params.json (not its fit.json).
     #[arg(long)]
     params: PathBuf,

@@ -37,7 +37,7 @@ pub struct FitArgs {
     /// estimated cost is at most a few seconds; fit.json records the choice and why).
     #[arg(long, default_value = "auto")]
     pub intervals: Intervals,
-    /// Number of multi-start points (Latin hypercube over MODEL.md's typical ranges).
+    /// Number of multi-start points (Latin hypercube over the typical ranges of docs/model.md).
     #[arg(long, default_value_t = 16)]
     pub starts: usize,
     /// Seed of the start design and the subsample.
@@ -46,7 +46,7 @@ pub struct FitArgs {
     /// Global stage between multi-start and polish: none, pso or nelder-mead.
     #[arg(long, default_value = "none")]
     pub global: Global,
-    /// Fix a parameter, NAME=VALUE (MODEL.md's or, with --model chiang, CHIANG.md's names;
+    /// Fix a parameter, NAME=VALUE (docs/model.md's or, with --model chiang, docs/chiang.md's names;
     /// degrees for *_deg); repeatable.
     #[arg(long = "fix")]
     pub fix: Vec<String>,

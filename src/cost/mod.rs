@@ -121,7 +121,7 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
         metrics: serde_json::json!({
             "model": "relative error of S per channel against exact roots with every effect, denominator floored at 1e-3 x the median reference S; time per evaluation (one direction pair, all channels, one thread)",
             "jacobian": "per parameter column: ||J_fd - J_ad|| / ||J_ad|| (max and RMS over columns); time per full Jacobian of the synthetic data",
-            "fit": "|estimate - truth| / width of MODEL.md's typical range, over the free shape parameters (max and RMS); wall time of the whole fit",
+            "fit": "|estimate - truth| / width of the parameter's typical range (docs/model.md), over the free shape parameters (max and RMS); wall time of the whole fit",
             "chiang-b0.3, chiang-b0.05": "relative error of the Chiang S per channel against 4096 width nodes, denominator floored at 1e-3 x the median reference S; time per sample (all channels, one thread); evaluations per second per core = 1/time_s; section baseline: the Marschner model's time on the same random directions (its error is not comparable)",
         }),
         rows,
