@@ -174,7 +174,7 @@ fn bad_fix_is_a_clear_error() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("eccentricity") && err.contains("range"),
+        err.contains("eccentricity") && err.contains("domain") && err.contains("(0.70711, 1]"),
         "{err}"
     );
 }
