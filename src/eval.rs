@@ -10,7 +10,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::atomic::write_atomically;
-use crate::data::lines::{csv_error, read_error, LineCounter, TextGuard};
+use crate::data::lines::{csv_error, quote_across_lines_error, read_error, LineCounter, TextGuard};
 use crate::data::records::{needs_csv_parser, Blocks};
 use crate::data::unit::{RadiansEvidence, UnitLine};
 use crate::data::{repeated_column, repeated_column_message, AngleUnit};
@@ -221,7 +221,15 @@ fn eval_csv_rest<R: Read, W: Write + ?Sized>(
         let end: u64 = reader.position().byte();
         let line = line_base + 1 + newlines.borrow_mut().count_before(end.saturating_sub(1));
         match more {
-            Ok(true) => eval.record(line, &record, None)?,
+            Ok(true) => {
+                let expected = eval.header.as_ref().map(|h| h.names.len());
+                if let Some(expected) = expected.filter(|&n| n != record.len()) {
+                    if let Some(e) = quote_across_lines_error(source, &record, line, expected) {
+                        return Err(e);
+                    }
+                }
+                eval.record(line, &record, None)?
+            }
             Ok(false) => {
                 if eval.header.is_none() {
                     eval.record(line, &csv::ByteRecord::new(), None)?;

@@ -42,6 +42,27 @@ fn expect_report(name: &str, content: &[u8]) -> (Dataset, LoadReport) {
     (ds, r)
 }
 
+/// A quote that is never closed takes in every line after it: the error names the line and
+/// column where it opened (after a comment line, with `\n` or `\r\n`, with or without a last
+/// newline), not the end of the file nor "found 2 fields".
+#[test]
+fn an_unclosed_quote_names_where_it_opened() {
+    for (ending, last) in [("\n", "\n"), ("\r\n", "\r\n"), ("\n", "")] {
+        let text = format!(
+            "{}1,2,3,4,5{ending}# note{ending}1,\"2,3,4,5{ending}6,7,8,9,10{ending}1,2,3,4,5{last}",
+            HEADER.replace('\n', ending)
+        );
+        let msg = expect_error("quote.csv", text.as_bytes(), 4, 2);
+        assert!(msg.contains("runs on to line 6"), "{msg}");
+        assert!(msg.contains("close the quote"), "{msg}");
+    }
+    // A quoted field that legitimately spans lines is fine; a later short row gets the plain
+    // message at its own line.
+    let text = format!("{HEADER}1,2,3,4,\"5\n\"\n1,2,3,4\n");
+    let msg = expect_error("spans.csv", text.as_bytes(), 4, 5);
+    assert!(msg.contains("expected 5 fields"), "{msg}");
+}
+
 #[test]
 fn truncated_mid_row_names_the_line_and_first_missing_column() {
     let msg = expect_error(

@@ -239,3 +239,23 @@ fn radians_in_a_degrees_key_warn_naming_the_key() {
     let out = hairfit_ok(&["eval", "--params", s(&params), "--input", s(&input)]);
     assert!(!stderr(&out).contains("warning"), "{}", stderr(&out));
 }
+
+/// An unclosed quote is named where it opened (line 4, the second field: after a comment line),
+/// not as "this row has 2 fields" at the end of the file.
+#[test]
+fn an_unclosed_quote_names_where_it_opened() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = write(dir.path(), "p.json", PARAMS);
+    let text =
+        "theta_i,phi_i,theta_r,phi_r\n10,0,20,30\n# note\n10,\"0,20,30\n11,0,20,30\n12,0,20,30\n";
+    let input = write(dir.path(), "q.csv", text);
+    let out = eval(&params, &input, &[]);
+    assert_fails_with(
+        &out,
+        &[
+            &format!("{}:4:2:", s(&input)),
+            "runs on to line 6",
+            "close the quote",
+        ],
+    );
+}

@@ -10,7 +10,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::csv::{parse_cell, Columns};
-use super::lines::{csv_error, read_error, LineCounter};
+use super::lines::{csv_error, quote_across_lines_error, read_error, LineCounter};
 use super::records::{count_lines, for_each_line, needs_csv_parser, split_at_lines, Blocks};
 use super::rows::{Cell, RowCells, Rows};
 use super::{LoadOptions, Role};
@@ -283,7 +283,8 @@ fn read_rows_csv(
             if record.len() == 1 && record[0].iter().all(u8::is_ascii_whitespace) {
                 continue;
             }
-            return Err(field_count_error(path, line, record.len(), n_fields));
+            return Err(quote_across_lines_error(path, &record, line, n_fields)
+                .unwrap_or_else(|| field_count_error(path, line, record.len(), n_fields)));
         }
         let mut angles: [Cell; 4] = [None; 4];
         for (k, (role, field)) in cols.roles.iter().zip(record.iter()).enumerate() {

@@ -197,6 +197,41 @@ pub(crate) fn read_error(path: &Path, err: std::io::Error) -> Error {
     Error::io(path, err)
 }
 
+/// The error for a record read by the csv crate whose field count is wrong because a quoted
+/// field runs across line breaks (most often a quote that is never closed, which swallows the
+/// rest of the file): it names the line and column where that field starts. `None` when no
+/// field holds a line break (the plain field-count error applies). `end_line` is the line the
+/// record ends on; the line breaks inside its fields say where it starts (csv's own record
+/// position counts the comment lines before it).
+pub(crate) fn quote_across_lines_error(
+    path: &Path,
+    record: &csv::ByteRecord,
+    end_line: u64,
+    expected: usize,
+) -> Option<Error> {
+    let field = record.iter().position(|f| f.contains(&b'\n'))?;
+    let breaks: usize = record
+        .iter()
+        .map(|f| memchr::memchr_iter(b'\n', f).count())
+        .sum();
+    // A quote still open at the end of the input holds the last line's own `\n` too.
+    let at_end = record.iter().next_back().is_some_and(|f| f.ends_with(b"\n"));
+    let start_line = end_line
+        .saturating_sub(breaks as u64 - u64::from(at_end))
+        .max(1);
+    Some(Error::input(
+        path,
+        start_line,
+        field as u64 + 1,
+        format!(
+            "the quoted field that starts here runs on to line {end_line}, so this row has {} \
+             fields where the header has {expected}: a quote that is never closed takes in the \
+             lines after it; close the quote on this line (or write the field without it)",
+            record.len()
+        ),
+    ))
+}
+
 /// A csv read error at `line` (where the reader stopped) as the library's error, with the column
 /// when the csv crate knows it: one conversion for every csv reader (dataset loader and eval).
 pub(crate) fn csv_error(path: &Path, err: csv::Error, line: u64) -> Error {
