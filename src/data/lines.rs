@@ -215,7 +215,10 @@ pub(crate) fn quote_across_lines_error(
         .map(|f| memchr::memchr_iter(b'\n', f).count())
         .sum();
     // A quote still open at the end of the input holds the last line's own `\n` too.
-    let at_end = record.iter().next_back().is_some_and(|f| f.ends_with(b"\n"));
+    let at_end = record
+        .iter()
+        .next_back()
+        .is_some_and(|f| f.ends_with(b"\n"));
     let start_line = end_line
         .saturating_sub(breaks as u64 - u64::from(at_end))
         .max(1);
