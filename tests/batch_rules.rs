@@ -244,6 +244,18 @@ fn a_changed_data_file_runs_again_another_cwd_does_not_and_force_reruns() {
     // --force fits every item again.
     let r = run_in(dir, &["batch", "m.csv", "--out", "o", "--force"]);
     assert!(cli::stderr(&r).contains("1 fitted"), "{}", cli::stderr(&r));
+
+    // A deleted output of a finished item (params.json, the report, curves.csv) brings it back.
+    for name in ["params.json", "index.html", "curves.csv"] {
+        std::fs::remove_file(dir.join("o/fib").join(name)).unwrap();
+        let r = run_in(dir, &["batch", "m.csv", "--out", "o"]);
+        assert!(
+            cli::stderr(&r).contains("1 fitted"),
+            "{name}: {}",
+            cli::stderr(&r)
+        );
+        assert!(dir.join("o/fib").join(name).is_file(), "{name} is back");
+    }
 }
 
 #[test]

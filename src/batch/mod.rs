@@ -191,8 +191,9 @@ pub struct RunOptions {
 }
 
 /// The verdict of `out/name`'s finished result of `item`, if it has one: the record says the
-/// same options and the same, unchanged data file, and fit.json holds a verdict other than
-/// failed or interrupted (those run again).
+/// same options and the same, unchanged data file, fit.json holds a verdict other than failed
+/// or interrupted (those run again), and none of the fit's files is missing (a user who deleted
+/// params.json or the report gets them back).
 fn finished_verdict(out: &Path, item: &Item) -> Option<Verdict> {
     let record = ItemRecord::read(out, &item.name)?;
     let same = record.error.is_none()
@@ -202,8 +203,14 @@ fn finished_verdict(out: &Path, item: &Item) -> Option<Verdict> {
     if !same {
         return None;
     }
-    merge::fit_verdict(&out.join(&item.name))
-        .filter(|v| !matches!(v, Verdict::Failed | Verdict::Interrupted))
+    let dir = out.join(&item.name);
+    let fit = crate::files::FitJson::load(&dir.join("fit.json")).ok()?;
+    let curves = fit.options.curves != crate::files::curves::CurvesMode::None;
+    let complete = ["params.json", "index.html"]
+        .iter()
+        .chain(curves.then_some(&"curves.csv"))
+        .all(|name| dir.join(name).is_file());
+    Some(fit.verdict).filter(|v| complete && !matches!(v, Verdict::Failed | Verdict::Interrupted))
 }
 
 /// Run this shard's items of `manifest` into `out/NAME`, one after another (each fit uses every
