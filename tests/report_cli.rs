@@ -53,3 +53,31 @@ fn a_missing_or_malformed_fit_json_is_a_clear_error() {
     assert!(stderr.contains("fit.json:3:"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// `report` has no --out or --force: given a file, a folder without fit.json or a compare
+/// directory, it says what it takes (and for a compare directory, which fit to report).
+#[test]
+fn what_is_not_a_fit_directory_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(
+        dir.path(),
+        "data.csv",
+        "theta_i,phi_i,theta_r,phi_r,radiance\n",
+    );
+    let stderr = failed(&hairfit(&["report", s(&file)]));
+    assert!(
+        stderr.contains("is a file") && stderr.contains("fit.json"),
+        "{stderr}"
+    );
+    let stderr = failed(&hairfit(&["report", s(dir.path())]));
+    assert!(stderr.contains("not a fit's directory"), "{stderr}");
+    assert!(!stderr.contains("--force"), "{stderr}");
+    let compare = dir.path().join("cmp");
+    std::fs::create_dir_all(compare.join("marschner")).unwrap();
+    write(&compare.join("marschner"), "fit.json", "{}");
+    let stderr = failed(&hairfit(&["report", s(&compare)]));
+    assert!(
+        stderr.contains("compare directory") && stderr.contains("marschner"),
+        "{stderr}"
+    );
+}

@@ -74,6 +74,37 @@ pub struct ReportSummary {
     pub notes: Vec<String>,
 }
 
+/// Refuse what is not a fit directory before touching it, saying what `report` takes (the
+/// output set's own checks would name `--out` and `--force`, which `report` does not have).
+fn check_fit_dir(dir: &Path, is_dir: bool) -> Result<()> {
+    let shown = dir.display();
+    if !is_dir {
+        return Err(Error::Other(format!(
+            "{shown}: is a file; hairfit report takes a fit's directory (the --out of hairfit fit, \
+             holding fit.json), e.g. hairfit report fits/demo"
+        )));
+    }
+    if dir.join("fit.json").is_file() {
+        return Ok(());
+    }
+    let families: Vec<&str> = ["marschner", "chiang"]
+        .into_iter()
+        .filter(|f| dir.join(f).join("fit.json").is_file())
+        .collect();
+    Err(Error::Other(if families.is_empty() {
+        format!(
+            "{shown}: holds no fit.json, so it is not a fit's directory; hairfit report takes \
+             the --out of hairfit fit, e.g. hairfit report fits/demo"
+        )
+    } else {
+        format!(
+            "{shown}: is a hairfit compare directory; report one of its fits, e.g. hairfit \
+             report {}",
+            dir.join(families[0]).display()
+        )
+    }))
+}
+
 /// Write the report of the fit in `dir` with default options (reads its files).
 pub fn write_report(dir: &Path) -> Result<ReportSummary> {
     write_report_with(dir, &ReportOptions::default())
@@ -83,7 +114,8 @@ pub fn write_report(dir: &Path) -> Result<ReportSummary> {
 /// The directory is republished as one set: its other files carried over, the figures redrawn.
 pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSummary> {
     // A missing directory is reported as such before any lock is taken beside it.
-    std::fs::metadata(dir).map_err(|e| crate::Error::io(dir, e))?;
+    let meta = std::fs::metadata(dir).map_err(|e| crate::Error::io(dir, e))?;
+    check_fit_dir(dir, meta.is_dir())?;
     let set = crate::outdir::OutputSet::begin(dir, "hairfit report", false, &[])?;
     let fit = FitJson::load(&dir.join("fit.json"))?;
     let curves_path = dir.join("curves.csv");
