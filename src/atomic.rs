@@ -169,6 +169,21 @@ pub fn same_file(input: &Path, output: &Path) -> bool {
     output.is_some_and(|o| o == input)
 }
 
+/// `flag` (e.g. `--output`) must name a file: an existing directory, or a path ending in `/`,
+/// is refused before any work (the rename at the end would fail with "Not a directory");
+/// `example` is a file name for the hint (`eval.csv`).
+pub fn refuse_directory_output(flag: &str, out: &Path, example: &str) -> Result<()> {
+    let text = out.as_os_str().to_string_lossy();
+    if out.is_dir() || text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
+        let dir = text.trim_end_matches(['/', std::path::MAIN_SEPARATOR]);
+        return Err(Error::Other(format!(
+            "{flag} {text}: that is a directory; {flag} names the file to write, \
+             e.g. {flag} {dir}/{example}"
+        )));
+    }
+    Ok(())
+}
+
 /// Refuse to write `output` (the option `output_flag`) over one of the files the command reads
 /// (`inputs`: option and path): the run would destroy its own input.
 pub fn refuse_replacing_inputs(

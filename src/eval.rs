@@ -85,7 +85,7 @@ pub fn eval_file(
         )));
     }
     if let Some(out) = output {
-        refuse_directory_output(out)?;
+        crate::atomic::refuse_directory_output("--output", out, "eval.csv")?;
     }
     let file = TextGuard::new(file);
     // The unit line is read before the stream, so `eval_stream` sees the settled unit (`None`
@@ -116,20 +116,6 @@ pub fn eval_file(
             Ok(summary)
         }
     }
-}
-
-/// `--output` must name a file: an existing directory, or a path ending in `/`, is refused
-/// before any work (the rename at the end would fail with "Not a directory").
-fn refuse_directory_output(out: &Path) -> Result<()> {
-    let text = out.as_os_str().to_string_lossy();
-    if out.is_dir() || text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
-        let dir = text.trim_end_matches(['/', std::path::MAIN_SEPARATOR]);
-        return Err(Error::Other(format!(
-            "--output {text}: that is a directory; --output names the CSV file to write, \
-             e.g. --output {dir}/eval.csv"
-        )));
-    }
-    Ok(())
 }
 
 /// Evaluate a CSV stream; `source` names the input in error messages.

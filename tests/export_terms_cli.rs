@@ -141,3 +141,21 @@ fn switched_off_terms_are_refitted_and_warned_about_never_exported_silently() {
     assert!(err.contains("exact"), "{err}");
     assert!(!stdout(&out).contains("WARNING"));
 }
+
+/// An --output that is a directory is refused before the renderer model is fitted (it used to
+/// fail with "Is a directory" after the whole fit), naming the option and a file to write.
+#[test]
+fn an_output_directory_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (to, example) in [("pbrt", "hair.pbrt"), ("blender", "hair.py")] {
+        let out = cli::hairfit(&[
+            "export",
+            "no-such-fit",
+            "--to",
+            to,
+            "--output",
+            s(dir.path()),
+        ]);
+        cli::assert_fails_with(&out, &["--output", "that is a directory", example]);
+    }
+}

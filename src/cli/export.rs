@@ -33,6 +33,10 @@ fn parse_renderer(s: &str) -> std::result::Result<Renderer, String> {
 /// Run the export; returns the summary line for stderr, and the file's text when it goes to
 /// stdout.
 pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
+    // Checked before the renderer model is fitted, which takes a while.
+    if let Some(path) = &args.output {
+        crate::atomic::refuse_directory_output("--output", path, args.to.file_name())?;
+    }
     let result = export(&args.dir, args.to)?;
     // Warnings first, each on its own line (main prefixes the first with `hairfit: `).
     let warned: String = result

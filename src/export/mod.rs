@@ -30,12 +30,21 @@ pub enum Renderer {
 }
 
 impl Renderer {
-    /// How the renderer's `f` differs from pbrt-v4's (CHIANG.md).
+    /// How the renderer's `f` differs from pbrt-v4's (docs/chiang.md).
     pub fn formulation(&self) -> Formulation {
         match self {
             Renderer::Pbrt => Formulation::PBRT_V4,
             Renderer::Blender => Formulation::CYCLES,
             Renderer::Materialx => Formulation::MATERIALX,
+        }
+    }
+
+    /// A file name of the renderer's kind, for hints (`hair.pbrt`).
+    pub fn file_name(&self) -> &'static str {
+        match self {
+            Renderer::Pbrt => "hair.pbrt",
+            Renderer::Blender => "hair.py",
+            Renderer::Materialx => "hair.mtlx",
         }
     }
 
