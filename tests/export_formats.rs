@@ -248,3 +248,26 @@ fn unexportable_fits_are_refused_with_the_reason() {
         "{err}"
     );
 }
+
+/// params.json is fit.json's `params` written apart: one that differs (here: copied in from
+/// a Chiang fit) is refused, where it used to export under this fit's name and quality line.
+#[test]
+fn a_params_json_that_is_not_the_fits_own_is_refused() {
+    let root = tempfile::tempdir().unwrap();
+    let dir = marschner_fit_dir(root.path(), "m");
+    let own: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("params.json")).unwrap()).unwrap();
+    let mut fit: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("fit.json")).unwrap()).unwrap();
+    fit["params"] = own;
+    std::fs::write(dir.join("fit.json"), fit.to_string()).unwrap();
+    export(&dir, Renderer::Pbrt).expect("its own params.json exports");
+
+    let chiang = chiang_fit_dir(root.path(), "c", &set_a_rgb());
+    std::fs::copy(chiang.join("params.json"), dir.join("params.json")).unwrap();
+    let err = export(&dir, Renderer::Pbrt).unwrap_err().to_string();
+    assert!(
+        err.contains("params.json") && err.contains("differs from the `params`"),
+        "{err}"
+    );
+}

@@ -104,6 +104,20 @@ impl SourceFit {
             &fit_path,
             "fit.json is written by `hairfit fit` — re-run the fit to regenerate it",
         )?;
+        // params.json is fit.json's `params` written apart: a file edited or copied in from
+        // another fit would export under this fit's name, quality line and channels.
+        if let (Some(recorded), Ok(given)) =
+            (fit.get("params"), serde_json::from_str::<Value>(&text))
+        {
+            if *recorded != given {
+                return Err(Error::Other(format!(
+                    "{}: differs from the `params` of {} (edited, or copied from another fit?); \
+                     export reads a fit's own files: re-run the fit, or put back its params.json",
+                    params_path.display(),
+                    fit_path.display()
+                )));
+            }
+        }
         let model = match tag.as_deref() {
             Some("chiang") => SourceModel::Chiang {
                 params: ChiangParamFile::from_json_str(&text, &params_path)?.to_params(),
