@@ -100,7 +100,7 @@ struct BatchArgs {
     /// Do not fit: write DIR/summary.csv and DIR/index.html from the items' fit.json files.
     #[arg(long)]
     merge: bool,
-    /// Exit 2 when an item's verdict is poor_fit or undetermined (with --merge: any item's);
+    /// Exit 3 when an item's verdict is poor_fit or undetermined (with --merge: any item's);
     /// every item is fitted as `hairfit fit --strict` would.
     #[arg(long)]
     strict: bool,
@@ -384,12 +384,7 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
             failed.join(", ")
         );
     }
-    let not_good: Vec<String> = run
-        .outcomes
-        .iter()
-        .filter(|(_, o)| matches!(o.verdict(), Some(Verdict::PoorFit | Verdict::Undetermined)))
-        .map(|(n, _)| n.clone())
-        .collect();
+    let not_good: Vec<String> = run.not_good_names().into_iter().map(String::from).collect();
     Ok(strict_exit(a.strict, &not_good))
 }
 

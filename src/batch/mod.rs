@@ -174,9 +174,19 @@ impl BatchRun {
 
     /// The names of the items that failed.
     pub fn failed_names(&self) -> Vec<&str> {
+        self.names_where(ItemOutcome::failed)
+    }
+
+    /// The names of the items whose verdict is poor_fit or undetermined (`--strict` refuses
+    /// them).
+    pub fn not_good_names(&self) -> Vec<&str> {
+        self.names_where(|o| matches!(o.verdict(), Some(Verdict::PoorFit | Verdict::Undetermined)))
+    }
+
+    fn names_where(&self, keep: impl Fn(&ItemOutcome) -> bool) -> Vec<&str> {
         self.outcomes
             .iter()
-            .filter(|(_, o)| o.failed())
+            .filter(|(_, o)| keep(o))
             .map(|(n, _)| n.as_str())
             .collect()
     }

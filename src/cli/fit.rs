@@ -83,7 +83,7 @@ pub struct FitArgs {
     /// input data file is never replaced).
     #[arg(long)]
     pub force: bool,
-    /// Exit 2 when the verdict is poor_fit or undetermined (0 without --strict).
+    /// Exit 3 when the verdict is poor_fit or undetermined (0 without --strict).
     #[arg(long)]
     pub strict: bool,
     #[command(flatten)]
