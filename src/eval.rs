@@ -130,7 +130,7 @@ pub fn eval_stream<R: Read, W: Write + ?Sized>(
     output: &mut W,
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
-    let model = |angles: &[Angles], out: &mut [f64]| request.model.eval_batch(angles, out);
+    let model = |angles: &[Angles], out: &mut [f64]| request.model.eval_batch_fast(angles, out);
     eval_stream_with(input, source, output, request, &model)
 }
 

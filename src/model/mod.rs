@@ -22,6 +22,7 @@ pub mod exit_angle;
 pub mod fresnel;
 pub mod instrument;
 pub mod jacobian;
+pub mod lanes;
 pub mod longitudinal;
 pub mod measurement;
 pub mod parameters;
@@ -36,6 +37,7 @@ use longitudinal::{gaussian_inv, lobe_shape};
 
 pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
+pub use lanes::scattering_lanes;
 pub use measurement::Measurement;
 pub use parameters::{ParamSpec, Unit};
 
