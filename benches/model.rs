@@ -4,8 +4,8 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use hairfit::fit::{Forward, ModelForward};
 use hairfit::model::{
-    scattering, scattering_jacobian, Angles, Effects, Lobes, Measurement, ModelConfig, ParamName,
-    Params, RootMode, StaticJacobian,
+    scattering, scattering_batch, scattering_jacobian, scattering_lanes, Angles, Effects, Lobes,
+    Measurement, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
 };
 use hairfit::params::ParameterFile as _;
 
@@ -152,5 +152,64 @@ fn bench_batch(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_model, bench_batch);
+/// `hairfit eval`'s f64 path: the batch four samples per vector against the scalar batch, all
+/// effects, cubic mode, 1 and 3 channels.
+fn bench_lanes(c: &mut Criterion) {
+    let angles = angle_set();
+    let config = ModelConfig::default();
+    let mut group = c.benchmark_group("lanes");
+    group.throughput(Throughput::Elements(BATCH as u64));
+    for channels in [vec![0.4], vec![0.2, 0.4, 0.8]] {
+        let mut p = params();
+        p.sigma_a = channels;
+        let nc = p.sigma_a.len();
+        let mut out = vec![0.0; BATCH * nc];
+        group.bench_function(format!("scalar batch, {nc} ch"), |b| {
+            b.iter(|| {
+                scattering_batch(black_box(&p), &config, &angles, &mut out);
+                out[0]
+            })
+        });
+        group.bench_function(format!("four lanes, {nc} ch"), |b| {
+            b.iter(|| {
+                scattering_lanes(black_box(&p), &config, &angles, &mut out);
+                out[0]
+            })
+        });
+    }
+    let mut p = params();
+    p.sigma_a = vec![0.4];
+    let mut out = vec![0.0; BATCH];
+    let mut sets = effect_sets();
+    let all = Effects::default();
+    sets.push((
+        "all+glints",
+        Effects {
+            eccentricity: false,
+            ..all
+        },
+    ));
+    sets.push((
+        "all+ecc",
+        Effects {
+            glints: false,
+            ..all
+        },
+    ));
+    for (name, effects) in sets {
+        let config = ModelConfig {
+            mode: RootMode::Cubic,
+            effects,
+        };
+        group.bench_function(format!("four lanes, {name}"), |b| {
+            b.iter(|| {
+                scattering_lanes(black_box(&p), &config, &angles, &mut out);
+                out[0]
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_model, bench_batch, bench_lanes);
 criterion_main!(benches);
