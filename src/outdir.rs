@@ -130,6 +130,17 @@ pub fn check_out_path(dir: &Path, why: &str) -> Result<PathBuf> {
     Ok(abs)
 }
 
+/// `--out DIR` cannot be written: `what` (the directory, or the lock file or staging
+/// directory beside it) could not be created. Names the option and what to do, with the OS's
+/// reason.
+fn unwritable(dir: &Path, what: String, e: &std::io::Error) -> Error {
+    Error::Other(format!(
+        "--out {}: cannot write there: {what} could not be created ({e}); choose an --out in \
+         a directory you can write to, e.g. fits/NAME",
+        dir.display(),
+    ))
+}
+
 /// Whether `name` is one of the hidden files hairfit keeps beside its outputs (a lock, a
 /// staging directory, the marker).
 fn is_hairfit_bookkeeping(name: &str) -> bool {
@@ -170,14 +181,15 @@ pub fn claim_shared_dir(dir: &Path, command: &str, legacy: &[&str]) -> Result<()
             }
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            std::fs::create_dir_all(&abs).map_err(|e| Error::io(dir, e))?;
+            std::fs::create_dir_all(&abs)
+                .map_err(|e| unwritable(dir, format!("the directory {}", abs.display()), &e))?;
         }
         Err(e) => return Err(Error::io(dir, e)),
     }
     let marker = abs.join(MARKER);
     if !marker.exists() {
         std::fs::write(&marker, format!("written by {command}\n"))
-            .map_err(|e| Error::io(&marker, e))?;
+            .map_err(|e| unwritable(dir, format!("the file {}", marker.display()), &e))?;
     }
     Ok(())
 }
@@ -200,7 +212,8 @@ impl OutputSet {
                 )));
             }
         }
-        std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        std::fs::create_dir_all(parent)
+            .map_err(|e| unwritable(dir, format!("the directory {}", parent.display()), &e))?;
         let lock = lock(parent, &name.to_string_lossy(), dir)?;
         if let Some(found) = holds_foreign_files(&abs)? {
             if !force {
@@ -213,7 +226,10 @@ impl OutputSet {
         let staging = tempfile::Builder::new()
             .prefix(&format!(".{}.hairfit-stage-", name.to_string_lossy()))
             .tempdir_in(parent)
-            .map_err(|e| Error::io(parent, e))?
+            .map_err(|e| {
+                let what = format!("a staging directory in {}", parent.display());
+                unwritable(dir, what, &e)
+            })?
             .keep();
         IN_FLIGHT
             .lock()
@@ -379,7 +395,7 @@ fn lock(parent: &Path, name: &str, dir: &Path) -> Result<File> {
         .read(true)
         .write(true)
         .open(&path)
-        .map_err(|e| Error::io(&path, e))?;
+        .map_err(|e| unwritable(dir, format!("the lock file {}", path.display()), &e))?;
     match file.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => {
