@@ -47,6 +47,8 @@ fn forget_in_flight(path: &Path) {
 pub struct OutputSet {
     dir: PathBuf,
     staging: PathBuf,
+    /// What the marker says wrote the set (e.g. `hairfit fit`).
+    command: String,
     published: bool,
     /// Held for the life of the run: the OS releases it when the process ends, however it ends.
     _lock: File,
@@ -75,9 +77,10 @@ fn holds_foreign_files(dir: &Path) -> Result<Option<String>> {
     )))
 }
 
-/// A result written before the marker existed: `fit.json` or `cost.json` by hairfit.
+/// A result written before the marker existed: `fit.json`, `cost.json` or `compare.json` by
+/// hairfit (a compare directory had markers only in its two fit directories).
 fn is_legacy_result(dir: &Path) -> bool {
-    ["fit.json", "cost.json"].iter().any(|f| {
+    ["fit.json", "cost.json", "compare.json"].iter().any(|f| {
         std::fs::read_to_string(dir.join(f)).is_ok_and(|t| t.contains("\"hairfit_version\""))
     })
 }
@@ -241,6 +244,7 @@ impl OutputSet {
         Ok(OutputSet {
             dir: dir.to_path_buf(),
             staging,
+            command: command.to_string(),
             published: false,
             _lock: lock,
         })
@@ -254,6 +258,49 @@ impl OutputSet {
     /// The directory the set is published to.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+
+    /// Create the sub-directory `name` of the set (e.g. `hairfit compare`'s `marschner/`)
+    /// with a marker of its own, so it reads as an output set by itself (`hairfit report`
+    /// redraws it). It is published with the set: it has no lock or staging directory of its
+    /// own, and so leaves none inside the set.
+    pub fn sub_dir(&self, name: &str) -> Result<PathBuf> {
+        let sub = self.staging.join(name);
+        std::fs::create_dir(&sub).map_err(|e| Error::io(&sub, e))?;
+        let marker = sub.join(MARKER);
+        std::fs::write(&marker, format!("written by {}\n", self.command))
+            .map_err(|e| Error::io(&marker, e))?;
+        Ok(sub)
+    }
+
+    /// Write a fit's files (fit.json, params.json, curves.csv, timing.json) and its plotted
+    /// report into `dir`, the staging directory or a [`OutputSet::sub_dir`] of it. Why the
+    /// report could not be drawn names the published place, not the staging one.
+    pub fn write_fit<P>(&self, dir: &Path, mut outcome: FitOutcome<P>) -> Result<PublishedFit<P>> {
+        let writing = std::time::Instant::now();
+        // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
+        let curves = crate::fit::written_curves(&outcome);
+        crate::fit::write_outputs_with(dir, &outcome, curves.as_deref())?;
+        let drawn = crate::report::write_report_of(
+            dir,
+            &outcome.json,
+            curves.as_deref(),
+            &crate::report::ReportOptions::default(),
+        );
+        drop(curves);
+        outcome.timing.outputs_s = Some(writing.elapsed().as_secs_f64());
+        crate::files::write_timing(dir, &outcome.timing)?;
+        // Messages name the directory the user asked for, not the staging one.
+        let report_error = drawn.err().map(|e| {
+            e.to_string().replace(
+                &self.staging.display().to_string(),
+                &self.dir.display().to_string(),
+            )
+        });
+        Ok(PublishedFit {
+            outcome,
+            report_error,
+        })
     }
 
     /// Carry `names` of the current set into the new one unchanged (hard links where possible,
@@ -358,32 +405,10 @@ pub fn publish_fit<P>(
     produce: impl FnOnce(&Path) -> Result<FitOutcome<P>>,
 ) -> Result<PublishedFit<P>> {
     let set = OutputSet::begin(out, command, force, inputs)?;
-    let mut outcome = produce(set.staging())?;
-    let writing = std::time::Instant::now();
-    // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
-    let curves = crate::fit::written_curves(&outcome);
-    crate::fit::write_outputs_with(set.staging(), &outcome, curves.as_deref())?;
-    let drawn = crate::report::write_report_of(
-        set.staging(),
-        &outcome.json,
-        curves.as_deref(),
-        &crate::report::ReportOptions::default(),
-    );
-    drop(curves);
-    outcome.timing.outputs_s = Some(writing.elapsed().as_secs_f64());
-    crate::files::write_timing(set.staging(), &outcome.timing)?;
-    // Messages name the directory the user asked for, not the staging one.
-    let report_error = drawn.err().map(|e| {
-        e.to_string().replace(
-            &set.staging().display().to_string(),
-            &out.display().to_string(),
-        )
-    });
+    let outcome = produce(set.staging())?;
+    let published = set.write_fit(set.staging(), outcome)?;
     set.publish()?;
-    Ok(PublishedFit {
-        outcome,
-        report_error,
-    })
+    Ok(published)
 }
 
 /// Take `parent/.NAME.hairfit-lock` without waiting; when another run holds it, say which.

@@ -338,51 +338,55 @@ pub struct CompareOutcome {
 }
 
 /// `hairfit compare DATA --out DIR`: load once, fit both families with `opts` (its `family`
-/// is ignored), write DIR/marschner and DIR/chiang (each a normal fit directory with its
-/// report), then compare.json, compare.svg/png and index.html.
+/// is ignored), and publish DIR as one output set (see [`crate::outdir`]): DIR/marschner and
+/// DIR/chiang (each a normal fit directory with its report), compare.json, compare.svg/png
+/// and index.html. DIR is locked and staged as `hairfit fit` does its --out (the lock file
+/// sits beside DIR), so a finished run leaves no lock or staging directory inside it; `force`
+/// replaces a directory that holds files other than a hairfit result.
 pub fn compare_command(
     data_path: &Path,
     load_options: &crate::data::LoadOptions,
     opts: &FitOptions,
     out: &Path,
+    force: bool,
 ) -> Result<CompareOutcome> {
+    let set = crate::outdir::OutputSet::begin(out, "hairfit compare", force, &[data_path])?;
     let (ds, report) = crate::data::load(data_path, load_options)?;
     let data = crate::fit::fit_data(&ds);
     let file = data_path.display().to_string();
     let mut outcomes = Vec::new();
     let mut report_lines = Vec::new();
+    let mut staged = Vec::new();
     for family in ModelFamily::ALL {
         let opts = FitOptions {
             family,
             ..opts.clone()
         };
-        let dir = out.join(family.as_str());
-        // Each family's directory is a normal fit directory, locked and published as one set.
-        let published =
-            crate::outdir::publish_fit(&dir, "hairfit compare", false, &[data_path], |_| {
-                let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), &opts)?;
-                outcome.json.options.load = Some(format!("{load_options:?}"));
-                Ok(outcome)
-            })?;
-        report_lines.push(published.report_line(&dir));
-        outcomes.push(published.outcome);
+        let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), &opts)?;
+        outcome.json.options.load = Some(format!("{load_options:?}"));
+        let dir = set.sub_dir(family.as_str())?;
+        let written = set.write_fit(&dir, outcome)?;
+        report_lines.push(written.report_line(&out.join(family.as_str())));
+        outcomes.push(written.outcome);
+        staged.push(dir);
     }
-    let (m_dir, c_dir) = (out.join("marschner"), out.join("chiang"));
+    let staging = set.staging();
     let comparison = compare(
         &file,
         &data,
-        [(&outcomes[0], &m_dir), (&outcomes[1], &c_dir)],
+        [(&outcomes[0], &staged[0]), (&outcomes[1], &staged[1])],
     )?;
-    comparison.save(&out.join("compare.json"))?;
+    comparison.save(&staging.join("compare.json"))?;
     let fig = figure::overlay(&outcomes[0].curves.to_rows(), &outcomes[1].curves.to_rows());
-    let info = crate::plot::render(out, &fig)?;
+    let info = crate::plot::render(staging, &fig)?;
     html::write_index(
-        out,
+        staging,
         &comparison,
         &info,
         &outcomes[0].json,
         &outcomes[1].json,
     )?;
+    set.publish()?;
     Ok(CompareOutcome {
         comparison,
         report_lines,
