@@ -199,3 +199,54 @@ fn compare_out_that_is_a_file_is_refused_like_fit_does() {
     );
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
 }
+
+/// `compare --fix k_g=2` failed only after the Marschner fit had run and been written (the
+/// Chiang model has no k_g). Every --fix is now checked for both families before anything
+/// is fitted: a parameter of one family names the family that lacks it and lists what both
+/// have; nothing is written.
+#[test]
+fn compare_fix_is_checked_for_both_families_before_any_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = small_data(dir.path());
+    let out = dir.path().join("cmp");
+    let both = "sigma_a (every channel), sigma_a[c] (one channel), eta";
+    for (fix, needles) in [
+        (
+            "k_g=2",
+            &[
+                "`k_g` is a Marschner parameter the Chiang model does not have",
+                both,
+            ][..],
+        ),
+        (
+            "alpha_deg=-2",
+            &[
+                "`alpha_deg` is a Chiang parameter the Marschner model does not have",
+                "--model chiang --fix alpha_deg=-2",
+            ][..],
+        ),
+        (
+            "bogus=1",
+            &["neither model family has a parameter `bogus`", both][..],
+        ),
+        // Known only once the data load (3 channels), still before either fit.
+        (
+            "sigma_a[5]=0.3",
+            &[
+                "`sigma_a[5]` names a channel the data do not have",
+                "3 channels",
+            ][..],
+        ),
+    ] {
+        let run = cli::hairfit(&quick_compare(&data, &out, &["--fix", fix]));
+        cli::assert_fails_with(&run, needles);
+        assert!(!out.exists(), "--fix {fix}: nothing may be written");
+    }
+    // What both families have is fixed in both fits.
+    hairfit_ok(&quick_compare(&data, &out, &["--fix", "eta=1.6"]));
+    let c = Comparison::load(&out.join("compare.json")).unwrap();
+    for m in &c.models {
+        let eta = serde_json::to_value(&m.params).unwrap()["eta"].as_f64();
+        assert_eq!(eta, Some(1.6), "{}", m.family);
+    }
+}

@@ -18,7 +18,13 @@ use crate::family::ModelFamily;
 /// model and `--mode`/`--lobes`/`--no-glints`/`--no-eccentricity` the Marschner fit's.
 #[derive(Debug, Clone, Args)]
 #[command(
-    after_help = "--out DIR is published as one set, as `hairfit fit` publishes its --out: DIR is locked (the lock file \
+    after_help = "--fix applies to both fits, so it takes only parameters both families have: sigma_a \
+(every channel), sigma_a[c] (one channel) and eta. A parameter of one family (k_g, alpha_r_deg, beta_m, \
+alpha_deg, ...) is refused before anything is fitted, naming the family that lacks it; to fix it, fit that \
+family alone with `hairfit fit DATA --model FAMILY --fix NAME=VALUE`.
+
+\
+--out DIR is published as one set, as `hairfit fit` publishes its --out: DIR is locked (the lock file \
 .DIR.hairfit-lock sits beside it), written into a staging directory beside it and swapped in whole, so a \
 finished run leaves no lock or staging directory inside DIR. --out must be a directory (new, empty, or an \
 earlier hairfit result; --force replaces one holding other files)."
@@ -46,6 +52,8 @@ pub fn compare_command(
             "compare fits both model families: drop --model".into(),
         ));
     }
+    // Both families' --fix names, before the data load and long before either fit.
+    crate::compare::check_fixes(&args.fit.fix, None)?;
     // Each family's own options are checked as that family's fit would check them.
     let mut chiang_args = args.fit.clone();
     chiang_args.model.family = ModelFamily::Chiang;
