@@ -46,6 +46,25 @@ pub fn readable(x: f64) -> String {
     }
 }
 
+/// A size in bytes for a message, in the largest binary unit it reaches (bytes, KiB, MiB, GiB,
+/// TiB) with up to one decimal: `512 bytes`, `6.2 KiB`, `64 MiB`, `1.5 GiB`. Every message that
+/// states a size uses this, so small sizes stay readable (never "0.0 GB").
+pub fn readable_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 4] = ["KiB", "MiB", "GiB", "TiB"];
+    if bytes < 1024 {
+        return format!("{bytes} byte{}", if bytes == 1 { "" } else { "s" });
+    }
+    let mut value = bytes as f64 / 1024.0;
+    let mut unit = 0;
+    while value >= 1023.95 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    let text = format!("{value:.1}");
+    let text = text.strip_suffix(".0").unwrap_or(&text);
+    format!("{text} {}", UNITS[unit])
+}
+
 impl Error {
     /// An input error at `file:line:column`.
     pub fn input(
@@ -68,5 +87,24 @@ impl Error {
             path: path.into(),
             source,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::readable_bytes;
+
+    #[test]
+    fn sizes_read_in_their_own_unit() {
+        assert_eq!(readable_bytes(0), "0 bytes");
+        assert_eq!(readable_bytes(1), "1 byte");
+        assert_eq!(readable_bytes(1023), "1023 bytes");
+        assert_eq!(readable_bytes(1024), "1 KiB");
+        assert_eq!(readable_bytes(6336), "6.2 KiB");
+        assert_eq!(readable_bytes(64 << 20), "64 MiB");
+        assert_eq!(readable_bytes((1 << 20) - 1), "1 MiB");
+        assert_eq!(readable_bytes(3 << 29), "1.5 GiB");
+        assert_eq!(readable_bytes(5 << 40), "5 TiB");
+        assert_eq!(readable_bytes(u64::MAX), "16777216 TiB");
     }
 }

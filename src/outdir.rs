@@ -47,6 +47,8 @@ fn forget_in_flight(path: &Path) {
 pub struct OutputSet {
     dir: PathBuf,
     staging: PathBuf,
+    /// What the marker says wrote the set (e.g. `hairfit fit`).
+    command: String,
     published: bool,
     /// Held for the life of the run: the OS releases it when the process ends, however it ends.
     _lock: File,
@@ -75,9 +77,10 @@ fn holds_foreign_files(dir: &Path) -> Result<Option<String>> {
     )))
 }
 
-/// A result written before the marker existed: `fit.json` or `cost.json` by hairfit.
+/// A result written before the marker existed: `fit.json`, `cost.json` or `compare.json` by
+/// hairfit (a compare directory had markers only in its two fit directories).
 fn is_legacy_result(dir: &Path) -> bool {
-    ["fit.json", "cost.json"].iter().any(|f| {
+    ["fit.json", "cost.json", "compare.json"].iter().any(|f| {
         std::fs::read_to_string(dir.join(f)).is_ok_and(|t| t.contains("\"hairfit_version\""))
     })
 }
@@ -130,6 +133,17 @@ pub fn check_out_path(dir: &Path, why: &str) -> Result<PathBuf> {
     Ok(abs)
 }
 
+/// `--out DIR` cannot be written: `what` (the directory, or the lock file or staging
+/// directory beside it) could not be created. Names the option and what to do, with the OS's
+/// reason.
+fn unwritable(dir: &Path, what: String, e: &std::io::Error) -> Error {
+    Error::Other(format!(
+        "--out {}: cannot write there: {what} could not be created ({e}); choose an --out in \
+         a directory you can write to, e.g. fits/NAME",
+        dir.display(),
+    ))
+}
+
 /// Whether `name` is one of the hidden files hairfit keeps beside its outputs (a lock, a
 /// staging directory, the marker).
 fn is_hairfit_bookkeeping(name: &str) -> bool {
@@ -170,14 +184,15 @@ pub fn claim_shared_dir(dir: &Path, command: &str, legacy: &[&str]) -> Result<()
             }
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            std::fs::create_dir_all(&abs).map_err(|e| Error::io(dir, e))?;
+            std::fs::create_dir_all(&abs)
+                .map_err(|e| unwritable(dir, format!("the directory {}", abs.display()), &e))?;
         }
         Err(e) => return Err(Error::io(dir, e)),
     }
     let marker = abs.join(MARKER);
     if !marker.exists() {
         std::fs::write(&marker, format!("written by {command}\n"))
-            .map_err(|e| Error::io(&marker, e))?;
+            .map_err(|e| unwritable(dir, format!("the file {}", marker.display()), &e))?;
     }
     Ok(())
 }
@@ -200,7 +215,8 @@ impl OutputSet {
                 )));
             }
         }
-        std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+        std::fs::create_dir_all(parent)
+            .map_err(|e| unwritable(dir, format!("the directory {}", parent.display()), &e))?;
         let lock = lock(parent, &name.to_string_lossy(), dir)?;
         if let Some(found) = holds_foreign_files(&abs)? {
             if !force {
@@ -213,7 +229,10 @@ impl OutputSet {
         let staging = tempfile::Builder::new()
             .prefix(&format!(".{}.hairfit-stage-", name.to_string_lossy()))
             .tempdir_in(parent)
-            .map_err(|e| Error::io(parent, e))?
+            .map_err(|e| {
+                let what = format!("a staging directory in {}", parent.display());
+                unwritable(dir, what, &e)
+            })?
             .keep();
         IN_FLIGHT
             .lock()
@@ -225,6 +244,7 @@ impl OutputSet {
         Ok(OutputSet {
             dir: dir.to_path_buf(),
             staging,
+            command: command.to_string(),
             published: false,
             _lock: lock,
         })
@@ -238,6 +258,49 @@ impl OutputSet {
     /// The directory the set is published to.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+
+    /// Create the sub-directory `name` of the set (e.g. `hairfit compare`'s `marschner/`)
+    /// with a marker of its own, so it reads as an output set by itself (`hairfit report`
+    /// redraws it). It is published with the set: it has no lock or staging directory of its
+    /// own, and so leaves none inside the set.
+    pub fn sub_dir(&self, name: &str) -> Result<PathBuf> {
+        let sub = self.staging.join(name);
+        std::fs::create_dir(&sub).map_err(|e| Error::io(&sub, e))?;
+        let marker = sub.join(MARKER);
+        std::fs::write(&marker, format!("written by {}\n", self.command))
+            .map_err(|e| Error::io(&marker, e))?;
+        Ok(sub)
+    }
+
+    /// Write a fit's files (fit.json, params.json, curves.csv, timing.json) and its plotted
+    /// report into `dir`, the staging directory or a [`OutputSet::sub_dir`] of it. Why the
+    /// report could not be drawn names the published place, not the staging one.
+    pub fn write_fit<P>(&self, dir: &Path, mut outcome: FitOutcome<P>) -> Result<PublishedFit<P>> {
+        let writing = std::time::Instant::now();
+        // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
+        let curves = crate::fit::written_curves(&outcome);
+        crate::fit::write_outputs_with(dir, &outcome, curves.as_deref())?;
+        let drawn = crate::report::write_report_of(
+            dir,
+            &outcome.json,
+            curves.as_deref(),
+            &crate::report::ReportOptions::default(),
+        );
+        drop(curves);
+        outcome.timing.outputs_s = Some(writing.elapsed().as_secs_f64());
+        crate::files::write_timing(dir, &outcome.timing)?;
+        // Messages name the directory the user asked for, not the staging one.
+        let report_error = drawn.err().map(|e| {
+            e.to_string().replace(
+                &self.staging.display().to_string(),
+                &self.dir.display().to_string(),
+            )
+        });
+        Ok(PublishedFit {
+            outcome,
+            report_error,
+        })
     }
 
     /// Carry `names` of the current set into the new one unchanged (hard links where possible,
@@ -342,32 +405,10 @@ pub fn publish_fit<P>(
     produce: impl FnOnce(&Path) -> Result<FitOutcome<P>>,
 ) -> Result<PublishedFit<P>> {
     let set = OutputSet::begin(out, command, force, inputs)?;
-    let mut outcome = produce(set.staging())?;
-    let writing = std::time::Instant::now();
-    // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
-    let curves = crate::fit::written_curves(&outcome);
-    crate::fit::write_outputs_with(set.staging(), &outcome, curves.as_deref())?;
-    let drawn = crate::report::write_report_of(
-        set.staging(),
-        &outcome.json,
-        curves.as_deref(),
-        &crate::report::ReportOptions::default(),
-    );
-    drop(curves);
-    outcome.timing.outputs_s = Some(writing.elapsed().as_secs_f64());
-    crate::files::write_timing(set.staging(), &outcome.timing)?;
-    // Messages name the directory the user asked for, not the staging one.
-    let report_error = drawn.err().map(|e| {
-        e.to_string().replace(
-            &set.staging().display().to_string(),
-            &out.display().to_string(),
-        )
-    });
+    let outcome = produce(set.staging())?;
+    let published = set.write_fit(set.staging(), outcome)?;
     set.publish()?;
-    Ok(PublishedFit {
-        outcome,
-        report_error,
-    })
+    Ok(published)
 }
 
 /// Take `parent/.NAME.hairfit-lock` without waiting; when another run holds it, say which.
@@ -379,7 +420,7 @@ fn lock(parent: &Path, name: &str, dir: &Path) -> Result<File> {
         .read(true)
         .write(true)
         .open(&path)
-        .map_err(|e| Error::io(&path, e))?;
+        .map_err(|e| unwritable(dir, format!("the lock file {}", path.display()), &e))?;
     match file.try_lock() {
         Ok(()) => {}
         Err(std::fs::TryLockError::WouldBlock) => {

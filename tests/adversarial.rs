@@ -302,7 +302,8 @@ fn a_rig_too_big_for_memory_is_refused_before_allocating() {
         &out,
         &[
             "azimuthal:steps=100000000",
-            "GB",
+            // 3·10⁸ samples × 128 bytes, in its own unit.
+            "need about 35.8 GiB",
             "fewer incidences or steps",
         ],
     );

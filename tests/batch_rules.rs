@@ -334,3 +334,40 @@ fn a_held_lock_without_a_holder_says_so_plainly() {
     assert!(!err.contains("()"), "{err}");
     drop(lock);
 }
+
+/// A `fix` of `sigma_a[5]` on 3-channel data was found only when that item ran, after the
+/// items before it had been fitted. The channels of a CSV's header (or a scan's `columns`)
+/// are known without loading the data, so such a fix is now an error at its manifest line
+/// and column before any item of the shard runs. A JSON dataset's channels need the whole
+/// file: its item still finds out when it runs.
+#[test]
+fn a_fix_naming_a_channel_the_data_lack_is_found_before_any_item_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    quick_manifest(dir);
+    std::fs::copy(shipped("longitudinal_rgb.csv"), dir.join("rgb.csv")).unwrap();
+    write(
+        dir,
+        "c.csv",
+        "name,data,starts,fix\nfib,sphere.csv,2,\nrgb,rgb.csv,2,eta=1.5;sigma_a[5]=0.3\n",
+    );
+    let r = run_in(dir, &["batch", "c.csv", "--out", "o"]);
+    cli::assert_fails_with(
+        &r,
+        &[
+            "c.csv:3:4:",
+            "`sigma_a[5]` names a channel the data do not have",
+            "3 channels",
+            "item `rgb`: its data rgb.csv has the channels r, g, b",
+        ],
+    );
+    assert!(!dir.join("o").exists(), "nothing ran");
+    // Within the data's channels the same manifest passes the check (and runs).
+    write(
+        dir,
+        "c.csv",
+        "name,data,starts,intervals,fix,no-progress\nrgb,rgb.csv,2,linear,sigma_a[2]=0.8,true\n",
+    );
+    let r = run_in(dir, &["batch", "c.csv", "--out", "o"]);
+    assert_eq!(code(&r), Some(0), "{}", cli::stderr(&r));
+}

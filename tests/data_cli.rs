@@ -57,3 +57,81 @@ fn load_errors_go_to_stderr_with_file_line_column() {
         "{err}"
     );
 }
+
+/// A parameter file (or a fit.json, or a synth truth file) given as DATA said "missing field
+/// `samples`": `load`, `fit` and `compare` now say what the file is and where it goes.
+#[test]
+fn a_parameter_file_given_as_data_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = cli::write(
+        dir.path(),
+        "params.json",
+        r#"{"sigma_a": [0.3, 0.5, 0.9], "alpha_r_deg": -7, "beta_r_deg": 7.5, "k_g": 2, "w_c_deg": 15}"#,
+    );
+    let chiang = cli::write(
+        dir.path(),
+        "chiang.json",
+        r#"{"model": "chiang", "sigma_a": 0.3, "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2}"#,
+    );
+    let out = dir.path().join("out");
+    let p = |path: &Path| path.to_str().unwrap().to_string();
+    for (file, model) in [(&params, ""), (&chiang, " --model chiang")] {
+        let f = p(file);
+        for args in [
+            vec!["load", f.as_str()],
+            vec!["fit", f.as_str(), "--out", out.to_str().unwrap()],
+            vec!["compare", f.as_str(), "--out", out.to_str().unwrap()],
+        ] {
+            let run = hairfit(&args);
+            cli::assert_fails_with(
+                &run,
+                &[
+                    &format!("{f}: this looks like a parameter file"),
+                    "not a dataset",
+                    &format!("hairfit eval{model} --params {f}"),
+                    &format!("hairfit synth{model} --params {f}"),
+                ],
+            );
+            assert!(!cli::stderr(&run).contains("missing field"), "{args:?}");
+            assert!(!out.exists(), "{args:?}");
+        }
+    }
+    // synth's truth sidecar points at its samples; a fit.json at the data it was fitted to.
+    let data = dir.path().join("d.csv");
+    cli::hairfit_ok(&[
+        "synth",
+        "--params",
+        &p(&params),
+        "--rig",
+        "azimuthal:incidences=30:steps=24",
+        "--output",
+        &p(&data),
+    ]);
+    let truth = dir.path().join("d.truth.json");
+    cli::assert_fails_with(
+        &hairfit(&["load", &p(&truth)]),
+        &[
+            "this is a synth truth file",
+            &format!("its samples are in {}", p(&data)),
+        ],
+    );
+    cli::hairfit_ok(&[
+        "fit",
+        &p(&data),
+        "--starts",
+        "2",
+        "--intervals",
+        "linear",
+        "--no-progress",
+        "--out",
+        &p(&out),
+    ]);
+    cli::assert_fails_with(
+        &hairfit(&["load", &p(&out.join("fit.json"))]),
+        &[
+            "this is a fit result (fit.json), not a dataset",
+            &format!("fitted to are {}", p(&data)),
+            &format!("hairfit report {}", p(&out)),
+        ],
+    );
+}

@@ -159,3 +159,69 @@ fn an_output_directory_is_refused_before_any_work() {
         cli::assert_fails_with(&out, &["--output", "that is a directory", example]);
     }
 }
+
+/// `export --to pbrt --output x.mtlx` wrote a pbrt block into a file MaterialX would then fail
+/// to load. A name with another renderer's extension is refused before any work, naming both
+/// formats and the fix; the renderer's own extension, another one or none are the user's.
+#[test]
+fn an_output_named_for_another_renderer_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    for (to, name, needles) in [
+        (
+            "pbrt",
+            "x.mtlx",
+            &[
+                ".mtlx is the extension of a MaterialX document (--to materialx)",
+                "--to pbrt writes a pbrt-v4",
+                "name the file",
+            ][..],
+        ),
+        (
+            "blender",
+            "x.PBRT",
+            &[
+                ".PBRT is the extension of a pbrt-v4",
+                "--to blender writes a Blender Python script",
+            ][..],
+        ),
+        (
+            "materialx",
+            "x.py",
+            &[
+                ".py is the extension of a Blender Python script (--to blender)",
+                "or pass --to blender",
+            ][..],
+        ),
+    ] {
+        let file = dir.path().join(name);
+        let out = cli::hairfit(&["export", "no-such-fit", "--to", to, "--output", s(&file)]);
+        cli::assert_fails_with(&out, needles);
+        let renamed = file.with_extension(match to {
+            "pbrt" => "pbrt",
+            "blender" => "py",
+            _ => "mtlx",
+        });
+        assert!(
+            stderr(&out).contains(&format!("name the file {}", s(&renamed))),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!file.exists());
+    }
+    // Accepted names get as far as reading the fit (which does not exist here).
+    for (to, name) in [
+        ("pbrt", "x.pbrt"),
+        ("materialx", "x.MTLX"),
+        ("pbrt", "x.txt"),
+        ("blender", "x"),
+    ] {
+        let file = dir.path().join(name);
+        let out = cli::hairfit(&["export", "no-such-fit", "--to", to, "--output", s(&file)]);
+        let err = stderr(&out);
+        assert!(
+            !out.status.success() && err.contains("no-such-fit"),
+            "{to} {name}: {err}"
+        );
+        assert!(!err.contains("extension"), "{to} {name}: {err}");
+    }
+}

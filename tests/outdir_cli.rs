@@ -376,3 +376,30 @@ fn batch_items_are_published_as_sets() {
     let leftovers: Vec<PathBuf> = staging_dirs(&out).into_iter().map(PathBuf::from).collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
+
+/// `demo --out /proc/nope` named the lock file beside it ("/proc/.nope.hairfit-lock: No such
+/// file or directory"), which the user never asked for. An --out that cannot be written names
+/// --out, what could not be created and what to do; nothing is left behind.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_unwritable_out_names_out_and_what_to_do() {
+    let data = shipped("sphere_1ch.csv");
+    for args in [
+        vec!["demo", "--out", "/proc/nope", "--no-progress"],
+        fit_args(&data, "/proc/nope", &[]),
+        fit_args(&data, "/proc/hairfit-nope/deeper", &[]),
+    ] {
+        let f = run_hairfit(&args, &[], Duration::from_secs(60));
+        assert_eq!(f.status.code(), Some(1), "{args:?}: {}", f.stderr);
+        let out = args[args.iter().position(|a| *a == "--out").unwrap() + 1];
+        assert!(
+            f.stderr
+                .starts_with(&format!("hairfit: error: --out {out}: cannot write there"))
+                && f.stderr.contains("could not be created")
+                && f.stderr
+                    .contains("choose an --out in a directory you can write to"),
+            "{args:?}: {}",
+            f.stderr
+        );
+    }
+}

@@ -575,3 +575,29 @@ fn synth_estimates_memory_before_allocating() {
         "clap refuses a size it cannot read"
     );
 }
+
+/// `--max-memory 1K` said "need about 0.0 GB, more than the 0.0 GB": sizes are now stated in
+/// their own unit (bytes, KiB, MiB, GiB), so a small limit reads as what it is.
+#[test]
+fn memory_sizes_are_stated_in_a_readable_unit() {
+    // 36 samples × 3 channels at 176 bytes each: 6336 bytes.
+    let err = synth_error(
+        &[
+            "--rig",
+            "azimuthal:incidences=15,30,45:steps=12",
+            "--max-memory",
+            "1K",
+        ],
+        PARAMS_3,
+    );
+    assert!(
+        err.contains("need about 6.2 KiB, more than the 1 KiB --max-memory allows"),
+        "{err}"
+    );
+    assert!(!err.contains("GB"), "{err}");
+    let err = synth_error(
+        &["--rig", "azimuthal:steps=100000000", "--max-memory", "1.5G"],
+        PARAMS_1,
+    );
+    assert!(err.contains("more than the 1.5 GiB --max-memory"), "{err}");
+}

@@ -32,6 +32,9 @@ pub struct Item {
     /// `hairfit fit` arguments without `--out`: the data path (relative to the manifest's
     /// directory, as a user in the current directory would type it) and the options.
     pub argv: Vec<String>,
+    /// The item's `fix` cell as written, and its column (CSV; JSON names the key), for an
+    /// error found once the data's channels are known ([`Manifest::check_channels`]).
+    pub fix: Option<(u64, String)>,
 }
 
 impl Item {
@@ -166,6 +169,52 @@ impl Manifest {
             path: path.to_path_buf(),
             items,
         })
+    }
+
+    /// Check each item `shard` owns against its data's channels, before any item runs: a
+    /// `fix` of `sigma_a[k]` that names a channel the data do not have is an error at the
+    /// `fix` cell's line and column. Only data whose channels are known without loading them
+    /// are checked (a CSV header, a scan's `columns`: [`crate::data::channels_without_loading`]);
+    /// a JSON dataset's channels need the whole file, so its item finds out when it runs.
+    pub fn check_channels(&self, shard: super::Shard) -> Result<()> {
+        let json = self
+            .path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        for (i, item) in self.items.iter().enumerate() {
+            let Some((column, cell)) = &item.fix else {
+                continue;
+            };
+            if !shard.owns(i) {
+                continue;
+            }
+            let Ok(args) = item.fit_args(Path::new("x"), false) else {
+                continue; // checked by load; the item's run reports it
+            };
+            let Some(channels) = crate::data::channels_without_loading(&args.data, &args.load)
+            else {
+                continue;
+            };
+            if let Err(e) = args.fit.check_fixes(channels.len()) {
+                let place = Place {
+                    json,
+                    line: item.line,
+                    column: *column,
+                    key: "fix",
+                };
+                return Err(place.error(
+                    &self.path,
+                    format!(
+                        "`fix` = `{cell}`: {e} (item `{}`: its data {} has the channel{} {})",
+                        item.name,
+                        item.data,
+                        if channels.len() == 1 { "" } else { "s" },
+                        channels.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -374,11 +423,15 @@ fn item_from_cells(
     check_fit_words(&argv).map_err(|m| {
         place(1, "").error(path, format!("item `{name}`: {}", as_manifest_words(&m)))
     })?;
+    let fix = find("fix")
+        .filter(|c| !c.value.trim().is_empty())
+        .map(|c| (c.column, c.value.clone()));
     Ok(Item {
         name,
         line,
         data,
         argv,
+        fix,
     })
 }
 

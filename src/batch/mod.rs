@@ -233,6 +233,7 @@ pub fn run_batch(
     cancel: Option<Arc<AtomicBool>>,
     mut on_item: impl FnMut(&Item, &ItemOutcome),
 ) -> Result<BatchRun> {
+    manifest.check_channels(shard)?;
     claim_out_dir(out)?;
     let mut outcomes = Vec::new();
     for (i, item) in manifest.items.iter().enumerate() {

@@ -17,6 +17,18 @@ use crate::family::ModelFamily;
 /// one of them (both families are fitted), `--terms`/`--width-nodes` set the Chiang fit's
 /// model and `--mode`/`--lobes`/`--no-glints`/`--no-eccentricity` the Marschner fit's.
 #[derive(Debug, Clone, Args)]
+#[command(
+    after_help = "--fix applies to both fits, so it takes only parameters both families have: sigma_a \
+(every channel), sigma_a[c] (one channel) and eta. A parameter of one family (k_g, alpha_r_deg, beta_m, \
+alpha_deg, ...) is refused before anything is fitted, naming the family that lacks it; to fix it, fit that \
+family alone with `hairfit fit DATA --model FAMILY --fix NAME=VALUE`.
+
+\
+--out DIR is published as one set, as `hairfit fit` publishes its --out: DIR is locked (the lock file \
+.DIR.hairfit-lock sits beside it), written into a staging directory beside it and swapped in whole, so a \
+finished run leaves no lock or staging directory inside DIR. --out must be a directory (new, empty, or an \
+earlier hairfit result; --force replaces one holding other files)."
+)]
 pub struct CompareArgs {
     /// Data file (.csv with a header, .json, or a headerless scan with --columns).
     pub data: PathBuf,
@@ -24,7 +36,8 @@ pub struct CompareArgs {
     pub load: LoadOptions,
     #[command(flatten)]
     pub fit: FitArgs,
-    /// Output directory: DIR/marschner/, DIR/chiang/, DIR/compare.json, DIR/index.html.
+    /// Output directory: DIR/marschner/, DIR/chiang/, DIR/compare.json, DIR/index.html;
+    /// replaced as a whole by the new result, as `hairfit fit` replaces its --out (see --force).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -39,6 +52,8 @@ pub fn compare_command(
             "compare fits both model families: drop --model".into(),
         ));
     }
+    // Both families' --fix names, before the data load and long before either fit.
+    crate::compare::check_fixes(&args.fit.fix, None)?;
     // Each family's own options are checked as that family's fit would check them.
     let mut chiang_args = args.fit.clone();
     chiang_args.model.family = ModelFamily::Chiang;
@@ -66,5 +81,5 @@ pub fn compare_command(
         curves: Some(crate::files::CurvesMode::Full),
         ..marschner_args.options(cancel)?
     };
-    crate::compare::compare_command(&args.data, &args.load, &opts, &args.out)
+    crate::compare::compare_command(&args.data, &args.load, &opts, &args.out, args.fit.force)
 }

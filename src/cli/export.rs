@@ -21,7 +21,8 @@ pub struct ExportArgs {
     /// Renderer: pbrt (a MakeNamedMaterial block), blender (a bpy script), materialx (.mtlx).
     #[arg(long, value_parser = parse_renderer)]
     pub to: Renderer,
-    /// Output file (written atomically); stdout when absent.
+    /// Output file (written atomically); stdout when absent. A name with another renderer's
+    /// extension (--to pbrt --output hair.mtlx) is refused; use .pbrt, .py or .mtlx as --to says.
     #[arg(long)]
     pub output: Option<PathBuf>,
 }
@@ -36,6 +37,7 @@ pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
     // Checked before the renderer model is fitted, which takes a while.
     if let Some(path) = &args.output {
         crate::atomic::refuse_directory_output("--output", path, args.to.file_name())?;
+        args.to.check_output_name("--output", path)?;
     }
     let result = export(&args.dir, args.to)?;
     // Warnings first, each on its own line (main prefixes the first with `hairfit: `).

@@ -94,17 +94,26 @@ pub struct FitArgs {
 
 impl FitArgs {
     /// Check these options without the data (for `hairfit batch`, before any item runs): what
-    /// [`FitArgs::options`] checks, and every `--fix` name and value. Per-channel names are
-    /// checked against any channel count; the data's own count is checked when it loads.
+    /// [`FitArgs::options`] checks, and every `--fix` name and value. A `sigma_a[k]` is checked
+    /// against the data's channel count when the data load (or, in a batch, when the data
+    /// file's header gives it up front: [`FitArgs::check_fixes`]).
     pub fn check(&self) -> Result<()> {
-        const ANY_CHANNELS: usize = 64;
         self.options(None)?;
-        let parse = |nc| match self.model.family {
+        let nc = crate::fit::fixes::channels_named(&self.fix).ok_or_else(|| {
+            Error::Other(format!(
+                "--fix {}: a channel index that large names no channel of any dataset",
+                self.fix.join(" --fix ")
+            ))
+        })?;
+        self.check_fixes(nc)
+    }
+
+    /// Check every `--fix` against data of `nc` channels (names, values, channel indices).
+    pub fn check_fixes(&self, nc: usize) -> Result<()> {
+        match self.model.family {
             ModelFamily::Marschner => crate::fit::parse_fixes(&self.fix, nc).map(drop),
             ModelFamily::Chiang => crate::chiang::fit::parse_fixes(&self.fix, nc).map(drop),
-        };
-        // The message of one channel lists the names without 64 of sigma_a[c].
-        parse(ANY_CHANNELS).map_err(|e| parse(1).err().unwrap_or(e))
+        }
     }
 
     /// The fit options these arguments ask for.

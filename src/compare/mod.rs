@@ -330,6 +330,86 @@ pub fn compare(
     })
 }
 
+/// Names of a family's parameters that act on every channel (not `sigma_a[c]`).
+fn shared_names<P: crate::fit::problem::FitParam>(all: Vec<P>) -> Vec<String> {
+    all.into_iter()
+        .filter(|p| p.channel().is_none())
+        .map(|p| p.json_name())
+        .collect()
+}
+
+/// `--fix` of `hairfit compare`: both fits get the same options, so each name must be a
+/// parameter of both families (η and σ_a: `sigma_a` or `sigma_a[c]`); one that only one family
+/// has (`k_g`, `beta_m`, …) or neither is refused, naming which family lacks it, before
+/// anything is fitted. The values are then checked as each family's fit would check them.
+/// `nc`: the data's channel count, or `None` before the data are loaded (each `sigma_a[k]`
+/// then names a channel; the data's count is checked once they are).
+pub fn check_fixes(fix: &[String], nc: Option<usize>) -> Result<()> {
+    use crate::fit::fixes::{channel_index, channels_named};
+    let marschner = shared_names(crate::fit::all_parameters(1));
+    let chiang = shared_names(crate::chiang::fit::all_parameters(1));
+    let both: Vec<&str> = marschner
+        .iter()
+        .filter(|n| chiang.contains(n))
+        .map(String::as_str)
+        .collect();
+    let own = |names: &[String]| {
+        names
+            .iter()
+            .filter(|n| !both.contains(&n.as_str()))
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let fixable = format!(
+        "sigma_a (every channel), sigma_a[c] (one channel), {}",
+        both.join(", ")
+    );
+    for item in fix {
+        let Some((name, _)) = item.split_once('=') else {
+            continue; // the families' own parser says how to write it
+        };
+        let name = name.trim();
+        let per_channel = name == "sigma_a" || channel_index(name).is_some();
+        let has = |names: &[String]| per_channel || names.iter().any(|n| n == name);
+        let lacking = match (has(&marschner), has(&chiang)) {
+            (true, true) => continue,
+            (true, false) => Some((ModelFamily::Marschner, ModelFamily::Chiang)),
+            (false, true) => Some((ModelFamily::Chiang, ModelFamily::Marschner)),
+            (false, false) => None,
+        };
+        return Err(Error::Other(match lacking {
+            Some((owner, other)) => format!(
+                "--fix `{item}`: compare fits both model families with the same options, but \
+                 `{name}` is a {} parameter the {} model does not have; compare fixes only \
+                 what both have: {fixable}. To fix {name}, fit the {} model alone: hairfit fit \
+                 DATA --model {owner} --fix {item}",
+                self::name(owner),
+                self::name(other),
+                self::name(owner),
+            ),
+            None => format!(
+                "--fix `{item}`: neither model family has a parameter `{name}`; compare fixes \
+                 only what both have: {fixable} (Marschner alone has {}; Chiang alone has {})",
+                own(&marschner),
+                own(&chiang)
+            ),
+        }));
+    }
+    let nc = match nc {
+        Some(nc) => nc,
+        None => channels_named(fix).ok_or_else(|| {
+            Error::Other(format!(
+                "--fix {}: a channel index that large names no channel of any dataset",
+                fix.join(" --fix ")
+            ))
+        })?,
+    };
+    crate::fit::parse_fixes(fix, nc)?;
+    crate::chiang::fit::parse_fixes(fix, nc)?;
+    Ok(())
+}
+
 /// What `hairfit compare` wrote.
 pub struct CompareOutcome {
     pub comparison: Comparison,
@@ -338,51 +418,57 @@ pub struct CompareOutcome {
 }
 
 /// `hairfit compare DATA --out DIR`: load once, fit both families with `opts` (its `family`
-/// is ignored), write DIR/marschner and DIR/chiang (each a normal fit directory with its
-/// report), then compare.json, compare.svg/png and index.html.
+/// is ignored), and publish DIR as one output set (see [`crate::outdir`]): DIR/marschner and
+/// DIR/chiang (each a normal fit directory with its report), compare.json, compare.svg/png
+/// and index.html. DIR is locked and staged as `hairfit fit` does its --out (the lock file
+/// sits beside DIR), so a finished run leaves no lock or staging directory inside it; `force`
+/// replaces a directory that holds files other than a hairfit result.
 pub fn compare_command(
     data_path: &Path,
     load_options: &crate::data::LoadOptions,
     opts: &FitOptions,
     out: &Path,
+    force: bool,
 ) -> Result<CompareOutcome> {
+    let set = crate::outdir::OutputSet::begin(out, "hairfit compare", force, &[data_path])?;
     let (ds, report) = crate::data::load(data_path, load_options)?;
+    // Every --fix against the data's channels, for both families, before either fit runs.
+    check_fixes(&opts.fix, Some(ds.n_channels()))?;
     let data = crate::fit::fit_data(&ds);
     let file = data_path.display().to_string();
     let mut outcomes = Vec::new();
     let mut report_lines = Vec::new();
+    let mut staged = Vec::new();
     for family in ModelFamily::ALL {
         let opts = FitOptions {
             family,
             ..opts.clone()
         };
-        let dir = out.join(family.as_str());
-        // Each family's directory is a normal fit directory, locked and published as one set.
-        let published =
-            crate::outdir::publish_fit(&dir, "hairfit compare", false, &[data_path], |_| {
-                let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), &opts)?;
-                outcome.json.options.load = Some(format!("{load_options:?}"));
-                Ok(outcome)
-            })?;
-        report_lines.push(published.report_line(&dir));
-        outcomes.push(published.outcome);
+        let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), &opts)?;
+        outcome.json.options.load = Some(format!("{load_options:?}"));
+        let dir = set.sub_dir(family.as_str())?;
+        let written = set.write_fit(&dir, outcome)?;
+        report_lines.push(written.report_line(&out.join(family.as_str())));
+        outcomes.push(written.outcome);
+        staged.push(dir);
     }
-    let (m_dir, c_dir) = (out.join("marschner"), out.join("chiang"));
+    let staging = set.staging();
     let comparison = compare(
         &file,
         &data,
-        [(&outcomes[0], &m_dir), (&outcomes[1], &c_dir)],
+        [(&outcomes[0], &staged[0]), (&outcomes[1], &staged[1])],
     )?;
-    comparison.save(&out.join("compare.json"))?;
+    comparison.save(&staging.join("compare.json"))?;
     let fig = figure::overlay(&outcomes[0].curves.to_rows(), &outcomes[1].curves.to_rows());
-    let info = crate::plot::render(out, &fig)?;
+    let info = crate::plot::render(staging, &fig)?;
     html::write_index(
-        out,
+        staging,
         &comparison,
         &info,
         &outcomes[0].json,
         &outcomes[1].json,
     )?;
+    set.publish()?;
     Ok(CompareOutcome {
         comparison,
         report_lines,

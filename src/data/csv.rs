@@ -309,6 +309,18 @@ pub(crate) fn parse_cell(
 }
 
 /// Load a header CSV file.
+/// The channel names a CSV file's header declares, read from the header alone (the loader
+/// reads the same header the same way); `None` when the file or its header cannot be read
+/// (loading it then says why).
+pub(crate) fn header_channels(path: &Path, options: &LoadOptions) -> Option<Vec<String>> {
+    let mut reader = super::open(path).ok()?;
+    let delimiter = options.delimiter_for(path).ok()?;
+    let pre = read_preamble(&mut reader, delimiter, path).ok()?;
+    columns_from_header(&pre.header, path, pre.lines)
+        .ok()
+        .map(|c| c.channels)
+}
+
 pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
     let mut reader = super::open(path)?;
     let delimiter = options.delimiter_for(path)?;

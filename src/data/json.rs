@@ -46,6 +46,63 @@ fn json_error(path: &Path, e: &serde_json::Error) -> Error {
     Error::input(path, e.line() as u64, e.column().max(1) as u64, hint)
 }
 
+/// A hairfit file that is not a dataset, given where a dataset goes (`hairfit load`, `fit`,
+/// `compare` DATA): a parameter file, a fit's fit.json, a synth truth sidecar. The error says
+/// what the file is and where it belongs instead of serde's "missing field `samples`".
+fn not_a_dataset(bytes: &[u8], path: &Path) -> Option<Error> {
+    let value: Value = serde_json::from_slice(bytes).ok()?;
+    let object = value.as_object()?;
+    if object.contains_key("samples") {
+        return None;
+    }
+    let shown = path.display();
+    let what = "DATA takes measured samples: a CSV with a header, a headerless scan (--columns) \
+                or a JSON dataset {\"samples\": [...]}";
+    let result = object.contains_key("hairfit_version") && object.contains_key("params");
+    let message = if result && object.contains_key("verdict") {
+        let data = object
+            .get("data")
+            .and_then(|d| d.get("file"))
+            .and_then(Value::as_str)
+            .map_or(String::new(), |f| {
+                format!(": the data it was fitted to are {f}")
+            });
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+        format!(
+            "{shown}: this is a fit result (fit.json), not a dataset{data}; to redraw the fit use \
+             hairfit report {}, to evaluate it pass its params.json to --params of hairfit eval. {what}",
+            dir.map_or(".".into(), |d| d.display().to_string())
+        )
+    } else if result {
+        let samples = path
+            .to_str()
+            .and_then(|p| p.strip_suffix(".truth.json"))
+            .map(|stem| std::path::PathBuf::from(format!("{stem}.csv")))
+            .filter(|csv| csv.is_file())
+            .map_or(String::new(), |csv| {
+                format!(": its samples are in {}", csv.display())
+            });
+        format!(
+            "{shown}: this is a synth truth file (the parameters a dataset was made from), not \
+             a dataset{samples}. {what}"
+        )
+    } else if object.contains_key("sigma_a") {
+        let model = match object.get("model").and_then(Value::as_str) {
+            Some("chiang") => " --model chiang",
+            _ => "",
+        };
+        format!(
+            "{shown}: this looks like a parameter file (it has \"sigma_a\"), not a dataset: a \
+             parameter file goes to --params, e.g. hairfit eval{model} --params {shown} --input \
+             ANGLES.csv, or hairfit synth{model} --params {shown} --rig RIG --output DATA.csv to \
+             make a dataset from it. {what}"
+        )
+    } else {
+        return None;
+    };
+    Some(Error::Other(message))
+}
+
 /// Line and column (1-based) where each element of the top-level `"samples"` array starts,
 /// found by a small scan that tracks strings and nesting depth (serde_json keeps no positions).
 fn sample_positions(bytes: &[u8]) -> Vec<(u64, u64)> {
@@ -193,7 +250,8 @@ pub(crate) fn load_json(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
     std::io::Read::read_to_end(&mut super::open(path)?, &mut bytes)
         .map_err(|e| super::lines::read_error(path, e))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-    let file: FileJson = serde_json::from_slice(bytes).map_err(|e| json_error(path, &e))?;
+    let file: FileJson = serde_json::from_slice(bytes)
+        .map_err(|e| not_a_dataset(bytes, path).unwrap_or_else(|| json_error(path, &e)))?;
     let positions = sample_positions(bytes);
     if file.samples.is_empty() {
         return Err(Error::input(

@@ -155,10 +155,10 @@ impl<R> TextGuard<R> {
         let head = first_newline.unwrap_or(chunk.len()) as u64;
         if self.in_line + head > MAX_LINE_BYTES || tail > MAX_LINE_BYTES {
             return Err(self.refuse(format!(
-                "line {} is longer than {} MiB with no line break: not a text table \
+                "line {} is longer than {} with no line break: not a text table \
                  (a binary file or a device?)",
                 self.lf + 1,
-                MAX_LINE_BYTES >> 20
+                crate::error::readable_bytes(MAX_LINE_BYTES)
             )));
         }
         self.lf += newlines;

@@ -388,6 +388,22 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)>
     Ok((dataset, report))
 }
 
+/// The channel names of the data at `path` as far as they can be known without reading its
+/// rows: a CSV file's header or a scan's `--columns`. `None` for a JSON dataset (its
+/// `"channels"` can only be found by parsing the whole file) and for a file or header that
+/// cannot be read (loading it says why). For checks made before anything runs (`hairfit
+/// batch`'s manifest): the header is one line, however large the file.
+pub fn channels_without_loading(path: &Path, options: &LoadOptions) -> Option<Vec<String>> {
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return None;
+    }
+    match detect_format(path, options) {
+        Format::Csv => csv::header_channels(path, options),
+        Format::Scan => scan::column_channels(options),
+        Format::Json => None,
+    }
+}
+
 /// Scan-only options on another format are a mistake worth an error, not a silent no-op.
 fn check_options_fit_format(path: &Path, format: Format, options: &LoadOptions) -> Result<()> {
     let scan_only = [

@@ -48,6 +48,51 @@ impl Renderer {
         }
     }
 
+    /// Every renderer, in `--to`'s order.
+    pub const ALL: [Renderer; 3] = [Renderer::Pbrt, Renderer::Blender, Renderer::Materialx];
+
+    /// The extension of the file the renderer loads (without the dot).
+    pub fn extension(&self) -> &'static str {
+        match self {
+            Renderer::Pbrt => "pbrt",
+            Renderer::Blender => "py",
+            Renderer::Materialx => "mtlx",
+        }
+    }
+
+    /// What the written file is, for messages.
+    pub fn file_kind(&self) -> &'static str {
+        match self {
+            Renderer::Pbrt => "a pbrt-v4 MakeNamedMaterial block",
+            Renderer::Blender => "a Blender Python script",
+            Renderer::Materialx => "a MaterialX document",
+        }
+    }
+
+    /// Refuse an output file named with another renderer's extension (`--to pbrt --output
+    /// hair.mtlx`): it would hold one format under another's name, which the tool opening it
+    /// by that name rejects or misreads. Any other name (the renderer's own extension, another
+    /// extension, none) is the user's choice.
+    pub fn check_output_name(&self, flag: &str, path: &Path) -> Result<()> {
+        let Some(ext) = path.extension().and_then(|e| e.to_str()) else {
+            return Ok(());
+        };
+        let Some(other) = Renderer::ALL
+            .into_iter()
+            .find(|r| r != self && ext.eq_ignore_ascii_case(r.extension()))
+        else {
+            return Ok(());
+        };
+        Err(Error::Other(format!(
+            "{flag} {}: .{ext} is the extension of {} (--to {other}), but --to {self} writes {}: \
+             name the file {}, or pass --to {other}",
+            path.display(),
+            other.file_kind(),
+            self.file_kind(),
+            path.with_extension(self.extension()).display()
+        )))
+    }
+
     /// The model a header names.
     pub fn model_name(&self) -> &'static str {
         match self {

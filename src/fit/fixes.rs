@@ -38,6 +38,22 @@ pub fn parse_fixes<P: FitParam>(
         } else {
             match all.iter().find(|p| p.json_name() == name) {
                 Some(&p) => vec![p],
+                None if channel_index(name).is_some() => {
+                    let nc = all
+                        .iter()
+                        .filter(|p| p.json_name().starts_with("sigma_a["))
+                        .count();
+                    return Err(Error::Other(format!(
+                        "--fix `{item}`: `{name}` names a channel the data do not have: they have \
+                         {nc} channel{} (sigma_a[0]{}); sigma_a=VALUE fixes every channel",
+                        if nc == 1 { "" } else { "s" },
+                        if nc > 1 {
+                            format!(" … sigma_a[{}]", nc - 1)
+                        } else {
+                            String::new()
+                        }
+                    )));
+                }
                 None => {
                     let known: Vec<String> = all.iter().map(|p| p.json_name()).collect();
                     return Err(Error::Other(format!(
@@ -68,6 +84,28 @@ pub fn parse_fixes<P: FitParam>(
         }
     }
     Ok(out)
+}
+
+/// The channel `k` of a `sigma_a[k]` name (digits only), if it is one.
+pub fn channel_index(name: &str) -> Option<usize> {
+    let digits = name.strip_prefix("sigma_a[")?.strip_suffix(']')?;
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok()
+}
+
+/// The fewest channels under which every `sigma_a[k]` of these `--fix` items names a channel
+/// (at least one): what options are checked against before the data's own count is known.
+/// `None` when an index is so large (over a million) that no dataset has that many channels.
+pub fn channels_named(items: &[String]) -> Option<usize> {
+    const MAX_CHANNELS: usize = 1 << 20;
+    let most = items
+        .iter()
+        .filter_map(|i| channel_index(i.split_once('=')?.0.trim()))
+        .max()
+        .map_or(1, |k| k.saturating_add(1));
+    (most <= MAX_CHANNELS).then_some(most)
 }
 
 /// The parameters a fit varies and the values of the others.
@@ -117,6 +155,22 @@ mod tests {
 
     fn items(v: &[&str]) -> Vec<String> {
         v.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn a_channel_beyond_the_data_is_named_as_such() {
+        let all = crate::fit::all_parameters(3);
+        let e = parse_fixes(&items(&["sigma_a[5]=0.3"]), &all, "parameter", "")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("3 channels (sigma_a[0] … sigma_a[2])"), "{e}");
+        assert_eq!(
+            channels_named(&items(&["sigma_a[5]=0.3", "eta=1.5"])),
+            Some(6)
+        );
+        assert_eq!(channels_named(&items(&["k_g=2"])), Some(1));
+        assert_eq!(channels_named(&items(&["sigma_a[99999999999]=1"])), None);
+        assert_eq!(channel_index("sigma_a[+1]"), None);
     }
 
     #[test]

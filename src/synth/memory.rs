@@ -1,7 +1,7 @@
 //! How much memory `hairfit synth` may use: `--max-memory`, by default half the machine's
 //! memory, checked against an estimate before the dataset is allocated.
 
-use crate::error::{Error, Result};
+use crate::error::{readable_bytes, Error, Result};
 
 /// Bytes one sample of `nc` channels takes in memory while synthesized (angles, source line,
 /// values, noise bookkeeping): measured peak over samples, rounded up.
@@ -64,11 +64,14 @@ pub fn check(
 ) -> Result<()> {
     let need = samples.saturating_mul(bytes_per_sample(nc));
     if need > limit {
+        let (mut n, mut l) = (readable_bytes(need), readable_bytes(limit));
+        if n == l {
+            // Rounded to one unit they would read alike.
+            (n, l) = (format!("{need} bytes"), format!("{limit} bytes"));
+        }
         return Err(what(format!(
-            "{samples} samples × {nc} channels need about {:.1} GB, more than the {:.1} GB \
-             --max-memory allows (default: half this machine's memory)",
-            need as f64 / 1e9,
-            limit as f64 / 1e9
+            "{samples} samples × {nc} channels need about {n}, more than the {l} \
+             --max-memory allows (default: half this machine's memory)"
         )));
     }
     Ok(())
@@ -96,6 +99,12 @@ mod tests {
         assert!(check(1000, 3, 1000 * bytes_per_sample(3), err).is_ok());
         let e = check(1001, 3, 1000 * bytes_per_sample(3), err).unwrap_err();
         assert!(e.to_string().contains("--max-memory"), "{e}");
+        let e = check(1000, 3, 1000 * bytes_per_sample(3) - 1, err).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("176000 bytes, more than the 175999 bytes"),
+            "{e}"
+        );
         assert!(
             check(u64::MAX, 1, u64::MAX - 1, err).is_err(),
             "no overflow"
