@@ -20,6 +20,7 @@
 
 use std::f64::consts::PI;
 
+use hairfit::fit::demo::demo_truth;
 use hairfit::model::azimuthal::caustic_position;
 use hairfit::model::eccentricity::eccentric_terms;
 use hairfit::model::{
@@ -69,17 +70,11 @@ fn random_angles(n: usize, seed: u64) -> Vec<Angles> {
         .collect()
 }
 
+/// The demo's parameters (mid-range values) with these absorption coefficients.
 fn typical(sigma_a: Vec<f64>) -> Params<f64> {
     Params {
-        eta: 1.55,
         sigma_a,
-        alpha_r: (-7f64).to_radians(),
-        beta_r: 8f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
+        ..demo_truth()
     }
 }
 

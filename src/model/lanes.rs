@@ -662,17 +662,8 @@ mod tests {
     /// everything back, which would stay correct but lose the speed.)
     #[test]
     fn few_samples_leave_the_fast_path() {
-        let params = Params {
-            eta: 1.55,
-            sigma_a: vec![0.2, 0.4, 0.8],
-            alpha_r: (-7f64).to_radians(),
-            beta_r: 8f64.to_radians(),
-            k_g: 2.0,
-            w_c: 15f64.to_radians(),
-            eccentricity: 0.9,
-            delta_eta_prime: 0.3,
-            delta_h_m: 0.5,
-        };
+        // The demo's parameters: mid-range values, three channels.
+        let params = crate::fit::demo::demo_truth();
         let mut state = 0x9E37_79B9_7F4A_7C15;
         let mut u = |lo: f64, hi: f64| lo + (hi - lo) * uniform(&mut state);
         let angles: Vec<Angles> = (0..20_000)
