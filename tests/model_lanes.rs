@@ -167,7 +167,7 @@ fn compare(params: &Params<f64>, config: &ModelConfig, angles: &[Angles], what: 
     let mut reference = vec![f64::NAN; angles.len() * nc];
     scattering_lanes(params, config, angles, &mut lanes);
     scattering_batch(params, config, angles, &mut reference);
-    let floor = 1e-15 * reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let floor = 1e-15 * reference.iter().fold(0.0f64, |m, v| m.max(v.abs())) + 1e-300;
     let mut worst = 0.0f64;
     for (k, (a, b)) in lanes.iter().zip(&reference).enumerate() {
         assert!(
