@@ -3,6 +3,7 @@
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 use crate::error::{Error, Result};
@@ -10,6 +11,26 @@ use crate::error::{Error, Result};
 /// Temporary files being written right now: a process ending by a signal runs no destructors,
 /// so a signal handler removes them with [`remove_in_flight`] before it exits.
 static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Set by a signal handler that is about to remove the partial outputs and exit.
+static STOPPING: AtomicBool = AtomicBool::new(false);
+
+/// For a signal handler, before it removes the partial outputs: no output is started from now
+/// on. A writer thread starting one would otherwise create its directory (a staging directory
+/// just removed) and a file in it again behind the removal.
+pub fn stop_writing() {
+    STOPPING.store(true, Ordering::SeqCst);
+}
+
+fn refuse_when_stopping(path: &Path) -> Result<()> {
+    if STOPPING.load(Ordering::SeqCst) {
+        return Err(Error::Other(format!(
+            "{}: not written: the run is being stopped",
+            path.display()
+        )));
+    }
+    Ok(())
+}
 
 /// Remove every temporary file still being written (for a signal handler that then exits).
 pub fn remove_in_flight() {
@@ -49,7 +70,9 @@ where
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    refuse_when_stopping(path)?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    refuse_when_stopping(path)?;
     let mut builder = tempfile::Builder::new();
     builder.prefix(".hairfit-").suffix(".tmp");
     // tempfile creates 0600; an output is an ordinary file: 0666 minus the umask, as File::create.

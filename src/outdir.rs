@@ -24,14 +24,21 @@ static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 pub fn remove_in_flight() {
     let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
     for p in list.iter() {
-        // The run's other threads may still be creating files in it (remove_dir_all then
-        // fails with "directory not empty"): try again, pausing so a writer that is mid-file
-        // finishes (back to back, 20 tries lost the race about once in ten under load).
-        for attempt in 0..50 {
-            if std::fs::remove_dir_all(p).is_ok() || !p.exists() {
-                break;
+        // The run's other threads may still be creating a file in it (remove_dir_all then
+        // fails with "directory not empty"), or, having started an output just before
+        // `atomic::stop_writing`, create the directory again behind the removal: remove until
+        // it stays gone for 10 ms (under a loaded CI, stopping at the first success left the
+        // directory behind about once in twenty runs).
+        for _ in 0..200 {
+            let _ = std::fs::remove_dir_all(p);
+            if !p.exists() {
+                std::thread::sleep(std::time::Duration::from_millis(10));
+                if !p.exists() {
+                    break;
+                }
+            } else {
+                std::thread::sleep(std::time::Duration::from_millis(5));
             }
-            std::thread::sleep(std::time::Duration::from_millis(2 * attempt.min(5)));
         }
     }
 }

@@ -72,6 +72,7 @@ pub fn stop_on_signal() -> StopSignal {
     let (flag, received) = (stop.flag.clone(), stop.received.clone());
     on_signals(move |sig| {
         if flag.swap(true, Ordering::SeqCst) {
+            crate::atomic::stop_writing();
             crate::atomic::remove_in_flight();
             crate::outdir::remove_in_flight();
             std::process::exit(i32::from(signal_exit_code(sig)));
@@ -85,6 +86,7 @@ pub fn stop_on_signal() -> StopSignal {
 /// temporary file, then exit as the signal would have.
 pub fn exit_on_signal() {
     on_signals(|sig| {
+        crate::atomic::stop_writing();
         crate::atomic::remove_in_flight();
         crate::outdir::remove_in_flight();
         std::process::exit(i32::from(signal_exit_code(sig)));
