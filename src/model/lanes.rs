@@ -63,6 +63,9 @@ pub fn scattering_lanes(
     groups_baseline(&lanes, angles, out, &scalar);
 }
 
+/// The groups with AVX2 enabled. `wide` picks its instructions at compile time, so its f64x4
+/// stays two 128-bit halves here too; the VEX three-operand forms still save ~7% of the
+/// instructions (callgrind, 100k rows of eval: 337 M against 362 M).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn groups_avx2(
