@@ -126,8 +126,10 @@ proptest! {
 
     /// Eight directions (two vector groups) per case. Tolerance as in tests/model_lanes.rs
     /// (1e-11 × (1 + η'), the grazing conditioning, plus 1e-15 of the largest value), widened
-    /// where this file's reciprocity test found rounding amplified in both paths alike: next to
-    /// a TRT fold without glints (1e-6) and for η or η* within 1e-3 of 1 (1e-4).
+    /// where rounding is amplified in both paths alike: for η or η* within 1e-3 of 1, where
+    /// asin(1/η') is near its singular end and an ulp of 1/η' moves the map by ~1e-10 (1e-4;
+    /// worst measured over 90,000 cases: 3.9e-5), and next to a TRT fold without glints, where
+    /// N ~ 1/sqrt(δ) (1e-10; measured 1.7e-12). Elsewhere measured 6.3e-13.
     #[test]
     fn lanes_agree_with_the_scalar_model_inside_fit_bounds(
         p in params(), effects in effects(),
@@ -146,7 +148,7 @@ proptest! {
         let relative = if eta_1.min(eta_2).min(p.eta) - 1.0 < 1e-3 {
             1e-4
         } else if cfg.effects.lobes.trt && !cfg.effects.glints {
-            1e-6
+            1e-10
         } else {
             1e-11
         };
