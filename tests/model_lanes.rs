@@ -3,9 +3,9 @@
 //! reach the fast path's limits (TT fold, past the glint merge, strong absorption, narrow lobes)
 //! and the hard directions (grazing, φ = ±φ_c, φ = ±π).
 //!
-//! Tolerance: the two paths do the same operations in the same order except the transcendental
-//! functions (the `wide` crate's vector sin/cos/exp/asin/acos against libm, each within ~1 ulp)
-//! and a few divisions replaced by one reciprocal (0.5 ulp each). Along a sample's ~100
+//! Tolerance: the two paths do the same operations (a few products regrouped) except the
+//! transcendental functions (the `wide` crate's vector sin/cos/exp/asin/acos against libm, each
+//! within ~1 ulp) and a few divisions replaced by one reciprocal (0.5 ulp each). Along a sample's ~100
 //! operations that is ~1e-14 relative. Two places amplify it, in both paths alike: next to a
 //! caustic `1/|Φ'|` (bounded by the MIN_DENOM floor), and towards grazing, where
 //! `η' = sqrt(η² − sin²θ_d)/cos θ_d` grows without bound and the transmission `1 − F ≈ 4/η'`

@@ -21,7 +21,7 @@ use super::RootMode;
 /// within δ ≈ 1e-17 of φ_c, below the f64 resolution of φ, where a root's Φ' is rounding noise
 /// (the root itself is only known to ~sqrt(ε)); it keeps N finite and of the size the exact map has
 /// one ulp away. With glints on, the fade (~δ²) makes the product vanish anyway.
-const MIN_DENOM: f64 = 1e-8;
+pub(super) const MIN_DENOM: f64 = 1e-8;
 
 /// Where each lobe's contributions go: per channel, per lobe (0 = R, 1 = TT, 2 = TRT).
 pub trait Sink<T> {

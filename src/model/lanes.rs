@@ -1,7 +1,7 @@
 //! `S` four samples at a time, for plain f64 in cubic mode (what `hairfit eval` runs): each step
 //! of the scalar [`super::evaluate`] done on four lanes of `wide::f64x4`, with its vector sin/cos,
 //! exp, asin and acos. The default x86-64 target has no AVX, so a four-lane vector is two SSE2
-//! registers: this takes about half the scalar model's instructions (1,385 against 2,520 per
+//! registers: this takes about half the scalar model's instructions (1,340 against 2,520 per
 //! sample with every effect on, random directions; callgrind).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
@@ -15,17 +15,14 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use wide::{f64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt, CmpNe};
 
 use super::angles::half_angles;
-use super::azimuthal::Sink;
+use super::azimuthal::MIN_DENOM;
 use super::longitudinal::INV_SQRT_TAU;
-use super::{evaluate, Angles, ModelConfig, Params, Prepared, RootMode};
+use super::{evaluate_into, scattering_batch, Angles, ModelConfig, Params, Prepared, RootMode};
 
 type V = f64x4;
 
 /// Lanes per group.
 const LANES: usize = 4;
-
-/// As `azimuthal::MIN_DENOM`: the smallest `|2 dΦ/dγ|` used.
-const MIN_DENOM: f64 = 1e-8;
 
 /// [`super::scattering_batch`] for f64: `out[k * nc + c]`. Cubic mode runs four samples per
 /// vector (each sample's value depends on that sample only, not on its neighbours or its place
@@ -37,23 +34,21 @@ pub fn scattering_lanes(
     out: &mut [f64],
 ) {
     let nc = params.sigma_a.len();
+    if config.mode != RootMode::Cubic || nc == 0 {
+        return scattering_batch(params, config, angles, out);
+    }
     assert_eq!(
         out.len(),
         angles.len() * nc,
         "one output per sample and channel"
     );
     let prepared = Prepared::new(params);
-    let scalar = |a: &Angles, o: &mut [f64]| {
-        o.fill(0.0);
-        evaluate(params, &prepared, config, a, &mut Slice(o));
+    let scalar = |a: &Angles, o: &mut [f64]| evaluate_into(params, &prepared, config, a, o);
+    let lanes = Lanes {
+        params,
+        prepared: &prepared,
+        config,
     };
-    if config.mode != RootMode::Cubic || nc == 0 {
-        for (a, o) in angles.iter().zip(out.chunks_mut(nc.max(1))) {
-            scalar(a, o);
-        }
-        return;
-    }
-    let lanes = Lanes::new(params, &prepared, config);
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2.
@@ -84,7 +79,7 @@ fn groups_baseline(
     out: &mut [f64],
     scalar: &dyn Fn(&Angles, &mut [f64]),
 ) {
-    let nc = lanes.sigma_a.len();
+    let nc = lanes.params.sigma_a.len();
     let mut sums = vec![V::ZERO; nc];
     let (groups, tail) = angles.split_at(angles.len() / LANES * LANES);
     for (group, o) in groups.chunks_exact(LANES).zip(out.chunks_mut(LANES * nc)) {
@@ -125,28 +120,11 @@ fn one_group(
     }
 }
 
-/// The scalar model's sink for one sample.
-struct Slice<'a>(&'a mut [f64]);
-impl Sink<f64> for Slice<'_> {
-    #[inline]
-    fn add(&mut self, channel: usize, _lobe: usize, value: f64) {
-        self.0[channel] += value;
-    }
-}
-
-/// The parameter-only factors, splatted.
+/// The batch's parameters, their parameter-only factors and the effects, for the groups.
 struct Lanes<'a> {
+    params: &'a Params<f64>,
+    prepared: &'a Prepared<f64>,
     config: &'a ModelConfig,
-    eta: f64,
-    sigma_a: &'a [f64],
-    /// `(α_p, 1/β_p)` of R, TT, TRT.
-    shapes: [(f64, f64); 3],
-    eccentric: (f64, f64),
-    k_g: f64,
-    w_c: f64,
-    inv_w_c: f64,
-    delta_eta_prime: f64,
-    delta_h_m: f64,
 }
 
 /// `x` where `mask` is set, else 0.
@@ -291,7 +269,7 @@ impl Cubic {
 
     /// `roots::cubic_root` for `c₀ = pπ − y` on the piece whose Viète index is `j` (0 upper,
     /// 1 middle, 2 lower); `r = sqrt(−P/3)` is the caustic where the map folds.
-    #[inline]
+    #[inline(always)]
     fn closed_form_root(&self, y: V, j: f64, r: V) -> V {
         let c0 = -y + self.p * PI;
         let p3 = self.p3;
@@ -383,42 +361,44 @@ fn piece_root(map: &Cubic, piece: &Piece, r: V, phi: V, active: V) -> (V, V, V) 
     (root, one & ok, several | (one & !ok))
 }
 
-impl<'a> Lanes<'a> {
-    fn new(params: &'a Params<f64>, prepared: &Prepared<f64>, config: &'a ModelConfig) -> Self {
-        let s = |p: usize| prepared.shapes[p];
-        Lanes {
-            config,
-            eta: params.eta,
-            sigma_a: &params.sigma_a,
-            shapes: [s(0), s(1), s(2)],
-            eccentric: prepared.eccentric,
-            k_g: prepared.glint.k_g,
-            w_c: prepared.glint.w_c,
-            inv_w_c: prepared.glint.inv_w_c,
-            delta_eta_prime: prepared.glint.delta_eta_prime,
-            delta_h_m: prepared.glint.delta_h_m,
-        }
-    }
-
+impl Lanes<'_> {
     /// `M_p(θ_h)`.
     #[inline]
     fn longitudinal(&self, p: usize, theta_h: V) -> V {
-        let (alpha, inv_beta) = self.shapes[p];
+        let (alpha, inv_beta) = self.prepared.shapes[p];
         gaussian_inv(theta_h - alpha, inv_beta)
     }
 
-    /// Add `base · exp(−p σ_a chord)` per channel, where `mask` is set.
-    #[inline]
-    fn add_absorbed(&self, p: f64, base: V, chord: V, mask: V, sums: &mut [V]) {
-        for (sum, &sigma) in sums.iter_mut().zip(self.sigma_a) {
-            let e = (chord * sigma * -p).exp();
+    /// Add a path through the fiber entering at `h = sin γ_i`: its Fresnel attenuation
+    /// `A(p, h)` times `weight`, absorbed along its chord `exp(−p σ_a · 2cos γ_t/cos θ_t)` per
+    /// channel, where `mask` is set.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn add_through_fiber(
+        &self,
+        p: usize,
+        br: BravaisLanes,
+        h: V,
+        cos_gi: V,
+        weight: V,
+        mask: V,
+        sums: &mut [V],
+    ) {
+        let cos_gt = cos_gamma_t(h, br.inv_eta_p);
+        let f = fresnel(br.eta_p, br.eta_pp, cos_gi, cos_gt);
+        let t = -f + 1.0;
+        let attenuation = if p == 1 { t * t } else { t * t * f };
+        let base = attenuation * weight;
+        let chord = cos_gt * 2.0 * br.inv_cos_theta_t;
+        for (sum, &sigma) in sums.iter_mut().zip(&self.params.sigma_a) {
+            let e = (chord * sigma * -(p as f64)).exp();
             *sum += keep(mask, base * e);
         }
     }
 
     /// Add one lobe's roots: `A cos γ / |2Φ'|` times `scale`, absorbed, where `valid`.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn add_root(
         &self,
         p: usize,
@@ -434,19 +414,13 @@ impl<'a> Lanes<'a> {
         let denom = denom
             .cmp_lt(V::splat(MIN_DENOM))
             .blend(V::splat(MIN_DENOM), denom);
-        let cos_gt = cos_gamma_t(h, br.inv_eta_p);
-        let f = fresnel(br.eta_p, br.eta_pp, cos_gi, cos_gt);
-        let t = -f + 1.0;
-        let attenuation = if p == 1 { t * t } else { t * t * f };
-        let base = attenuation * cos_gi / denom * scale;
-        let chord = cos_gt * 2.0 * br.inv_cos_theta_t;
-        self.add_absorbed(p as f64, base, chord, valid, sums);
+        self.add_through_fiber(p, br, h, cos_gi, cos_gi / denom * scale, valid, sums);
     }
 
     /// `S` of four samples into `sums` (one vector per channel); returns the lanes the scalar
     /// model must evaluate instead, as bits.
     #[inline(always)]
-    fn group(&self, angles: &[Angles], sums: &mut [V]) -> u32 {
+    fn group(&self, angles: &[Angles; LANES], sums: &mut [V]) -> u32 {
         let ha = [0, 1, 2, 3].map(|l| {
             let a = &angles[l];
             half_angles(a.theta_i, a.phi_i, a.theta_r, a.phi_r)
@@ -464,7 +438,7 @@ impl<'a> Lanes<'a> {
         sums.fill(V::ZERO);
 
         if lobes.r || lobes.tt {
-            let br = bravais(V::splat(self.eta), sin_td, cos_td, inv_cos_td);
+            let br = bravais(V::splat(self.params.eta), sin_td, cos_td, inv_cos_td);
             if lobes.r {
                 let m = self.longitudinal(0, theta_h) * inv_cos2;
                 let (h, cos_gi) = (phi * -0.5).sin_cos();
@@ -496,10 +470,10 @@ impl<'a> Lanes<'a> {
         }
         if lobes.trt {
             let eta = if self.config.effects.eccentricity {
-                let (sum, diff) = self.eccentric;
+                let (sum, diff) = self.prepared.eccentric;
                 (V::splat(diff) * (phi_h * 2.0).cos() + sum) * 0.5
             } else {
-                V::splat(self.eta)
+                V::splat(self.params.eta)
             };
             let br = bravais(eta, sin_td, cos_td, inv_cos_td);
             irregular |= bits(!br.eta_p.cmp_ge(V::ONE));
@@ -585,11 +559,12 @@ impl<'a> Lanes<'a> {
         let phi_c = keep(below, phi_c.abs());
         let (sin_gc, cos_gc) = gc.sin_cos();
         let d2 = (map.a * gc * 6.0 / (cos_gc * cos_gc)).abs();
-        let (w_c, dhm) = (self.w_c, self.delta_h_m);
+        let glint = &self.prepared.glint;
+        let (w_c, dhm) = (glint.w_c, glint.delta_h_m);
         let narrow = V::splat(8.0 * w_c).cmp_lt(d2 * (dhm * dhm));
         let delta_h_caustic = narrow.blend((V::splat(w_c * 2.0) / d2).sqrt() * 2.0, V::splat(dhm));
         // Past the merge: t = 1 − smoothstep(2, 2 + Δη', η').
-        let upper = self.delta_eta_prime + 2.0;
+        let upper = glint.delta_eta_prime + 2.0;
         let u = (eta_p - 2.0) / (upper - 2.0);
         let smooth = u.cmp_le(V::ZERO).blend(
             V::ZERO,
@@ -599,7 +574,7 @@ impl<'a> Lanes<'a> {
         let (dm, bad_m) = wrap(-phi_c + phi);
         let (dp, bad_p) = wrap(phi_c + phi);
         let bump = |x: V| {
-            let z = x * self.inv_w_c;
+            let z = x * glint.inv_w_c;
             (z * z * -0.5).exp()
         };
         let (g_m, g_p) = (bump(dm), bump(dp));
@@ -625,13 +600,10 @@ impl<'a> Lanes<'a> {
         if bits(on) == 0 {
             return;
         }
-        let cos_gt = cos_gamma_t(gl.h_c, br.inv_eta_p);
-        let f = fresnel(br.eta_p, br.eta_pp, gl.cos_gc, cos_gt);
-        let lobes = gl.g_sum * self.inv_w_c * INV_SQRT_TAU;
-        let t = -f + 1.0;
-        let base = t * t * f * gl.t * self.k_g * gl.delta_h * lobes * m;
-        let chord = cos_gt * 2.0 * br.inv_cos_theta_t;
-        self.add_absorbed(2.0, base, chord, on, sums);
+        let glint = &self.prepared.glint;
+        let lobes = gl.g_sum * glint.inv_w_c * INV_SQRT_TAU;
+        let weight = gl.t * glint.k_g * gl.delta_h * lobes * m;
+        self.add_through_fiber(2, br, gl.h_c, gl.cos_gc, weight, on, sums);
     }
 }
 
@@ -681,11 +653,15 @@ mod tests {
             .collect();
         let config = ModelConfig::default();
         let prepared = Prepared::new(&params);
-        let lanes = Lanes::new(&params, &prepared, &config);
+        let lanes = Lanes {
+            params: &params,
+            prepared: &prepared,
+            config: &config,
+        };
         let mut sums = vec![V::ZERO; 3];
         let fell_back: u32 = angles
-            .chunks(LANES)
-            .map(|g| lanes.group(g, &mut sums).count_ones())
+            .chunks_exact(LANES)
+            .map(|g| lanes.group(g.try_into().unwrap(), &mut sums).count_ones())
             .sum();
         assert!(
             (fell_back as usize) * 100 < angles.len(),

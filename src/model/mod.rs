@@ -374,11 +374,22 @@ pub fn scattering_batch<T: ModelNum>(
     );
     let prepared = Prepared::new(params);
     for (a, o) in angles.iter().zip(out.chunks_mut(nc.max(1))) {
-        for v in o.iter_mut() {
-            *v = T::from(0.0);
-        }
-        evaluate(params, &prepared, config, a, &mut Total(o));
+        evaluate_into(params, &prepared, config, a, o);
     }
+}
+
+/// `S` of one sample, one value per channel, into `out` (overwritten).
+fn evaluate_into<T: ModelNum>(
+    params: &Params<T>,
+    prepared: &Prepared<T>,
+    config: &ModelConfig,
+    angles: &Angles,
+    out: &mut [T],
+) {
+    for v in out.iter_mut() {
+        *v = T::from(0.0);
+    }
+    evaluate(params, prepared, config, angles, &mut Total(out));
 }
 
 /// Same, split per lobe: `out[c] = [R, TT, TRT]` contributions (each already divided by
