@@ -99,13 +99,7 @@ impl FitArgs {
     /// file's header gives it up front: [`FitArgs::check_fixes`]).
     pub fn check(&self) -> Result<()> {
         self.options(None)?;
-        let nc = crate::fit::fixes::channels_named(&self.fix).ok_or_else(|| {
-            Error::Other(format!(
-                "--fix {}: a channel index that large names no channel of any dataset",
-                self.fix.join(" --fix ")
-            ))
-        })?;
-        self.check_fixes(nc)
+        self.check_fixes(crate::fit::fixes::channels_named(&self.fix)?)
     }
 
     /// Check every `--fix` against data of `nc` channels (names, values, channel indices).

@@ -398,12 +398,7 @@ pub fn check_fixes(fix: &[String], nc: Option<usize>) -> Result<()> {
     }
     let nc = match nc {
         Some(nc) => nc,
-        None => channels_named(fix).ok_or_else(|| {
-            Error::Other(format!(
-                "--fix {}: a channel index that large names no channel of any dataset",
-                fix.join(" --fix ")
-            ))
-        })?,
+        None => channels_named(fix)?,
     };
     crate::fit::parse_fixes(fix, nc)?;
     crate::chiang::fit::parse_fixes(fix, nc)?;

@@ -308,7 +308,6 @@ pub(crate) fn parse_cell(
     ))
 }
 
-/// Load a header CSV file.
 /// The channel names a CSV file's header declares, read from the header alone (the loader
 /// reads the same header the same way); `None` when the file or its header cannot be read
 /// (loading it then says why).
@@ -321,6 +320,7 @@ pub(crate) fn header_channels(path: &Path, options: &LoadOptions) -> Option<Vec<
         .map(|c| c.channels)
 }
 
+/// Load a header CSV file.
 pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
     let mut reader = super::open(path)?;
     let delimiter = options.delimiter_for(path)?;

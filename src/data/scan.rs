@@ -26,13 +26,13 @@ fn option_error(msg: String) -> Error {
     Error::Other(msg)
 }
 
-/// Resolve the scan options into a layout, with an error naming the offending option.
 /// The channel names `--columns` declares for a headerless scan (`None` when the options do
 /// not describe one; loading it then says why).
 pub(crate) fn column_channels(options: &LoadOptions) -> Option<Vec<String>> {
     layout(options).ok().map(|l| l.channels)
 }
 
+/// Resolve the scan options into a layout, with an error naming the offending option.
 fn layout(options: &LoadOptions) -> Result<Layout> {
     const VALID: &str = "theta_i, phi_i, theta_r, phi_r, radiance or radiance_<ch>, \
                          sigma[_<ch>], weight[_<ch>], `_` or `skip`";

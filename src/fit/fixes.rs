@@ -97,15 +97,21 @@ pub fn channel_index(name: &str) -> Option<usize> {
 
 /// The fewest channels under which every `sigma_a[k]` of these `--fix` items names a channel
 /// (at least one): what options are checked against before the data's own count is known.
-/// `None` when an index is so large (over a million) that no dataset has that many channels.
-pub fn channels_named(items: &[String]) -> Option<usize> {
+/// An error when an index is so large (over a million) that no dataset has that many channels.
+pub fn channels_named(items: &[String]) -> Result<usize> {
     const MAX_CHANNELS: usize = 1 << 20;
     let most = items
         .iter()
         .filter_map(|i| channel_index(i.split_once('=')?.0.trim()))
         .max()
         .map_or(1, |k| k.saturating_add(1));
-    (most <= MAX_CHANNELS).then_some(most)
+    if most > MAX_CHANNELS {
+        return Err(Error::Other(format!(
+            "--fix {}: a channel index that large names no channel of any dataset",
+            items.join(" --fix ")
+        )));
+    }
+    Ok(most)
 }
 
 /// The parameters a fit varies and the values of the others.
@@ -165,11 +171,14 @@ mod tests {
             .to_string();
         assert!(e.contains("3 channels (sigma_a[0] … sigma_a[2])"), "{e}");
         assert_eq!(
-            channels_named(&items(&["sigma_a[5]=0.3", "eta=1.5"])),
-            Some(6)
+            channels_named(&items(&["sigma_a[5]=0.3", "eta=1.5"])).unwrap(),
+            6
         );
-        assert_eq!(channels_named(&items(&["k_g=2"])), Some(1));
-        assert_eq!(channels_named(&items(&["sigma_a[99999999999]=1"])), None);
+        assert_eq!(channels_named(&items(&["k_g=2"])).unwrap(), 1);
+        assert!(channels_named(&items(&["sigma_a[99999999999]=1"]))
+            .unwrap_err()
+            .to_string()
+            .contains("names no channel of any dataset"));
         assert_eq!(channel_index("sigma_a[+1]"), None);
     }
 
