@@ -4,8 +4,9 @@
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use hairfit::fit::{Forward, ModelForward};
 use hairfit::model::{
-    scattering, scattering_batch, scattering_jacobian, scattering_lanes, Angles, Effects, Lobes,
-    Measurement, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
+    scattering, scattering_batch, scattering_jacobian, scattering_lanes, scattering_lanes_on,
+    Angles, Effects, LaneKernel, Lobes, Measurement, ModelConfig, ParamName, Params, RootMode,
+    StaticJacobian,
 };
 use hairfit::params::ParameterFile as _;
 
@@ -153,7 +154,8 @@ fn bench_batch(c: &mut Criterion) {
 }
 
 /// `hairfit eval`'s f64 path: the batch four samples per vector against the scalar batch, all
-/// effects, cubic mode, 1 and 3 channels.
+/// effects, cubic mode, 1 and 3 channels; "four lanes" is the kernel this CPU gets (AVX2 where
+/// it has it), "wide lanes" the SSE2 kernel every x86-64 CPU runs.
 fn bench_lanes(c: &mut Criterion) {
     let angles = angle_set();
     let config = ModelConfig::default();
@@ -173,6 +175,12 @@ fn bench_lanes(c: &mut Criterion) {
         group.bench_function(format!("four lanes, {nc} ch"), |b| {
             b.iter(|| {
                 scattering_lanes(black_box(&p), &config, &angles, &mut out);
+                out[0]
+            })
+        });
+        group.bench_function(format!("wide lanes, {nc} ch"), |b| {
+            b.iter(|| {
+                scattering_lanes_on(LaneKernel::Wide, black_box(&p), &config, &angles, &mut out);
                 out[0]
             })
         });

@@ -3,9 +3,13 @@
 //! reach the fast path's limits (TT fold, past the glint merge, strong absorption, narrow lobes)
 //! and the hard directions (grazing, φ = ±φ_c, φ = ±π).
 //!
-//! Tolerance: the two paths do the same operations (a few products regrouped) except the
-//! transcendental functions (the `wide` crate's vector sin/cos/exp/asin/acos against libm, each
-//! within ~1 ulp) and a few divisions replaced by one reciprocal (0.5 ulp each). Along a sample's ~100
+//! Both lane kernels are tested: wide's vectors on any CPU, and the AVX2 one where the CPU has
+//! it (the one `scattering_lanes` picks there); they do the same IEEE operations, so they must
+//! give the same bits.
+//!
+//! Tolerance: the lanes and the scalar model do the same operations (a few products regrouped)
+//! except the transcendental functions (the lanes' own vector sin/cos/exp/asin/acos against
+//! libm, each within 1 ulp) and a few divisions replaced by one reciprocal (0.5 ulp each). Along a sample's ~100
 //! operations that is ~1e-14 relative. Two places amplify it, in both paths alike: next to a
 //! caustic `1/|Φ'|` (bounded by the MIN_DENOM floor), and towards grazing, where
 //! `η' = sqrt(η² − sin²θ_d)/cos θ_d` grows without bound and the transmission `1 − F ≈ 4/η'`
@@ -24,10 +28,21 @@ use hairfit::fit::demo::demo_truth;
 use hairfit::model::azimuthal::caustic_position;
 use hairfit::model::eccentricity::eccentric_terms;
 use hairfit::model::{
-    scattering_batch, scattering_lanes, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
+    scattering_batch, scattering_lanes, scattering_lanes_on, Angles, Effects, LaneKernel, Lobes,
+    ModelConfig, Params, RootMode,
 };
 
 const TOLERANCE: f64 = 1e-11;
+
+/// The kernels this CPU runs: wide's always, the AVX2 one where the CPU has AVX2 and FMA.
+fn kernels() -> Vec<LaneKernel> {
+    if LaneKernel::avx2_available() {
+        vec![LaneKernel::Wide, LaneKernel::Avx2]
+    } else {
+        eprintln!("this CPU has no AVX2+FMA: the AVX2 kernel is not tested here");
+        vec![LaneKernel::Wide]
+    }
+}
 
 /// `1 + η'` at the largest index any lobe of `params` sees at this direction: the conditioning
 /// of S towards grazing (see the module note).
@@ -162,10 +177,31 @@ fn effect_sets() -> Vec<(&'static str, Effects)> {
 /// The worst `|lanes − reference| / (max(|lanes|, |reference|) · conditioning)`; panics at the
 /// first value outside the tolerance.
 fn compare(params: &Params<f64>, config: &ModelConfig, angles: &[Angles], what: &str) -> f64 {
+    kernels()
+        .into_iter()
+        .map(|kernel| {
+            compare_on(
+                kernel,
+                params,
+                config,
+                angles,
+                &format!("{kernel:?}: {what}"),
+            )
+        })
+        .fold(0.0, f64::max)
+}
+
+fn compare_on(
+    kernel: LaneKernel,
+    params: &Params<f64>,
+    config: &ModelConfig,
+    angles: &[Angles],
+    what: &str,
+) -> f64 {
     let nc = params.sigma_a.len();
     let mut lanes = vec![f64::NAN; angles.len() * nc];
     let mut reference = vec![f64::NAN; angles.len() * nc];
-    scattering_lanes(params, config, angles, &mut lanes);
+    scattering_lanes_on(kernel, params, config, angles, &mut lanes);
     scattering_batch(params, config, angles, &mut reference);
     let floor = 1e-15 * reference.iter().fold(0.0f64, |m, v| m.max(v.abs())) + 1e-300;
     let mut worst = 0.0f64;
@@ -261,13 +297,22 @@ fn samples_off_the_fast_path_get_the_reference_bits() {
     };
     let run = |config: &ModelConfig, angles: &[Angles], params: &Params<f64>| {
         let n = angles.len() * params.sigma_a.len();
-        let (mut lanes, mut reference) = (vec![0.0; n], vec![0.0; n]);
-        scattering_lanes(params, config, angles, &mut lanes);
+        let mut reference = vec![0.0; n];
         scattering_batch(params, config, angles, &mut reference);
+        let lanes: Vec<Vec<f64>> = kernels()
+            .into_iter()
+            .map(|kernel| {
+                let mut lanes = vec![0.0; n];
+                scattering_lanes_on(kernel, params, config, angles, &mut lanes);
+                lanes
+            })
+            .collect();
         (lanes, reference)
     };
     let (lanes, reference) = run(&exact, &angles, &params);
-    assert_eq!(bits(&lanes), bits(&reference), "exact mode");
+    for lanes in &lanes {
+        assert_eq!(bits(lanes), bits(&reference), "exact mode");
+    }
     // η < 2/√3 folds the cubic TT map at θ_d = 0: with TT alone every lane falls back there,
     // so every value is the reference's to the bit.
     let folded = Params {
@@ -295,7 +340,9 @@ fn samples_off_the_fast_path_get_the_reference_bits() {
         })
         .collect();
     let (lanes, reference) = run(&tt, &level, &folded);
-    assert_eq!(bits(&lanes), bits(&reference), "TT folded everywhere");
+    for lanes in &lanes {
+        assert_eq!(bits(lanes), bits(&reference), "TT folded everywhere");
+    }
     assert!(
         reference.iter().any(|&v| v > 0.0),
         "TT contributes somewhere"
@@ -310,27 +357,57 @@ fn a_sample_gets_the_same_bits_wherever_it_stands() {
     let config = ModelConfig::default();
     let angles = random_angles(403, 11);
     let nc = params.sigma_a.len();
-    let mut batch = vec![0.0; angles.len() * nc];
-    scattering_lanes(&params, &config, &angles, &mut batch);
-    let mut rotated = angles.clone();
-    rotated.rotate_left(1);
-    let mut shifted = vec![0.0; angles.len() * nc];
-    scattering_lanes(&params, &config, &rotated, &mut shifted);
-    for (k, a) in angles.iter().enumerate() {
-        let mut alone = vec![0.0; nc];
-        scattering_lanes(&params, &config, std::slice::from_ref(a), &mut alone);
-        let here = &batch[k * nc..(k + 1) * nc];
-        let j = (k + angles.len() - 1) % angles.len();
-        assert_eq!(
-            bits(&alone),
-            bits(here),
-            "sample {k} alone and in the batch"
-        );
-        assert_eq!(
-            bits(&shifted[j * nc..(j + 1) * nc]),
-            bits(here),
-            "sample {k} one lane over"
-        );
+    for kernel in kernels() {
+        let run = |angles: &[Angles]| {
+            let mut out = vec![0.0; angles.len() * nc];
+            scattering_lanes_on(kernel, &params, &config, angles, &mut out);
+            out
+        };
+        let batch = run(&angles);
+        let mut rotated = angles.clone();
+        rotated.rotate_left(1);
+        let shifted = run(&rotated);
+        for (k, a) in angles.iter().enumerate() {
+            let alone = run(std::slice::from_ref(a));
+            let here = &batch[k * nc..(k + 1) * nc];
+            let j = (k + angles.len() - 1) % angles.len();
+            assert_eq!(
+                bits(&alone),
+                bits(here),
+                "{kernel:?}: sample {k} alone and in the batch"
+            );
+            assert_eq!(
+                bits(&shifted[j * nc..(j + 1) * nc]),
+                bits(here),
+                "{kernel:?}: sample {k} one lane over"
+            );
+        }
+    }
+}
+
+/// `hairfit eval` prints the same digits on any CPU: the AVX2 kernel gives wide's bits, for
+/// every effect set and parameter set, channel counts 1, 3 and 5 included.
+#[test]
+fn both_kernels_give_the_same_bits() {
+    let angles = random_angles(1001, 13);
+    for (pname, params) in parameter_sets() {
+        for (ename, effects) in effect_sets() {
+            let config = ModelConfig {
+                mode: RootMode::Cubic,
+                effects,
+            };
+            let n = angles.len() * params.sigma_a.len();
+            let (mut picked, mut each) = (vec![0.0; n], Vec::new());
+            scattering_lanes(&params, &config, &angles, &mut picked);
+            for kernel in kernels() {
+                let mut out = vec![0.0; n];
+                scattering_lanes_on(kernel, &params, &config, &angles, &mut out);
+                each.push(bits(&out));
+            }
+            for (kernel, out) in kernels().iter().zip(&each) {
+                assert_eq!(out, &bits(&picked), "{kernel:?}, {pname}, {ename}");
+            }
+        }
     }
 }
 

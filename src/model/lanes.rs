@@ -1,33 +1,75 @@
 //! `S` four samples at a time, for plain f64 in cubic mode (what `hairfit eval` runs): each step
-//! of the scalar [`super::evaluate`] done on four lanes of `wide::f64x4`, with its vector sin/cos,
-//! exp, asin and acos. The default x86-64 target has no AVX, so a four-lane vector is two SSE2
-//! registers: this takes about half the scalar model's instructions (1,340 against 2,520 per
-//! sample with every effect on, random directions; callgrind).
+//! of the scalar [`super::evaluate`] done on four-lane vectors ([`vector::Lane`]). On CPUs with
+//! AVX2 and FMA the vector is one 256-bit register with this crate's own exp, sin/cos, asin and
+//! acos ([`avx2`]); elsewhere it is `wide::f64x4`, which the default x86-64 target builds as two
+//! SSE2 halves with wide's functions. Per sample with every effect on (random directions,
+//! callgrind): the scalar model takes 2,520 instructions, wide's lanes 1,340, the AVX2 lanes
+//! fewer still (the README has the times).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
 //! path is evaluated again by the scalar model, which stays the reference; elsewhere the two agree
-//! to ~1e-13 relative (the vector and libm transcendental functions differ in the last bits;
-//! tests/model_lanes.rs states the tolerance and why).
+//! to ~1e-13 relative (the vector and libm transcendental functions differ in the last bits, so
+//! the two kernels differ there from each other too; tests/model_lanes.rs states the tolerance
+//! and why).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
-use wide::{f64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt, CmpNe};
+use wide::f64x4;
 
 use super::angles::half_angles;
 use super::azimuthal::MIN_DENOM;
 use super::longitudinal::INV_SQRT_TAU;
 use super::{evaluate_into, scattering_batch, Angles, ModelConfig, Params, Prepared, RootMode};
 
-type V = f64x4;
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+mod functions;
+mod vector;
+use functions::floor;
+use vector::Lane;
 
 /// Lanes per group.
 const LANES: usize = 4;
+
+/// Which vector type runs the lanes.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LaneKernel {
+    /// The best this CPU has: AVX2 where present, else wide's.
+    Detect,
+    /// `wide::f64x4` with its functions, on any CPU.
+    Wide,
+    /// One AVX register; `Wide` on CPUs without AVX2. Same bits as `Wide`.
+    Avx2,
+}
+
+impl LaneKernel {
+    /// Whether this CPU runs the AVX2 kernel.
+    pub fn avx2_available() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        return avx2::available();
+        #[cfg(not(target_arch = "x86_64"))]
+        return false;
+    }
+}
 
 /// [`super::scattering_batch`] for f64: `out[k * nc + c]`. Cubic mode runs four samples per
 /// vector (each sample's value depends on that sample only, not on its neighbours or its place
 /// in the batch); exact mode runs the scalar model.
 pub fn scattering_lanes(
+    params: &Params<f64>,
+    config: &ModelConfig,
+    angles: &[Angles],
+    out: &mut [f64],
+) {
+    scattering_lanes_on(LaneKernel::Detect, params, config, angles, out)
+}
+
+/// [`scattering_lanes`] on a chosen kernel (tests and benchmarks compare them).
+#[doc(hidden)]
+pub fn scattering_lanes_on(
+    kernel: LaneKernel,
     params: &Params<f64>,
     config: &ModelConfig,
     angles: &[Angles],
@@ -50,17 +92,15 @@ pub fn scattering_lanes(
         config,
     };
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if kernel != LaneKernel::Wide && avx2::available() {
         // SAFETY: the CPU has AVX2.
         unsafe { groups_avx2(&lanes, angles, out, &scalar) };
         return;
     }
-    groups_baseline(&lanes, angles, out, &scalar);
+    groups::<f64x4>(&lanes, angles, out, &scalar);
 }
 
-/// The groups with AVX2 enabled. `wide` picks its instructions at compile time, so its f64x4
-/// stays two 128-bit halves here too; the VEX three-operand forms still save ~7% of the
-/// instructions (callgrind, 100k rows of eval: 337 M against 362 M).
+/// The groups on [`avx2::F64x4`], compiled for AVX2 so that its intrinsics inline.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn groups_avx2(
@@ -69,11 +109,11 @@ unsafe fn groups_avx2(
     out: &mut [f64],
     scalar: &dyn Fn(&Angles, &mut [f64]),
 ) {
-    groups_baseline(lanes, angles, out, scalar)
+    groups::<avx2::F64x4>(lanes, angles, out, scalar)
 }
 
 #[inline(always)]
-fn groups_baseline(
+fn groups<V: Lane>(
     lanes: &Lanes<'_>,
     angles: &[Angles],
     out: &mut [f64],
@@ -98,7 +138,7 @@ fn groups_baseline(
 /// The first `used` samples of `group` into `o` (`o[l * nc + c]`), the lanes off the fast path
 /// by the scalar model.
 #[inline(always)]
-fn one_group(
+fn one_group<V: Lane>(
     lanes: &Lanes<'_>,
     group: &[Angles; LANES],
     used: usize,
@@ -128,34 +168,28 @@ struct Lanes<'a> {
 }
 
 /// `x` where `mask` is set, else 0.
-#[inline]
-fn keep(mask: V, x: V) -> V {
+#[inline(always)]
+fn keep<V: Lane>(mask: V, x: V) -> V {
     mask.blend(x, V::ZERO)
 }
 
 /// Lanes set in `mask`, as bits.
-#[inline]
-fn bits(mask: V) -> u32 {
+#[inline(always)]
+fn bits<V: Lane>(mask: V) -> u32 {
     mask.move_mask() as u32
 }
 
-/// `floor` and `ceil` without libm: wide rounds to nearest without a libm call.
-#[inline]
-fn floor(x: V) -> V {
-    let r = x.round();
-    r - keep(r.cmp_gt(x), V::ONE)
-}
-
-#[inline]
-fn ceil(x: V) -> V {
+/// `ceil` without libm, as [`floor`].
+#[inline(always)]
+fn ceil<V: Lane>(x: V) -> V {
     let r = x.round();
     r + keep(r.cmp_lt(x), V::ONE)
 }
 
 /// `angles::wrap` for `|x| < 4π` (the same operations, so the same bits); lanes outside that
 /// range are reported in the second value.
-#[inline]
-fn wrap(x: V) -> (V, V) {
+#[inline(always)]
+fn wrap<V: Lane>(x: V) -> (V, V) {
     let inside = x.abs().cmp_lt(V::splat(TAU));
     let once = x.cmp_ge(V::splat(TAU)) & x.cmp_lt(V::splat(2.0 * TAU));
     let r = inside.blend(x, x - TAU);
@@ -164,9 +198,16 @@ fn wrap(x: V) -> (V, V) {
     (y, !(inside | once))
 }
 
+/// The glint's unnormalised Gaussian `exp(−(x/w)²/2)`, `inv_w = 1/w`.
+#[inline(always)]
+fn bump<V: Lane>(x: V, inv_w: f64) -> V {
+    let z = x * inv_w;
+    (z * z * -0.5).exp()
+}
+
 /// `gaussian_inv(x, inv_s)`.
-#[inline]
-fn gaussian_inv(x: V, inv_s: f64) -> V {
+#[inline(always)]
+fn gaussian_inv<V: Lane>(x: V, inv_s: f64) -> V {
     let z = x * inv_s;
     (z * z * -0.5).exp() * inv_s * INV_SQRT_TAU
 }
@@ -175,15 +216,15 @@ fn gaussian_inv(x: V, inv_s: f64) -> V {
 /// divide by, all from one division: `root = sqrt(η² − sin²θ_d)`, `η' = root/cos θ_d`,
 /// `η'' = η² cos θ_d/root`, `cos θ_t = root/η`.
 #[derive(Clone, Copy)]
-struct BravaisLanes {
+struct BravaisLanes<V> {
     eta_p: V,
     eta_pp: V,
     inv_eta_p: V,
     inv_cos_theta_t: V,
 }
 
-#[inline]
-fn bravais(eta: V, sin_td: V, cos_td: V, inv_cos_td: V) -> BravaisLanes {
+#[inline(always)]
+fn bravais<V: Lane>(eta: V, sin_td: V, cos_td: V, inv_cos_td: V) -> BravaisLanes<V> {
     let s2 = sin_td * sin_td;
     let eta2 = eta * eta;
     let root = (eta2 - s2).sqrt();
@@ -197,15 +238,15 @@ fn bravais(eta: V, sin_td: V, cos_td: V, inv_cos_td: V) -> BravaisLanes {
 }
 
 /// `cos γ_t = sqrt(1 − (h/η')²)`.
-#[inline]
-fn cos_gamma_t(h: V, inv_eta_p: V) -> V {
+#[inline(always)]
+fn cos_gamma_t<V: Lane>(h: V, inv_eta_p: V) -> V {
     let x = h * inv_eta_p;
     (-(x * x) + 1.0).sqrt()
 }
 
 /// Fresnel `F` as [`super::fresnel::fresnel`].
-#[inline]
-fn fresnel(eta_p: V, eta_pp: V, cos_gi: V, cos_gt: V) -> V {
+#[inline(always)]
+fn fresnel<V: Lane>(eta_p: V, eta_pp: V, cos_gi: V, cos_gt: V) -> V {
     let a = eta_p * cos_gt;
     let b = eta_pp * cos_gi;
     let (n_s, d_s) = (cos_gi - a, cos_gi + a);
@@ -217,7 +258,7 @@ fn fresnel(eta_p: V, eta_pp: V, cos_gi: V, cos_gt: V) -> V {
 
 /// The cubic exit-angle map `Φ̂ = aγ³ + bγ + pπ` of one lobe on four lanes, with the
 /// closed-form root's per-map quantities (`1/a`, `P/3 = b/(3a)`).
-struct Cubic {
+struct Cubic<V> {
     p: f64,
     a: V,
     b: V,
@@ -225,9 +266,9 @@ struct Cubic {
     p3: V,
 }
 
-impl Cubic {
+impl<V: Lane> Cubic<V> {
     /// `c = asin(1/η')`, `a = −8pc/π³`, `b = 6pc/π − 2`, as `ExitMap::new`.
-    #[inline]
+    #[inline(always)]
     fn new(p: usize, inv_eta_p: V) -> Self {
         let c = inv_eta_p.asin();
         let pf = p as f64;
@@ -243,25 +284,25 @@ impl Cubic {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn value(&self, g: V) -> V {
         (self.a * (g * g) + self.b) * g + self.p * PI
     }
 
-    #[inline]
+    #[inline(always)]
     fn slope(&self, g: V) -> V {
         self.a * g * g * 3.0 + self.b
     }
 
     /// Lanes where the map folds: `b > 0` (`a < 0` always), so `dΦ̂/dγ = 0` at
     /// `γ_c = sqrt(−b/(3a)) = sqrt(−P/3)`.
-    #[inline]
+    #[inline(always)]
     fn folds(&self) -> V {
         self.b.cmp_gt(V::ZERO) & self.a.cmp_lt(V::ZERO)
     }
 
     /// The caustic `γ_c` and the lanes where it lies inside `(0, π/2)`.
-    #[inline]
+    #[inline(always)]
     fn caustic(&self) -> (V, V) {
         let g = (-self.p3).sqrt();
         (g, self.folds() & g.cmp_lt(V::splat(FRAC_PI_2)))
@@ -295,24 +336,28 @@ impl Cubic {
 
 /// `roots::cube_root_start` per lane: the exponent divided by 3 through the bits, then two
 /// Halley steps on four lanes.
-#[inline]
-fn cube_root_start(s: V) -> V {
+#[inline(always)]
+fn cube_root_start<V: Lane>(s: V) -> V {
     let m = s.abs();
     let guess = m
         .to_array()
         .map(|v| f64::from_bits(v.to_bits() / 3 + 0x2A9F_7893_0000_0000));
-    let halley = |u: V| {
-        let u3 = u * u * u;
-        u * (u3 + m * 2.0) / (u3 * 2.0 + m)
-    };
-    let u = halley(halley(V::new(guess))).copysign(s);
+    let u = halley(halley(V::new(guess), m), m).copysign(s);
     // 0 and non-finite values pass through, as in the scalar start.
     let pass = s.cmp_eq(V::ZERO) | !s.is_finite();
     pass.blend(s, u)
 }
 
+/// One Halley step from `u` towards `∛m`. (Functions here, not closures: a closure is not
+/// inlined into the AVX2 caller, and out of line its intrinsics become calls.)
+#[inline(always)]
+fn halley<V: Lane>(u: V, m: V) -> V {
+    let u3 = u * u * u;
+    u * (u3 + m * 2.0) / (u3 * 2.0 + m)
+}
+
 /// One monotone piece `[lo, hi]` of a map on four lanes, with the map's values at its ends.
-struct Piece {
+struct Piece<V> {
     lo: V,
     hi: V,
     f_lo: V,
@@ -326,7 +371,7 @@ struct Piece {
 /// Lanes with more than one root, a target on a piece's end, a start outside the piece or a
 /// Newton step that does not settle are irregular.
 #[inline(always)]
-fn piece_root(map: &Cubic, piece: &Piece, r: V, phi: V, active: V) -> (V, V, V) {
+fn piece_root<V: Lane>(map: &Cubic<V>, piece: &Piece<V>, r: V, phi: V, active: V) -> (V, V, V) {
     let (vmin, vmax) = (piece.f_lo.min(piece.f_hi), piece.f_lo.max(piece.f_hi));
     let k_min = ceil((vmin - phi) * (1.0 / TAU));
     let k_max = floor((vmax - phi) * (1.0 / TAU));
@@ -363,8 +408,8 @@ fn piece_root(map: &Cubic, piece: &Piece, r: V, phi: V, active: V) -> (V, V, V) 
 
 impl Lanes<'_> {
     /// `M_p(θ_h)`.
-    #[inline]
-    fn longitudinal(&self, p: usize, theta_h: V) -> V {
+    #[inline(always)]
+    fn longitudinal<V: Lane>(&self, p: usize, theta_h: V) -> V {
         let (alpha, inv_beta) = self.prepared.shapes[p];
         gaussian_inv(theta_h - alpha, inv_beta)
     }
@@ -374,10 +419,10 @@ impl Lanes<'_> {
     /// channel, where `mask` is set.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn add_through_fiber(
+    fn add_through_fiber<V: Lane>(
         &self,
         p: usize,
-        br: BravaisLanes,
+        br: BravaisLanes<V>,
         h: V,
         cos_gi: V,
         weight: V,
@@ -392,18 +437,18 @@ impl Lanes<'_> {
         let chord = cos_gt * 2.0 * br.inv_cos_theta_t;
         for (sum, &sigma) in sums.iter_mut().zip(&self.params.sigma_a) {
             let e = (chord * sigma * -(p as f64)).exp();
-            *sum += keep(mask, base * e);
+            *sum = *sum + keep(mask, base * e);
         }
     }
 
     /// Add one lobe's roots: `A cos γ / |2Φ'|` times `scale`, absorbed, where `valid`.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn add_root(
+    fn add_root<V: Lane>(
         &self,
         p: usize,
-        map: &Cubic,
-        br: BravaisLanes,
+        map: &Cubic<V>,
+        br: BravaisLanes<V>,
         g: V,
         valid: V,
         scale: V,
@@ -420,7 +465,7 @@ impl Lanes<'_> {
     /// `S` of four samples into `sums` (one vector per channel); returns the lanes the scalar
     /// model must evaluate instead, as bits.
     #[inline(always)]
-    fn group(&self, angles: &[Angles; LANES], sums: &mut [V]) -> u32 {
+    fn group<V: Lane>(&self, angles: &[Angles; LANES], sums: &mut [V]) -> u32 {
         let ha = [0, 1, 2, 3].map(|l| {
             let a = &angles[l];
             half_angles(a.theta_i, a.phi_i, a.theta_r, a.phi_r)
@@ -446,7 +491,7 @@ impl Lanes<'_> {
                 let f = fresnel(br.eta_p, br.eta_pp, cos_gi, cos_gt);
                 let v = f * cos_gi * 0.25 * m;
                 for sum in sums.iter_mut() {
-                    *sum += v;
+                    *sum = *sum + v;
                 }
             }
             if lobes.tt {
@@ -546,14 +591,14 @@ impl Lanes<'_> {
     /// `glint_geometry` and the fade of `add_trt_with_glints` on four lanes; the second value
     /// flags lanes whose `φ_c` the two-branch wrap does not cover.
     #[inline(always)]
-    fn glint_geometry(
+    fn glint_geometry<V: Lane>(
         &self,
-        map: &Cubic,
+        map: &Cubic<V>,
         eta_p: V,
         gc: V,
         has_caustic: V,
         phi: V,
-    ) -> (GlintLanes, u32) {
+    ) -> (GlintLanes<V>, u32) {
         let below = eta_p.cmp_lt(V::splat(2.0)) & has_caustic;
         let (phi_c, bad_wrap) = wrap(map.value(gc));
         let phi_c = keep(below, phi_c.abs());
@@ -573,11 +618,7 @@ impl Lanes<'_> {
         let t = below.blend(V::ONE, -smooth + 1.0);
         let (dm, bad_m) = wrap(-phi_c + phi);
         let (dp, bad_p) = wrap(phi_c + phi);
-        let bump = |x: V| {
-            let z = x * glint.inv_w_c;
-            (z * z * -0.5).exp()
-        };
-        let (g_m, g_p) = (bump(dm), bump(dp));
+        let (g_m, g_p) = (bump(dm, glint.inv_w_c), bump(dp, glint.inv_w_c));
         let fade = (-(t * g_m) + 1.0) * (-(t * g_p) + 1.0);
         let bad = bits((below & bad_wrap) | bad_m | bad_p);
         (
@@ -595,7 +636,7 @@ impl Lanes<'_> {
 
     /// The glint lobes `t·k_G·A(2, h_c)·Δh·(g(φ−φ_c) + g(φ+φ_c))` times `m`.
     #[inline(always)]
-    fn add_glint(&self, gl: &GlintLanes, br: BravaisLanes, m: V, sums: &mut [V]) {
+    fn add_glint<V: Lane>(&self, gl: &GlintLanes<V>, br: BravaisLanes<V>, m: V, sums: &mut [V]) {
         let on = gl.t.cmp_ne(V::ZERO);
         if bits(on) == 0 {
             return;
@@ -608,7 +649,7 @@ impl Lanes<'_> {
 }
 
 /// The TRT glint on four lanes.
-struct GlintLanes {
+struct GlintLanes<V> {
     t: V,
     h_c: V,
     cos_gc: V,
@@ -658,7 +699,7 @@ mod tests {
             prepared: &prepared,
             config: &config,
         };
-        let mut sums = vec![V::ZERO; 3];
+        let mut sums = vec![f64x4::ZERO; 3];
         let fell_back: u32 = angles
             .chunks_exact(LANES)
             .map(|g| lanes.group(g.try_into().unwrap(), &mut sums).count_ones())

@@ -38,6 +38,8 @@ use longitudinal::{gaussian_inv, lobe_shape};
 pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
 pub use lanes::scattering_lanes;
+#[doc(hidden)]
+pub use lanes::{scattering_lanes_on, LaneKernel};
 pub use measurement::Measurement;
 pub use parameters::{ParamSpec, Unit};
 

@@ -1,0 +1,168 @@
+//! What the lanes need of a four-lane f64 vector, as one trait: the arithmetic, comparisons that
+//! return all-ones masks, `blend`, a bit shift, and (provided, from [`super::functions`]) exp,
+//! sin/cos, asin and acos. Two types implement it: `wide::f64x4` (any x86-64; the default target
+//! builds it as two SSE2 halves) and, on CPUs with AVX2, [`super::avx2::F64x4`], one 256-bit
+//! register. Both do the same IEEE operations, so they give the same bits.
+
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
+
+use wide::{f64x4, u64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt, CmpNe};
+
+use super::functions;
+
+/// Four f64 lanes; masks are vectors whose set lanes have every bit set.
+pub(super) trait Lane:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + Add<f64, Output = Self>
+    + Sub<f64, Output = Self>
+    + Mul<f64, Output = Self>
+    + Div<f64, Output = Self>
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + BitXor<Output = Self>
+    + Not<Output = Self>
+{
+    const ZERO: Self;
+    const ONE: Self;
+    fn splat(x: f64) -> Self;
+    fn new(lanes: [f64; 4]) -> Self;
+    fn to_array(self) -> [f64; 4];
+    /// The sign bits, lane 0 lowest.
+    fn move_mask(self) -> i32;
+    /// `self`'s set lanes take `t`, the others `f`.
+    fn blend(self, t: Self, f: Self) -> Self;
+    fn cmp_eq(self, o: Self) -> Self;
+    /// Not equal, or unordered.
+    fn cmp_ne(self, o: Self) -> Self;
+    fn cmp_lt(self, o: Self) -> Self;
+    fn cmp_le(self, o: Self) -> Self;
+    fn cmp_gt(self, o: Self) -> Self;
+    fn cmp_ge(self, o: Self) -> Self;
+    fn abs(self) -> Self;
+    fn sqrt(self) -> Self;
+    /// To the nearest integer.
+    fn round(self) -> Self;
+    fn min(self, o: Self) -> Self;
+    fn max(self, o: Self) -> Self;
+    /// `self`'s magnitude with `sign`'s sign.
+    fn copysign(self, sign: Self) -> Self;
+    fn is_finite(self) -> Self;
+    /// Each lane's bits shifted left by `N`.
+    fn shl_bits<const N: i32>(self) -> Self;
+
+    /// `self · b + c`, not fused: a fused multiply-add would round differently on the CPUs that
+    /// have one.
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        self * b + c
+    }
+    #[inline(always)]
+    fn exp(self) -> Self {
+        functions::exp(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        functions::sin_cos(self)
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        functions::sin_cos(self).1
+    }
+    #[inline(always)]
+    fn asin(self) -> Self {
+        functions::asin(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        functions::acos(self)
+    }
+}
+
+/// wide's own methods (not its transcendental functions: the lanes' own are as fast on SSE2 and
+/// give the AVX2 kernel's bits).
+impl Lane for f64x4 {
+    const ZERO: Self = f64x4::ZERO;
+    const ONE: Self = f64x4::ONE;
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        f64x4::splat(x)
+    }
+    #[inline(always)]
+    fn new(lanes: [f64; 4]) -> Self {
+        f64x4::new(lanes)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f64; 4] {
+        f64x4::to_array(self)
+    }
+    #[inline(always)]
+    fn move_mask(self) -> i32 {
+        f64x4::move_mask(self)
+    }
+    #[inline(always)]
+    fn blend(self, t: Self, f: Self) -> Self {
+        f64x4::blend(self, t, f)
+    }
+    #[inline(always)]
+    fn cmp_eq(self, o: Self) -> Self {
+        CmpEq::cmp_eq(self, o)
+    }
+    #[inline(always)]
+    fn cmp_ne(self, o: Self) -> Self {
+        CmpNe::cmp_ne(self, o)
+    }
+    #[inline(always)]
+    fn cmp_lt(self, o: Self) -> Self {
+        CmpLt::cmp_lt(self, o)
+    }
+    #[inline(always)]
+    fn cmp_le(self, o: Self) -> Self {
+        CmpLe::cmp_le(self, o)
+    }
+    #[inline(always)]
+    fn cmp_gt(self, o: Self) -> Self {
+        CmpGt::cmp_gt(self, o)
+    }
+    #[inline(always)]
+    fn cmp_ge(self, o: Self) -> Self {
+        CmpGe::cmp_ge(self, o)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64x4::abs(self)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64x4::sqrt(self)
+    }
+    #[inline(always)]
+    fn round(self) -> Self {
+        f64x4::round(self)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        f64x4::min(self, o)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        f64x4::max(self, o)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        f64x4::copysign(self, sign)
+    }
+    #[inline(always)]
+    fn is_finite(self) -> Self {
+        f64x4::is_finite(self)
+    }
+    #[inline(always)]
+    fn shl_bits<const N: i32>(self) -> Self {
+        let bits: u64x4 = bytemuck::cast(self);
+        bytemuck::cast(bits << N)
+    }
+}
