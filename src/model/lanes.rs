@@ -1,17 +1,16 @@
 //! `S` four samples at a time, for plain f64 in cubic mode (what `hairfit eval` runs): each step
 //! of the scalar [`super::evaluate`] done on four-lane vectors ([`vector::Lane`]). On CPUs with
-//! AVX2 and FMA the vector is one 256-bit register with this crate's own exp, sin/cos, asin and
-//! acos ([`avx2`]); elsewhere it is `wide::f64x4`, which the default x86-64 target builds as two
-//! SSE2 halves with wide's functions. Per sample with every effect on (random directions,
-//! callgrind): the scalar model takes 2,520 instructions, wide's lanes 1,340, the AVX2 lanes
-//! fewer still (the README has the times).
+//! AVX2 the vector is one 256-bit register ([`avx2`], chosen at run time); elsewhere it is
+//! `wide::f64x4`, which the default x86-64 target builds as two SSE2 halves. Both run the lanes'
+//! own exp, sin/cos, asin and acos ([`functions`]) and the same IEEE operations, so they give the
+//! same bits. Per sample with every effect on (random directions, callgrind): the scalar model
+//! takes 2,520 instructions, the AVX2 lanes about 710 (the README has the times).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
 //! path is evaluated again by the scalar model, which stays the reference; elsewhere the two agree
-//! to ~1e-13 relative (the vector and libm transcendental functions differ in the last bits, so
-//! the two kernels differ there from each other too; tests/model_lanes.rs states the tolerance
-//! and why).
+//! to ~1e-13 relative (the lanes' and libm's transcendental functions differ in the last bits;
+//! tests/model_lanes.rs states the tolerance and why).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -38,7 +37,7 @@ const LANES: usize = 4;
 pub enum LaneKernel {
     /// The best this CPU has: AVX2 where present, else wide's.
     Detect,
-    /// `wide::f64x4` with its functions, on any CPU.
+    /// `wide::f64x4` (two SSE2 halves in the default build), on any CPU.
     Wide,
     /// One AVX register; `Wide` on CPUs without AVX2. Same bits as `Wide`.
     Avx2,
