@@ -25,7 +25,8 @@ pub(super) fn available() -> bool {
 /// `f64`'s sign bit.
 const SIGN: f64 = -0.0;
 
-macro_rules! arithmetic {
+/// `impl $trait for F64x4` by one intrinsic on the two registers.
+macro_rules! lanewise {
     ($trait:ident, $method:ident, $intrinsic:ident) => {
         impl $trait for F64x4 {
             type Output = Self;
@@ -35,6 +36,13 @@ macro_rules! arithmetic {
                 F64x4(unsafe { $intrinsic(self.0, o.0) })
             }
         }
+    };
+}
+
+/// [`lanewise`], and the same with an `f64` on the right (splat to every lane).
+macro_rules! arithmetic {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        lanewise!($trait, $method, $intrinsic);
         impl $trait<f64> for F64x4 {
             type Output = Self;
             #[inline(always)]
@@ -48,22 +56,9 @@ arithmetic!(Add, add, _mm256_add_pd);
 arithmetic!(Sub, sub, _mm256_sub_pd);
 arithmetic!(Mul, mul, _mm256_mul_pd);
 arithmetic!(Div, div, _mm256_div_pd);
-
-macro_rules! bitwise {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for F64x4 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                // SAFETY: as in `splat`.
-                F64x4(unsafe { $intrinsic(self.0, o.0) })
-            }
-        }
-    };
-}
-bitwise!(BitAnd, bitand, _mm256_and_pd);
-bitwise!(BitOr, bitor, _mm256_or_pd);
-bitwise!(BitXor, bitxor, _mm256_xor_pd);
+lanewise!(BitAnd, bitand, _mm256_and_pd);
+lanewise!(BitOr, bitor, _mm256_or_pd);
+lanewise!(BitXor, bitxor, _mm256_xor_pd);
 
 impl Neg for F64x4 {
     type Output = Self;

@@ -46,42 +46,37 @@ const ASIN_P: [f64; 13] = [
     0.166_666_666_666_666_69,
 ];
 
-/// `1/k!` for k = 13 down to 0: `e^r`'s Taylor coefficients, highest degree first.
-const EXP_TAYLOR: [f64; 14] = {
-    let mut c = [0.0; 14];
-    let mut i = 0;
-    while i < 14 {
-        c[i] = 1.0 / factorial(13 - i);
-        i += 1;
-    }
-    c
-};
+/// `e^r`'s Taylor coefficients `1/k!`, k = 13 down to 0.
+const EXP_TAYLOR: [f64; 14] = taylor(0, 1, 1.0, false);
 
 /// `S` in `sin r = r + r³·S(r²)`: `(−1)^(m+1)/(2m+3)!` for m = 7 down to 0.
-const SIN_TAYLOR: [f64; 8] = {
-    let mut c = [0.0; 8];
-    let mut i = 0;
-    while i < 8 {
-        let m = 7 - i;
-        let sign = if m % 2 == 0 { -1.0 } else { 1.0 };
-        c[i] = sign / factorial(2 * m + 3);
-        i += 1;
-    }
-    c
-};
+const SIN_TAYLOR: [f64; 8] = taylor(3, 2, -1.0, true);
 
 /// `C` in `cos r = 1 − r²/2 + r⁴·C(r²)`: `(−1)^m/(2m+4)!` for m = 6 down to 0.
-const COS_TAYLOR: [f64; 7] = {
-    let mut c = [0.0; 7];
+const COS_TAYLOR: [f64; 7] = taylor(4, 2, 1.0, true);
+
+/// Coefficients `sign_m/(lowest + step·m)!` for m = N−1 down to 0 (highest degree first), with
+/// `sign_m = first_sign·(−1)^m` when `alternate`, else `first_sign`.
+const fn taylor<const N: usize>(
+    lowest: usize,
+    step: usize,
+    first_sign: f64,
+    alternate: bool,
+) -> [f64; N] {
+    let mut c = [0.0; N];
     let mut i = 0;
-    while i < 7 {
-        let m = 6 - i;
-        let sign = if m % 2 == 0 { 1.0 } else { -1.0 };
-        c[i] = sign / factorial(2 * m + 4);
+    while i < N {
+        let m = N - 1 - i;
+        let sign = if alternate && m % 2 == 1 {
+            -first_sign
+        } else {
+            first_sign
+        };
+        c[i] = sign / factorial(lowest + step * m);
         i += 1;
     }
     c
-};
+}
 
 /// `k!` as f64 (exact up to 18!, which is all the series use).
 const fn factorial(k: usize) -> f64 {
