@@ -99,7 +99,9 @@ pub fn scattering_lanes_on(
     groups::<f64x4>(&lanes, angles, out, &scalar);
 }
 
-/// The groups on [`avx2::F64x4`], compiled for AVX2 so that its intrinsics inline.
+/// The groups on [`avx2::F64x4`], compiled for AVX2 so that its intrinsics inline. Every helper
+/// below is `#[inline(always)]` (and none is a closure) for that reason: a helper left out of
+/// line has no AVX2 context, and each intrinsic in it becomes a call (eval ran 3× slower).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn groups_avx2(
@@ -347,8 +349,7 @@ fn cube_root_start<V: Lane>(s: V) -> V {
     pass.blend(s, u)
 }
 
-/// One Halley step from `u` towards `∛m`. (Functions here, not closures: a closure is not
-/// inlined into the AVX2 caller, and out of line its intrinsics become calls.)
+/// One Halley step from `u` towards `∛m` (a function, not a closure: see `groups_avx2`).
 #[inline(always)]
 fn halley<V: Lane>(u: V, m: V) -> V {
     let u3 = u * u * u;
