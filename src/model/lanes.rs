@@ -4,7 +4,7 @@
 //! `wide::f64x4`, which the default x86-64 target builds as two SSE2 halves. Both run the lanes'
 //! own exp, sin/cos, asin and acos ([`functions`]) and the same IEEE operations, so they give the
 //! same bits. Per sample with every effect on (random directions, callgrind): the scalar model
-//! takes 2,520 instructions, the AVX2 lanes about 710 (the README has the times).
+//! takes 2,520 instructions, the AVX2 lanes about 670 (the README has the times).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
@@ -16,7 +16,6 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use wide::f64x4;
 
-use super::angles::half_angles;
 use super::azimuthal::MIN_DENOM;
 use super::longitudinal::INV_SQRT_TAU;
 use super::{evaluate_into, scattering_batch, Angles, ModelConfig, Params, Prepared, RootMode};
@@ -187,16 +186,18 @@ fn ceil<V: Lane>(x: V) -> V {
     r + keep(r.cmp_lt(x), V::ONE)
 }
 
-/// `angles::wrap` for `|x| < 4π` (the same operations, so the same bits); lanes outside that
-/// range are reported in the second value.
+/// `angles::wrap` for `|x| < 4π` (the same bits); lanes outside that range (and at exactly −2π,
+/// where fmod gives −0) are reported in the second value. On (−4π, −2π) `wrap` takes
+/// `fmod(x, 2π)`, which is exact, and `x + 2π` is exact there too (Sterbenz), so they agree.
 #[inline(always)]
 fn wrap<V: Lane>(x: V) -> (V, V) {
     let inside = x.abs().cmp_lt(V::splat(TAU));
     let once = x.cmp_ge(V::splat(TAU)) & x.cmp_lt(V::splat(2.0 * TAU));
-    let r = inside.blend(x, x - TAU);
+    let once_below = x.cmp_gt(V::splat(-2.0 * TAU)) & x.cmp_lt(V::splat(-TAU));
+    let r = inside.blend(x, once_below.blend(x + TAU, x - TAU));
     let y = r.cmp_lt(V::ZERO).blend(r + TAU, r);
     let y = y.cmp_gt(V::splat(PI)).blend(y - TAU, y);
-    (y, !(inside | once))
+    (y, !(inside | once | once_below))
 }
 
 /// The glint's unnormalised Gaussian `exp(−(x/w)²/2)`, `inv_w = 1/w`.
@@ -466,20 +467,22 @@ impl Lanes<'_> {
     /// model must evaluate instead, as bits.
     #[inline(always)]
     fn group<V: Lane>(&self, angles: &[Angles; LANES], sums: &mut [V]) -> u32 {
-        let ha = [0, 1, 2, 3].map(|l| {
-            let a = &angles[l];
-            half_angles(a.theta_i, a.phi_i, a.theta_r, a.phi_r)
-        });
-        let theta_h = V::new(ha.map(|h| h.theta_h));
-        let theta_d = V::new(ha.map(|h| h.theta_d));
-        let phi = V::new(ha.map(|h| h.phi));
-        let phi_h = V::new(ha.map(|h| h.phi_h));
+        // `half_angles` on the lanes (the same operations, so the same bits); a φ_r − φ_i
+        // beyond ±4π, which `wrap` would need its fmod for, is the scalar model's.
+        let theta_i = V::new([0, 1, 2, 3].map(|l| angles[l].theta_i));
+        let theta_r = V::new([0, 1, 2, 3].map(|l| angles[l].theta_r));
+        let phi_i = V::new([0, 1, 2, 3].map(|l| angles[l].phi_i));
+        let phi_r = V::new([0, 1, 2, 3].map(|l| angles[l].phi_r));
+        let theta_h = (theta_i + theta_r) * 0.5;
+        let theta_d = (theta_r - theta_i) * 0.5;
+        let (phi, far) = wrap(phi_r - phi_i);
+        let phi_h = (phi_i + phi_r) * 0.5;
+        let mut irregular = bits(far);
         let (sin_td, cos_td) = theta_d.sin_cos();
         let inv_cos_td = V::ONE / cos_td;
         let inv_cos2 = inv_cos_td * inv_cos_td;
         let lobes = self.config.effects.lobes;
         let all = V::new([f64::from_bits(u64::MAX); 4]);
-        let mut irregular = 0u32;
         sums.fill(V::ZERO);
 
         if lobes.r || lobes.tt {
@@ -670,6 +673,37 @@ mod tests {
         *state ^= *state >> 7;
         *state ^= *state << 17;
         (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// The lanes' `wrap` gives `angles::wrap`'s bits wherever it does not hand the lane back,
+    /// and hands back only |x| ≥ 4π and −2π itself.
+    #[test]
+    fn wrap_gives_the_scalar_bits() {
+        let mut state = 0x2545_F491_4F6C_DD1D;
+        let mut xs: Vec<f64> = (0..40_000)
+            .map(|_| (uniform(&mut state) - 0.5) * 9.0 * PI)
+            .collect();
+        for edge in [-2.0 * TAU, -TAU, -PI, 0.0, PI, TAU, 2.0 * TAU] {
+            xs.extend([edge, edge.next_up(), edge.next_down()]);
+        }
+        xs.extend([-0.0, 0.0]);
+        for c in xs.chunks(4) {
+            let lanes: [f64; 4] = std::array::from_fn(|l| *c.get(l).unwrap_or(&c[0]));
+            let (y, far) = wrap(f64x4::new(lanes));
+            let (y, far) = (y.to_array(), far.to_array());
+            for l in 0..4 {
+                let x = lanes[l];
+                let handed_back = far[l].to_bits() != 0;
+                assert_eq!(handed_back, x.abs() >= 2.0 * TAU || x == -TAU, "{x}");
+                if !handed_back {
+                    assert_eq!(
+                        y[l].to_bits(),
+                        super::super::angles::wrap(x).to_bits(),
+                        "{x}"
+                    );
+                }
+            }
+        }
     }
 
     /// The fast path is the common path: on random directions with typical parameters (all
