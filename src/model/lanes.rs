@@ -30,15 +30,13 @@ use vector::Lane;
 /// Lanes per group.
 const LANES: usize = 4;
 
-/// Which vector type runs the lanes.
+/// Which vector type runs the lanes (both give the same bits).
 #[doc(hidden)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LaneKernel {
-    /// The best this CPU has: AVX2 where present, else wide's.
-    Detect,
     /// `wide::f64x4` (two SSE2 halves in the default build), on any CPU.
     Wide,
-    /// One AVX register; `Wide` on CPUs without AVX2. Same bits as `Wide`.
+    /// One AVX register where the CPU has AVX2 (what `scattering_lanes` runs), else `Wide`.
     Avx2,
 }
 
@@ -61,7 +59,7 @@ pub fn scattering_lanes(
     angles: &[Angles],
     out: &mut [f64],
 ) {
-    scattering_lanes_on(LaneKernel::Detect, params, config, angles, out)
+    scattering_lanes_on(LaneKernel::Avx2, params, config, angles, out)
 }
 
 /// [`scattering_lanes`] on a chosen kernel (tests and benchmarks compare them).
@@ -90,7 +88,7 @@ pub fn scattering_lanes_on(
         config,
     };
     #[cfg(target_arch = "x86_64")]
-    if kernel != LaneKernel::Wide && avx2::available() {
+    if kernel == LaneKernel::Avx2 && avx2::available() {
         // SAFETY: the CPU has AVX2.
         unsafe { groups_avx2(&lanes, angles, out, &scalar) };
         return;

@@ -141,7 +141,8 @@ impl Lane for F64x4 {
             _mm256_round_pd::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(self.0)
         })
     }
-    /// `o` where either is NaN (wide's picks the number; the lanes clamp against constants).
+    /// `o` where either is NaN (wide's picks the number: the same wherever `o` is not NaN,
+    /// which is the trait's contract).
     #[inline(always)]
     fn min(self, o: Self) -> Self {
         // SAFETY: as in `splat`.

@@ -47,7 +47,9 @@ pub(super) trait Lane:
     fn sqrt(self) -> Self;
     /// To the nearest integer.
     fn round(self) -> Self;
+    /// `o` must not be NaN: where `self` is, both kernels give `o`.
     fn min(self, o: Self) -> Self;
+    /// As `min`.
     fn max(self, o: Self) -> Self;
     /// `self`'s magnitude with `sign`'s sign.
     fn copysign(self, sign: Self) -> Self;
@@ -85,6 +87,18 @@ pub(super) trait Lane:
 
 /// wide's own methods (not its transcendental functions: the lanes' own are as fast on SSE2 and
 /// give the AVX2 kernel's bits).
+/// `fn $name(self, …) -> Self` of [`Lane`] as wide's function of the same name.
+macro_rules! delegate {
+    ($($name:ident($($arg:ident),*) -> $out:ty = $to:path;)*) => {
+        $(
+            #[inline(always)]
+            fn $name(self $(, $arg: Self)*) -> $out {
+                $to(self $(, $arg)*)
+            }
+        )*
+    };
+}
+
 impl Lane for f64x4 {
     const ZERO: Self = f64x4::ZERO;
     const ONE: Self = f64x4::ONE;
@@ -96,69 +110,23 @@ impl Lane for f64x4 {
     fn new(lanes: [f64; 4]) -> Self {
         f64x4::new(lanes)
     }
-    #[inline(always)]
-    fn to_array(self) -> [f64; 4] {
-        f64x4::to_array(self)
-    }
-    #[inline(always)]
-    fn move_mask(self) -> i32 {
-        f64x4::move_mask(self)
-    }
-    #[inline(always)]
-    fn blend(self, t: Self, f: Self) -> Self {
-        f64x4::blend(self, t, f)
-    }
-    #[inline(always)]
-    fn cmp_eq(self, o: Self) -> Self {
-        CmpEq::cmp_eq(self, o)
-    }
-    #[inline(always)]
-    fn cmp_ne(self, o: Self) -> Self {
-        CmpNe::cmp_ne(self, o)
-    }
-    #[inline(always)]
-    fn cmp_lt(self, o: Self) -> Self {
-        CmpLt::cmp_lt(self, o)
-    }
-    #[inline(always)]
-    fn cmp_le(self, o: Self) -> Self {
-        CmpLe::cmp_le(self, o)
-    }
-    #[inline(always)]
-    fn cmp_gt(self, o: Self) -> Self {
-        CmpGt::cmp_gt(self, o)
-    }
-    #[inline(always)]
-    fn cmp_ge(self, o: Self) -> Self {
-        CmpGe::cmp_ge(self, o)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        f64x4::abs(self)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        f64x4::sqrt(self)
-    }
-    #[inline(always)]
-    fn round(self) -> Self {
-        f64x4::round(self)
-    }
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        f64x4::min(self, o)
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        f64x4::max(self, o)
-    }
-    #[inline(always)]
-    fn copysign(self, sign: Self) -> Self {
-        f64x4::copysign(self, sign)
-    }
-    #[inline(always)]
-    fn is_finite(self) -> Self {
-        f64x4::is_finite(self)
+    delegate! {
+        to_array() -> [f64; 4] = f64x4::to_array;
+        move_mask() -> i32 = f64x4::move_mask;
+        blend(t, f) -> Self = f64x4::blend;
+        cmp_eq(o) -> Self = CmpEq::cmp_eq;
+        cmp_ne(o) -> Self = CmpNe::cmp_ne;
+        cmp_lt(o) -> Self = CmpLt::cmp_lt;
+        cmp_le(o) -> Self = CmpLe::cmp_le;
+        cmp_gt(o) -> Self = CmpGt::cmp_gt;
+        cmp_ge(o) -> Self = CmpGe::cmp_ge;
+        abs() -> Self = f64x4::abs;
+        sqrt() -> Self = f64x4::sqrt;
+        round() -> Self = f64x4::round;
+        min(o) -> Self = f64x4::min;
+        max(o) -> Self = f64x4::max;
+        copysign(sign) -> Self = f64x4::copysign;
+        is_finite() -> Self = f64x4::is_finite;
     }
     #[inline(always)]
     fn shl_bits<const N: i32>(self) -> Self {
