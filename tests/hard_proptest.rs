@@ -126,16 +126,15 @@ proptest! {
 
     /// Eight directions (two vector groups) per case, on each lane kernel this CPU runs.
     /// Tolerance as in tests/model_lanes.rs (1e-11 × (1 + η'), the grazing conditioning, plus
-    /// 1e-15 of the largest value), times `1 + x` where `exp(−x)` absorbs (x up to 2σ_a·2/cos θ_t
-    /// on TRT's path: it turns a relative error δ of x into x·δ of S), and widened where rounding
-    /// is amplified in both paths alike:
+    /// 1e-15 of the largest value), widened where rounding is amplified in both paths alike
+    /// (worst measured over 5 × 90,000 cases):
     /// - for η or η* within 1e-3 of 1, where asin(1/η') is near its singular end and an ulp of
-    ///   1/η' moves the map by ~1e-10: 1e-3 (worst measured over 4 × 90,000 cases: 7.2e-5);
-    /// - with TRT, next to its fold, where N ~ 1/sqrt(δ): 1e-10 (measured 2.1e-11). Glints do
-    ///   not hide the fold: they replace the roots only within ~w_c of φ_c, and w_c goes down
-    ///   to 1e-4 rad.
+    ///   1/η' moves the map by ~1e-10: 1e-4 (measured 5.4e-5);
+    /// - with TRT, next to its fold, where N ~ 1/sqrt(δ): 1e-10 (measured 2.1e-11, the
+    ///   regression seed). Glints do not hide the fold: they replace the roots only within ~w_c
+    ///   of φ_c, and w_c goes down to 1e-4 rad.
     ///
-    /// Elsewhere measured 1.8e-13 against 1e-11.
+    /// Elsewhere measured 5.2e-13 against 1e-11.
     #[test]
     fn lanes_agree_with_the_scalar_model_inside_fit_bounds(
         p in params(), effects in effects(),
@@ -151,7 +150,7 @@ proptest! {
         let a2 = p.eccentricity * p.eccentricity;
         let (eta_1, eta_2) = (2.0 * (p.eta - 1.0) * a2 - p.eta + 2.0, 2.0 * (p.eta - 1.0) / a2 - p.eta + 2.0);
         let relative = if eta_1.min(eta_2).min(p.eta) - 1.0 < 1e-3 {
-            1e-3
+            1e-4
         } else if cfg.effects.lobes.trt {
             1e-10
         } else {
@@ -168,16 +167,10 @@ proptest! {
             for (k, (a, b)) in lanes.iter().zip(&reference).enumerate() {
                 let d = &angles[k / 3];
                 let theta_d = (d.theta_r - d.theta_i) / 2.0;
-                let sin2 = theta_d.sin().powi(2);
                 let eta = p.eta.max(eta_1).max(eta_2);
-                let kappa = 1.0 + (eta * eta - sin2).sqrt() / theta_d.cos();
-                // exp(−x) turns a relative error δ of x into x·δ of S: x ≤ 2σ_a·2/cos θ_t (TRT's
-                // longest path), cos θ_t least at the smallest index a lobe sees.
-                let eta_least = p.eta.min(eta_1).min(eta_2);
-                let cos_theta_t = (eta_least * eta_least - sin2).max(0.0).sqrt() / eta_least;
-                let absorption = 1.0 + 4.0 * p.sigma_a[k % 3] / cos_theta_t;
+                let kappa = 1.0 + (eta * eta - theta_d.sin().powi(2)).sqrt() / theta_d.cos();
                 prop_assert!(a.is_finite() && *a >= 0.0, "{:?}: S = {} at {:?}", kernel, a, d);
-                prop_assert!((a - b).abs() <= relative * kappa * absorption * a.max(*b) + floor,
+                prop_assert!((a - b).abs() <= relative * kappa * a.max(*b) + floor,
                     "{:?}: lanes {} vs reference {} at {:?}, channel {}", kernel, a, b, d, k % 3);
             }
         }
