@@ -27,8 +27,8 @@ pub fn remove_in_flight() {
         // The run's other threads may still be creating a file in it (remove_dir_all then
         // fails with "directory not empty"), or, having started an output just before
         // `atomic::stop_writing`, create the directory again behind the removal: remove until
-        // it stays gone for 10 ms (under a loaded CI, stopping at the first success left the
-        // directory behind about once in twenty runs).
+        // it stays gone for 10 ms (stopping at the first success left the directory behind once,
+        // in a full CI run under load).
         for _ in 0..200 {
             let _ = std::fs::remove_dir_all(p);
             if !p.exists() {
