@@ -466,11 +466,20 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         let model = self.model;
         self.values.clear();
         self.values.resize(self.angles.len() * n_channels, 0.0);
-        // Chunks of rows share the Chiang width integral per exit direction.
-        self.values
-            .par_chunks_mut(n_channels * EVAL_BATCH)
-            .zip(self.angles.par_chunks(EVAL_BATCH))
-            .for_each(|(out, a)| model(a, out));
+        // Chunks of rows share the Chiang width integral per exit direction. With one thread
+        // the batches run here, not on the pool's only worker while this thread sleeps (two
+        // wake-ups a chunk); the batches are the same, so are the values.
+        if rayon::current_num_threads() == 1 {
+            self.values
+                .chunks_mut(n_channels * EVAL_BATCH)
+                .zip(self.angles.chunks(EVAL_BATCH))
+                .for_each(|(out, a)| model(a, out));
+        } else {
+            self.values
+                .par_chunks_mut(n_channels * EVAL_BATCH)
+                .zip(self.angles.par_chunks(EVAL_BATCH))
+                .for_each(|(out, a)| model(a, out));
+        }
         if let Some(j) = self.values.iter().position(|v| !v.is_finite()) {
             let row = j / n_channels;
             let start = if row == 0 {
