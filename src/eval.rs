@@ -1,8 +1,8 @@
 //! `hairfit eval`: stream an angles CSV through the model and append the scattering values.
 //!
-//! The input is read and written in fixed-size chunks (evaluated in parallel with rayon), so memory
-//! stays bounded whatever the row count. Output files are written atomically: an error on any row
-//! leaves no output file behind.
+//! The input is read and written in fixed-size chunks (evaluated in parallel with rayon, or on the
+//! calling thread when the pool has one thread), so memory stays bounded whatever the row count.
+//! Output files are written atomically: an error on any row leaves no output file behind.
 
 use std::io::{Read, Write};
 use std::path::Path;
