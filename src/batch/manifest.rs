@@ -508,16 +508,18 @@ fn check_name(name: &str) -> std::result::Result<(), String> {
 /// Why `key` names no option, and which names do (`json`: the place already names the key).
 fn unknown_column(key: &str, options: &[FitOption], json: bool) -> String {
     let dashed = key.trim_start_matches('-').replace('_', "-");
-    let hint = if options.iter().any(|o| o.long == dashed) {
-        format!(" (did you mean `{dashed}`?)")
-    } else {
-        String::new()
-    };
     let names: Vec<&str> = options
         .iter()
         .map(|o| o.long.as_str())
         .filter(|n| !RUN_LEVEL.iter().any(|(k, _)| k == n))
         .collect();
+    let hint = if options.iter().any(|o| o.long == dashed) {
+        format!(" (did you mean `{dashed}`?)")
+    } else {
+        closest_name(&dashed, &names)
+            .map(|name| format!(" (did you mean `{name}`?)"))
+            .unwrap_or_default()
+    };
     if json {
         format!(
             "not a `hairfit fit` option{hint}; keys besides name and data are options without their dashes: {}",
@@ -529,6 +531,17 @@ fn unknown_column(key: &str, options: &[FitOption], json: bool) -> String {
             names.join(", ")
         )
     }
+}
+
+/// The name most like `typed`, when one is close enough to be the intended one: Jaro
+/// similarity above 0.8, as clap suggests a misspelt option (`lose` → `loss`, `sed` → `seed`).
+fn closest_name<'a>(typed: &str, names: &[&'a str]) -> Option<&'a str> {
+    names
+        .iter()
+        .map(|&name| (strsim::jaro(typed, name), name))
+        .filter(|&(similarity, _)| similarity > 0.8)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, name)| name)
 }
 
 /// A `hairfit fit` message in a manifest's words: the options it names (`--space linear`)
@@ -634,6 +647,12 @@ mod tests {
         let e = load("name,data,los\na,a.csv,cauchy\n", "csv").unwrap_err();
         let s = e.to_string();
         assert!(s.contains(":1:3:") && s.contains("`los`"), "{s}");
+        assert!(s.contains("(did you mean `loss`?)"), "{s}");
+        // A name like none of the options gets no guess.
+        let e = load("name,data,colour\na,a.csv,red\n", "csv").unwrap_err();
+        assert!(!e.to_string().contains("did you mean"), "{e}");
+        let e = load("name,data,sed\na,a.csv,3\n", "csv").unwrap_err();
+        assert!(e.to_string().contains("(did you mean `seed`?)"), "{e}");
         let e = load("name,data,loss\na,a.csv,cauchyy\n", "csv").unwrap_err();
         assert!(e.to_string().contains(":2:3:"), "{e}");
         let e = load("name,data\na,a.csv\nA,b.csv\n", "csv").unwrap_err();
