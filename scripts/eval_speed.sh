@@ -18,6 +18,19 @@ set -euo pipefail
 
 RUNS="${1:-20}"
 shift || true
+case "$RUNS" in
+    '' | *[!0-9]* | 0)
+        echo "eval_speed: RUNS must be a positive number of runs, not \`$RUNS\` (usage: scripts/eval_speed.sh [RUNS] [BINARY...])" >&2
+        exit 2
+        ;;
+esac
+bins=()
+for bin in "$@"; do
+    [ -x "$bin" ] || { echo "eval_speed: \`$bin\` is not an executable hairfit" >&2; exit 2; }
+    # Absolute, as the runs happen in WORKDIR.
+    bins+=("$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")")
+done
+set -- "${bins[@]+"${bins[@]}"}"
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 WORKDIR="${WORKDIR:-/tmp/hairfit-eval-speed}"
 ROWS="${ROWS:-1000000}"

@@ -469,16 +469,17 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         // Chunks of rows share the Chiang width integral per exit direction. With one thread
         // the batches run here, not on the pool's only worker while this thread sleeps (two
         // wake-ups a chunk); the batches are the same, so are the values.
+        let batch = |(out, a): (&mut [f64], &[Angles])| model(a, out);
+        let (values, angles) = (&mut self.values, &self.angles);
+        let width = n_channels * EVAL_BATCH;
         if rayon::current_num_threads() == 1 {
-            self.values
-                .chunks_mut(n_channels * EVAL_BATCH)
-                .zip(self.angles.chunks(EVAL_BATCH))
-                .for_each(|(out, a)| model(a, out));
+            let batches = values.chunks_mut(width).zip(angles.chunks(EVAL_BATCH));
+            batches.for_each(batch);
         } else {
-            self.values
-                .par_chunks_mut(n_channels * EVAL_BATCH)
-                .zip(self.angles.par_chunks(EVAL_BATCH))
-                .for_each(|(out, a)| model(a, out));
+            let batches = values
+                .par_chunks_mut(width)
+                .zip(angles.par_chunks(EVAL_BATCH));
+            batches.for_each(batch);
         }
         if let Some(j) = self.values.iter().position(|v| !v.is_finite()) {
             let row = j / n_channels;

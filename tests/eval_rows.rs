@@ -33,7 +33,7 @@ fn stand_in(angles: &[Angles], out: &mut [f64]) {
     }
 }
 
-/// θ_r in degrees as the model sees it.
+/// θ_r (degrees) in radians, as the model sees it.
 fn radians(theta_r: f64) -> f64 {
     Angles::from_degrees(0.0, 0.0, theta_r, 0.0).theta_r
 }
@@ -75,13 +75,14 @@ fn run(text: &str) -> hairfit::error::Result<String> {
     Ok(String::from_utf8(out).unwrap())
 }
 
-/// 60,000 rows (about 2 MB: two 1 MiB blocks and part of a third, four evaluation chunks): each
+/// 60,000 rows (about 1.4 MB: a 1 MiB block and part of a second, four evaluation chunks): each
 /// output line is its input line and then θ_r (radians, shortest round-trip text) three times,
-/// on the fast path, the split path and after the csv crate takes over in the second block.
+/// on the fast path, the split path and, with a quote in row 50,000 (the second block), after
+/// the csv crate takes over mid-file.
 #[test]
 fn every_row_keeps_its_text_and_gets_its_own_value() {
     let rows = 60_000;
-    for quote_at in [None, Some(30_000)] {
+    for quote_at in [None, Some(50_000)] {
         let text = table(rows, quote_at, None);
         let output = run(&text).unwrap();
         let inputs: Vec<&str> = text.lines().collect();
@@ -100,10 +101,11 @@ fn every_row_keeps_its_text_and_gets_its_own_value() {
 }
 
 /// The error quotes the row the non-finite value belongs to, on each path: a plain row, a row
-/// with a space (split path), a row after the csv crate took over, and a row in a later chunk.
+/// with a space (split path), a row after the csv crate took over in the second block, and a
+/// plain row of the second block's last chunk.
 #[test]
 fn a_non_finite_value_quotes_its_own_row() {
-    for (bad_at, quote_at) in [(5, None), (3, None), (40_000, Some(30_000)), (50_001, None)] {
+    for (bad_at, quote_at) in [(5, None), (3, None), (55_000, Some(50_000)), (58_001, None)] {
         let text = table(60_000, quote_at, Some(bad_at));
         let row = text.lines().nth(bad_at + 1).unwrap();
         let message = run(&text).unwrap_err().to_string();

@@ -85,9 +85,7 @@ pub(super) trait Lane:
     }
 }
 
-/// wide's own methods (not its transcendental functions: the lanes' own are as fast on SSE2 and
-/// give the AVX2 kernel's bits).
-/// `fn $name(self, …) -> Self` of [`Lane`] as wide's function of the same name.
+/// `fn $name(self, …) -> $out` of [`Lane`] as wide's function of the same name.
 macro_rules! delegate {
     ($($name:ident($($arg:ident),*) -> $out:ty = $to:path;)*) => {
         $(
@@ -99,6 +97,8 @@ macro_rules! delegate {
     };
 }
 
+/// wide's own methods (not its transcendental functions: the lanes' own are as fast on SSE2 and
+/// give the AVX2 kernel's bits).
 impl Lane for f64x4 {
     const ZERO: Self = f64x4::ZERO;
     const ONE: Self = f64x4::ONE;
