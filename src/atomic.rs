@@ -1,5 +1,7 @@
 //! Atomic file output: results are written to a temporary file beside the target and renamed into
 //! place only when complete, so an error or an interruption never leaves a half-written file.
+//! A target that is a link is resolved first (the file it names is replaced, the link stays); a
+//! device, FIFO or socket (`/dev/null`, a pipe) is written in place, never replaced.
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -60,13 +62,68 @@ impl Drop for InFlight {
     }
 }
 
+/// Where an output is written.
+#[derive(Debug, PartialEq, Eq)]
+enum Destination {
+    /// A regular file, or none yet, at this path (links resolved): replaced by a rename.
+    Replace(PathBuf),
+    /// A device, FIFO or socket: written in place as a shell's `>` would, since renaming a file
+    /// over it would replace `/dev/null` itself, or the pipe a reader waits on.
+    InPlace,
+}
+
+/// Links followed at most, as the kernel's own limit (ELOOP).
+const MAX_LINKS: usize = 40;
+
+fn destination(path: &Path) -> Destination {
+    let is_link = |p: &Path| std::fs::symlink_metadata(p).is_ok_and(|m| m.file_type().is_symlink());
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() || m.is_dir() => {
+            // A directory is left to fail as before; a linked file is replaced where it lies.
+            let resolved = is_link(path).then(|| path.canonicalize().ok()).flatten();
+            Destination::Replace(resolved.unwrap_or_else(|| path.to_path_buf()))
+        }
+        Ok(_) => Destination::InPlace,
+        Err(_) => {
+            // Nothing there yet, or a dangling link: the link's last target is the new file.
+            let mut target = path.to_path_buf();
+            for _ in 0..MAX_LINKS {
+                if !is_link(&target) {
+                    break;
+                }
+                let Ok(next) = std::fs::read_link(&target) else {
+                    break;
+                };
+                target = match target.parent() {
+                    Some(dir) if next.is_relative() => dir.join(next),
+                    _ => next,
+                };
+            }
+            Destination::Replace(target)
+        }
+    }
+}
+
+/// True when `path` exists and is not a regular file or a link to one: a device, a FIFO or a
+/// socket, written in place (see [`write_atomically`]).
+pub fn is_special_file(path: &Path) -> bool {
+    destination(path) == Destination::InPlace
+}
+
 /// Write `path` atomically: `fill` writes the whole content; on success the temporary file is
-/// renamed over `path`, on error it is removed and `path` is left untouched.
+/// renamed over `path`, on error it is removed and `path` is left untouched. A `path` that is a
+/// link is resolved and the file it names replaced; a device, FIFO or socket (`/dev/null`, a
+/// pipe) is written in place, as it cannot be replaced atomically (an error then leaves what was
+/// written, as on standard output).
 pub fn write_atomically<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> Result<()>,
 {
-    let dir = match path.parent() {
+    let target = match destination(path) {
+        Destination::Replace(target) => target,
+        Destination::InPlace => return write_in_place(path, fill),
+    };
+    let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
@@ -89,8 +146,24 @@ where
         out.flush().map_err(|e| Error::io(path, e))?;
     }
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    tmp.persist(&target).map_err(|e| Error::io(path, e.error))?;
     Ok(())
+}
+
+/// Write a device, FIFO or socket through an ordinary open (no create, no truncation, no fsync:
+/// a pipe refuses fsync).
+fn write_in_place<F>(path: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> Result<()>,
+{
+    refuse_when_stopping(path)?;
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(|e| Error::io(path, e))?;
+    let mut out = BufWriter::new(file);
+    fill(&mut out)?;
+    out.flush().map_err(|e| Error::io(path, e))
 }
 
 /// Files written under temporary names beside their targets, then published together by
@@ -123,11 +196,20 @@ impl StagedFiles {
     }
 
     /// Where to write `target` (with any writer, atomic or not) before [`StagedFiles::publish`].
-    pub fn stage(&mut self, target: &Path) -> PathBuf {
-        let tmp = temporary_beside(target, "");
+    /// A linked target is resolved (the file it names is replaced); a device, FIFO or socket is
+    /// refused, as files published together cannot go to one.
+    pub fn stage(&mut self, target: &Path) -> Result<PathBuf> {
+        let Destination::Replace(resolved) = destination(target) else {
+            return Err(Error::Other(format!(
+                "{}: is a device, FIFO or socket; these outputs are written together, so each \
+                 must be a file",
+                target.display()
+            )));
+        };
+        let tmp = temporary_beside(&resolved, "");
         self._in_flight.push(InFlight::new(&tmp));
-        self.pairs.push((tmp.clone(), target.to_path_buf()));
-        tmp
+        self.pairs.push((tmp.clone(), resolved));
+        Ok(tmp)
     }
 
     /// Rename every staged file onto its target. If one rename fails, the targets already
@@ -252,16 +334,16 @@ mod tests {
         // The second target is a directory: its rename fails, so the first is restored.
         std::fs::create_dir(&b).unwrap();
         let mut staged = StagedFiles::new();
-        std::fs::write(staged.stage(&a), "new a").unwrap();
-        std::fs::write(staged.stage(&b), "new b").unwrap();
+        std::fs::write(staged.stage(&a).unwrap(), "new a").unwrap();
+        std::fs::write(staged.stage(&b).unwrap(), "new b").unwrap();
         assert!(staged.publish().is_err());
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "old a");
         // Nothing else left: the old file, the directory in the way, no temporaries.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
         std::fs::remove_dir(&b).unwrap();
         let mut staged = StagedFiles::new();
-        std::fs::write(staged.stage(&a), "new a").unwrap();
-        std::fs::write(staged.stage(&b), "new b").unwrap();
+        std::fs::write(staged.stage(&a).unwrap(), "new a").unwrap();
+        std::fs::write(staged.stage(&b).unwrap(), "new b").unwrap();
         staged.publish().unwrap();
         assert_eq!(std::fs::read_to_string(&a).unwrap(), "new a");
         assert_eq!(std::fs::read_to_string(&b).unwrap(), "new b");

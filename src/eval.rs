@@ -103,7 +103,7 @@ pub fn eval_file(
                 warnings: Vec::new(),
             };
             write_atomically(out, |w| {
-                summary = eval_stream(file, input, w, request)?;
+                summary = eval_stream(file, input, w, request).map_err(|e| name_output(e, out))?;
                 Ok(())
             })?;
             Ok(summary)
@@ -111,10 +111,22 @@ pub fn eval_file(
         None => {
             let stdout = std::io::stdout();
             let mut lock = std::io::BufWriter::new(stdout.lock());
-            let summary = eval_stream(file, input, &mut lock, request)?;
-            lock.flush().map_err(|e| Error::io("<stdout>", e))?;
+            let stdout = Path::new("<stdout>");
+            let summary =
+                eval_stream(file, input, &mut lock, request).map_err(|e| name_output(e, stdout))?;
+            lock.flush().map_err(|e| Error::io(stdout, e))?;
             Ok(summary)
         }
+    }
+}
+
+/// The stream names a failed write `OUTPUT_NAME`; the file knows its name.
+const OUTPUT_NAME: &str = "<output>";
+
+fn name_output(e: Error, name: &Path) -> Error {
+    match e {
+        Error::Io { path, source } if path == Path::new(OUTPUT_NAME) => Error::io(name, source),
+        e => e,
     }
 }
 
@@ -524,7 +536,7 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
     fn write_out(&mut self) -> Result<()> {
         self.output
             .write_all(&self.out)
-            .map_err(|e| Error::Other(format!("could not write the output: {e}")))?;
+            .map_err(|e| Error::io(OUTPUT_NAME, e))?;
         self.out.clear();
         Ok(())
     }
@@ -535,7 +547,7 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             self.flush_chunk()?;
         }
         self.write_out()?;
-        self.output.flush().map_err(|e| Error::io("<output>", e))?;
+        self.output.flush().map_err(|e| Error::io(OUTPUT_NAME, e))?;
         let warnings = self.radians.and_then(|e| e.warning()).into_iter().collect();
         Ok(EvalSummary {
             rows: self.rows,

@@ -338,6 +338,13 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
             args.output.display()
         )));
     }
+    if crate::atomic::is_special_file(&args.output) {
+        return Err(Error::Other(format!(
+            "--output {}: is a device, FIFO or socket; synth writes the CSV and its truth file \
+             (FILE.truth.json) beside each other, so --output names a file",
+            args.output.display()
+        )));
+    }
     refuse_overwriting_input(&args.params, &args.output)?;
     let rig = Rig::parse(&args.rig)?;
     let noise =
@@ -395,9 +402,9 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     // The data and its truth are published together: both or neither.
     let truth_file = truth_path(&args.output);
     let mut staged = crate::atomic::StagedFiles::new();
-    let csv_tmp = staged.stage(&args.output);
+    let csv_tmp = staged.stage(&args.output)?;
     write_csv(&dataset, &csv_tmp).map_err(|e| name_target(e, &csv_tmp, &args.output))?;
-    let truth_tmp = staged.stage(&truth_file);
+    let truth_tmp = staged.stage(&truth_file)?;
     truth
         .save(&truth_tmp)
         .map_err(|e| name_target(e, &truth_tmp, &truth_file))?;

@@ -1,0 +1,192 @@
+//! Outputs whose path is not a plain file: a link has the file it names replaced (the link
+//! stays), and a device, FIFO or socket is written in place, never replaced. Renaming the
+//! temporary file over `--output /dev/null` used to turn `/dev/null` into a regular file (as
+//! root) and a FIFO into a file its reader never saw. The tests use FIFOs and links in a
+//! temporary directory, not `/dev/null`, so a regression cannot damage the machine.
+
+#![cfg(unix)]
+
+#[path = "support/cli.rs"]
+mod cli;
+
+use std::io::Read;
+use std::os::unix::fs::FileTypeExt;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use cli::{hairfit, hairfit_command, run_within, s, shipped, stderr, write};
+
+const PARAMS: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
+  "w_c_deg": 15, "eccentricity": 0.9}"#;
+
+fn mkfifo(path: &Path) {
+    let name = std::ffi::CString::new(path.as_os_str().as_encoded_bytes()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo only creates the node.
+    assert_eq!(unsafe { libc::mkfifo(name.as_ptr(), 0o644) }, 0, "mkfifo");
+}
+
+fn is_fifo(path: &Path) -> bool {
+    std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_fifo())
+}
+
+/// Entries of `dir` other than the ones named: no temporary may stay behind.
+fn others(dir: &Path, known: &[&str]) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !known.contains(&n.as_str()))
+        .collect()
+}
+
+/// `hairfit eval` of the shipped example angles into a plain file: the bytes every other target
+/// must receive.
+fn eval_into(dir: &Path, output: &Path) -> std::process::Output {
+    let params = dir.join("p.json");
+    if !params.exists() {
+        write(dir, "p.json", PARAMS);
+    }
+    let input = shipped("example_angles.csv");
+    hairfit(&[
+        "eval",
+        "--params",
+        s(&params),
+        "--input",
+        s(&input),
+        "--output",
+        s(output),
+    ])
+}
+
+fn reference(dir: &Path) -> Vec<u8> {
+    let plain = dir.join("plain.csv");
+    let out = eval_into(dir, &plain);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::read(&plain).unwrap()
+}
+
+#[test]
+fn a_fifo_output_is_written_in_place_and_stays_a_fifo() {
+    let dir = tempfile::tempdir().unwrap();
+    let expected = reference(dir.path());
+    let fifo: PathBuf = dir.path().join("pipe.csv");
+    mkfifo(&fifo);
+    // The reader reports through a channel: if the FIFO were replaced, its open would never
+    // return, and the test fails at the timeout below instead of hanging.
+    let (sender, received) = std::sync::mpsc::channel();
+    {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let mut got = Vec::new();
+            std::fs::File::open(&fifo)
+                .unwrap()
+                .read_to_end(&mut got)
+                .unwrap();
+            sender.send(got).unwrap();
+        });
+    }
+    let mut command = hairfit_command(&[
+        "eval",
+        "--params",
+        s(&dir.path().join("p.json")),
+        "--input",
+        s(&shipped("example_angles.csv")),
+        "--output",
+        s(&fifo),
+    ]);
+    command.env("RAYON_NUM_THREADS", "1");
+    let (out, _) = run_within(command, Duration::from_secs(60));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(is_fifo(&fifo), "the FIFO was replaced by a file");
+    let got = received
+        .recv_timeout(Duration::from_secs(30))
+        .expect("the FIFO's reader got no end of file");
+    assert_eq!(got, expected, "the reader got other bytes");
+    assert_eq!(
+        others(dir.path(), &["p.json", "plain.csv", "pipe.csv"]),
+        Vec::<String>::new()
+    );
+}
+
+#[test]
+fn a_linked_output_replaces_the_file_the_link_names_and_keeps_the_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let expected = reference(dir.path());
+    let sub = dir.path().join("results");
+    std::fs::create_dir(&sub).unwrap();
+    let link = dir.path().join("latest.csv");
+    // First a dangling link (the file it names is created), then a link to that file (replaced).
+    std::os::unix::fs::symlink("results/eval.csv", &link).unwrap();
+    for round in ["dangling", "existing"] {
+        let out = eval_into(dir.path(), &link);
+        assert!(out.status.success(), "{round}: {}", stderr(&out));
+        let meta = std::fs::symlink_metadata(&link).unwrap();
+        assert!(
+            meta.file_type().is_symlink(),
+            "{round}: the link was replaced"
+        );
+        assert_eq!(
+            std::fs::read(sub.join("eval.csv")).unwrap(),
+            expected,
+            "{round}"
+        );
+        assert_eq!(others(&sub, &["eval.csv"]), Vec::<String>::new(), "{round}");
+        assert_eq!(
+            others(
+                dir.path(),
+                &["p.json", "plain.csv", "latest.csv", "results"]
+            ),
+            Vec::<String>::new(),
+            "{round}"
+        );
+    }
+}
+
+#[test]
+fn synth_refuses_a_fifo_output_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = write(dir.path(), "p.json", PARAMS);
+    let fifo = dir.path().join("pipe.csv");
+    mkfifo(&fifo);
+    let out = hairfit(&[
+        "synth",
+        "--params",
+        s(&params),
+        "--rig",
+        "sphere:n=10",
+        "--output",
+        s(&fifo),
+        "--seed",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("pipe.csv") && err.contains("device, FIFO or socket"),
+        "{err}"
+    );
+    assert!(is_fifo(&fifo));
+    assert_eq!(
+        others(dir.path(), &["p.json", "pipe.csv"]),
+        Vec::<String>::new()
+    );
+}
+
+#[test]
+fn a_device_that_refuses_the_write_is_named_in_the_error() {
+    let full = Path::new("/dev/full");
+    let is_char_device =
+        |p: &Path| std::fs::metadata(p).is_ok_and(|m| m.file_type().is_char_device());
+    if !is_char_device(full) {
+        eprintln!("skipped: no /dev/full on this machine");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = eval_into(dir.path(), full);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("/dev/full") && err.contains("No space left"),
+        "{err}"
+    );
+    assert!(is_char_device(full), "/dev/full was replaced");
+}
