@@ -78,7 +78,8 @@ pub fn eval_file(
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
     let file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
-    if file.metadata().is_ok_and(|m| m.is_dir()) {
+    let meta = file.metadata().map_err(|e| Error::io(input, e))?;
+    if meta.is_dir() {
         return Err(Error::Other(format!(
             "--input {}: is a directory, not an angles CSV",
             input.display()
@@ -87,10 +88,20 @@ pub fn eval_file(
     if let Some(out) = output {
         crate::atomic::refuse_directory_output("--output", out, "eval.csv")?;
     }
-    let file = TextGuard::new(file);
     // The unit line is read before the stream, so `eval_stream` sees the settled unit (`None`
-    // when neither the line nor `--angles` states one).
-    let directive = crate::data::unit::file_directive(input, 1)?;
+    // when neither the line nor `--angles` states one). A file is read again from its start; a
+    // pipe or device can be read only once, so the lines read for the unit are kept and read
+    // again in front of the rest.
+    let mut file = std::io::BufReader::with_capacity(1 << 16, TextGuard::new(file));
+    let mut preamble = Vec::new();
+    let directive = if meta.is_file() {
+        crate::data::unit::file_directive(input, 1)?
+    } else {
+        let limit = crate::data::unit::STREAM_PREAMBLE_LIMIT as u64 + 1;
+        let mut bounded = (&mut file).take(limit);
+        crate::data::unit::directive_in(&mut bounded, input, 1, Some(&mut preamble))?
+    };
+    let file = std::io::Cursor::new(preamble).chain(file);
     crate::data::unit::resolve(request.angles, directive, input)?;
     let request = &EvalRequest {
         angles: request.angles.or(directive.map(|(unit, _)| unit)),

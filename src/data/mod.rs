@@ -367,6 +367,15 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)>
             path.display()
         )));
     }
+    if !meta.is_file() {
+        // Reading a pipe a second time would wait forever for a writer that is gone.
+        return Err(Error::Other(format!(
+            "{}: is a pipe or a device, not a file: a data file is read more than once (its \
+             format, unit line and rows), so save the stream to a file first (e.g. \
+             `… > data.csv`) and give that file",
+            path.display()
+        )));
+    }
     let format = detect_format(path, options);
     check_options_fit_format(path, format, options)?;
     if let Some(t) = options.negative_tolerance {

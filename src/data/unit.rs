@@ -46,12 +46,42 @@ impl UnitLine {
 /// row (after `header_lines` non-comment lines: 1 for a header CSV, 0 for a scan). Two unit
 /// lines that disagree are an error naming both.
 pub(crate) fn file_directive(path: &Path, header_lines: u64) -> Result<Option<(AngleUnit, u64)>> {
-    let mut reader = super::open(path)?;
+    directive_in(&mut super::open(path)?, path, header_lines, None)
+}
+
+/// Bytes of comment and header lines a stream may hold before its first data row; a stream
+/// (a pipe) is read once, so they are kept to be read again.
+pub(crate) const STREAM_PREAMBLE_LIMIT: usize = 1 << 24;
+
+/// [`file_directive`] on a stream already open. With `keep`, every line read is appended to it
+/// (for a stream that cannot be read twice); more than [`STREAM_PREAMBLE_LIMIT`] bytes kept is an
+/// error.
+pub(crate) fn directive_in(
+    reader: &mut impl std::io::BufRead,
+    path: &Path,
+    header_lines: u64,
+    mut keep: Option<&mut Vec<u8>>,
+) -> Result<Option<(AngleUnit, u64)>> {
     let mut buf = Vec::new();
     let (mut line, mut headers_left) = (0u64, header_lines);
     let mut found: Option<(AngleUnit, u64)> = None;
-    while next_line(&mut reader, &mut buf, path)? {
+    while next_line(reader, &mut buf, path)? {
         line += 1;
+        if let Some(kept) = keep.as_deref_mut() {
+            kept.extend_from_slice(&buf);
+            if kept.len() > STREAM_PREAMBLE_LIMIT {
+                return Err(Error::input(
+                    path,
+                    line,
+                    1,
+                    format!(
+                        "more than {} MiB of comments and headers before the first data row of \
+                         a stream; save it to a file and give that file",
+                        STREAM_PREAMBLE_LIMIT >> 20
+                    ),
+                ));
+            }
+        }
         let text = String::from_utf8_lossy(&buf);
         let t = text.trim_start_matches('\u{feff}').trim();
         if t.is_empty() {

@@ -1,17 +1,26 @@
-//! Outputs whose path is not a plain file: a link has the file it names replaced (the link
-//! stays), and a device, FIFO or socket is written in place, never replaced. Renaming the
-//! temporary file over `--output /dev/null` used to turn `/dev/null` into a regular file (as
-//! root) and a FIFO into a file its reader never saw. The tests use FIFOs and links in a
-//! temporary directory, not `/dev/null`, so a regression cannot damage the machine.
+//! Inputs and outputs whose path is not a plain file.
+//!
+//! - An output that is a link has the file it names replaced (the link stays); a device, FIFO or
+//!   socket is written in place, never replaced. Renaming the temporary file over
+//!   `--output /dev/null` used to turn `/dev/null` into a regular file (as root) and a FIFO into
+//!   a file its reader never saw.
+//! - `eval` reads its input from a pipe (`--input /dev/stdin`) once: the lines read for the unit
+//!   line are read again in front of the rest (a second open used to swallow the header). The
+//!   data loader reads a file more than once, so it refuses a pipe at once (it used to wait
+//!   forever on a FIFO's second open).
+//!
+//! The tests use FIFOs and links in a temporary directory, not `/dev/null`, so a regression
+//! cannot damage the machine.
 
 #![cfg(unix)]
 
 #[path = "support/cli.rs"]
 mod cli;
 
-use std::io::Read;
+use std::io::{Read, Write};
 use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
+use std::process::Stdio;
 use std::time::Duration;
 
 use cli::{hairfit, hairfit_command, run_within, s, shipped, stderr, write};
@@ -189,4 +198,90 @@ fn a_device_that_refuses_the_write_is_named_in_the_error() {
         "{err}"
     );
     assert!(is_char_device(full), "/dev/full was replaced");
+}
+
+/// Run eval with `input` written to its standard input (by a thread: the child may stop reading
+/// early, so write errors are the child's to report) and `--input /dev/stdin`.
+fn eval_from_pipe(dir: &Path, input: Vec<u8>, extra: &[&str]) -> std::process::Output {
+    let params = write(dir, "p.json", PARAMS);
+    let mut args = vec!["eval", "--params", s(&params), "--input", "/dev/stdin"];
+    args.extend_from_slice(extra);
+    let mut child = hairfit_command(&args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the hairfit binary starts");
+    let mut stdin = child.stdin.take().unwrap();
+    std::thread::spawn(move || {
+        let _ = stdin.write_all(&input);
+    });
+    cli::wait_within(child, Duration::from_secs(60), "eval from a pipe").0
+}
+
+#[test]
+fn eval_reads_a_pipe_once_with_its_unit_line_and_header() {
+    let dir = tempfile::tempdir().unwrap();
+    // Radians, with a comment and the unit line before the header, rows enough for two of
+    // eval's 1 MiB blocks.
+    let mut text = String::from("# from a pipe\n# angles: rad\ntheta_i,phi_i,theta_r,phi_r\n");
+    for k in 0..40_000 {
+        let x = (k as f64 * 0.618_034).fract();
+        text += &format!("{:.9},{:.9},{:.9},{:.9}\n", x - 0.5, 2.0 * x, 0.4 - x, -x);
+    }
+    let file = write(dir.path(), "rad.csv", &text);
+    let params = write(dir.path(), "p.json", PARAMS);
+    let expected = hairfit(&["eval", "--params", s(&params), "--input", s(&file)]);
+    assert!(expected.status.success(), "{}", stderr(&expected));
+    let piped = eval_from_pipe(dir.path(), text.into_bytes(), &[]);
+    assert!(piped.status.success(), "{}", stderr(&piped));
+    assert!(piped.stdout.starts_with(b"# angles: rad\ntheta_i,"));
+    assert_eq!(piped.stdout.len(), expected.stdout.len());
+    assert!(piped.stdout == expected.stdout, "the pipe's output differs");
+    // The unit line read from the pipe still meets --angles.
+    let text = "# angles: rad\ntheta_i,phi_i,theta_r,phi_r\n0.1,0.2,0.3,0.4\n";
+    let conflict = eval_from_pipe(dir.path(), text.into(), &["--angles", "deg"]);
+    assert!(!conflict.status.success());
+    assert!(
+        stderr(&conflict).contains("/dev/stdin:1:1"),
+        "{}",
+        stderr(&conflict)
+    );
+}
+
+#[test]
+fn eval_refuses_a_pipe_whose_comments_never_end() {
+    let dir = tempfile::tempdir().unwrap();
+    // 17 MiB of comment lines and no header: kept for a second reading, they would grow
+    // without bound; the limit is 16 MiB.
+    let line = format!("#{}\n", "x".repeat(1022)); // 1 KiB a line
+    let input = line.repeat(17 << 10).into_bytes();
+    let out = eval_from_pipe(dir.path(), input, &[]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("/dev/stdin:16385:1") && err.contains("16 MiB") && err.contains("save it"),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_loader_refuses_a_pipe_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("data.csv");
+    mkfifo(&fifo);
+    // No writer ever opens the FIFO: a loader that opened it would wait forever.
+    let (out, _) = run_within(
+        hairfit_command(&["fit", s(&fifo), "--out", s(&dir.path().join("fit"))]),
+        Duration::from_secs(60),
+    );
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(
+        err.contains("data.csv")
+            && err.contains("is a pipe or a device")
+            && err.contains("> data.csv"),
+        "{err}"
+    );
+    assert!(!dir.path().join("fit").exists());
 }
