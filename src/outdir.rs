@@ -52,7 +52,11 @@ fn forget_in_flight(path: &Path) {
 /// Dropped unpublished (an error), the staging directory is removed and the old set stays.
 #[derive(Debug)]
 pub struct OutputSet {
+    /// `--out` as given, for messages.
     dir: PathBuf,
+    /// The directory replaced: `dir` absolute, links resolved (a link to a directory keeps
+    /// pointing at the new set; the lock and staging directory sit beside the same place).
+    target: PathBuf,
     staging: PathBuf,
     /// What the marker says wrote the set (e.g. `hairfit fit`).
     command: String,
@@ -250,6 +254,7 @@ impl OutputSet {
             .map_err(|e| Error::io(&marker, e))?;
         Ok(OutputSet {
             dir: dir.to_path_buf(),
+            target: abs.clone(),
             staging,
             command: command.to_string(),
             published: false,
@@ -314,7 +319,7 @@ impl OutputSet {
     /// so a large `curves.csv` is not copied), e.g. when a report is redrawn.
     pub fn keep(&self, names: &[&str]) -> Result<()> {
         for name in names {
-            let (from, to) = (self.dir.join(name), self.staging.join(name));
+            let (from, to) = (self.target.join(name), self.staging.join(name));
             if std::fs::hard_link(&from, &to).is_err() {
                 std::fs::copy(&from, &to).map_err(|e| Error::io(&from, e))?;
             }
@@ -326,7 +331,7 @@ impl OutputSet {
     /// run makes them anew, or they are stale): e.g. `hairfit report` keeps the fit's files and
     /// redraws the figures.
     pub fn keep_all_but(&self, redrawn: impl Fn(&str) -> bool) -> Result<()> {
-        let entries = match std::fs::read_dir(&self.dir) {
+        let entries = match std::fs::read_dir(&self.target) {
             Ok(e) => e,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
             Err(e) => return Err(Error::io(&self.dir, e)),
@@ -345,7 +350,7 @@ impl OutputSet {
 
     /// Swap the staged set in place of the old one, then remove the old one.
     pub fn publish(mut self) -> Result<()> {
-        let old = swap_in(&self.staging, &self.dir)?;
+        let old = swap_in(&self.staging, &self.target)?;
         self.published = true;
         forget_in_flight(&self.staging);
         if let Some(old) = old {

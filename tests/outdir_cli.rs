@@ -403,3 +403,43 @@ fn an_unwritable_out_names_out_and_what_to_do() {
         );
     }
 }
+
+/// `--out latest` where `latest` links to a run's directory: the set is published into the
+/// directory the link names and the link stays (the swap used to replace the link itself with
+/// the new set, leaving the linked directory as it was), for a fit and for a report redrawn
+/// through the link.
+#[test]
+fn an_out_that_is_a_link_publishes_into_the_linked_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let real = tmp.path().join("run-1");
+    std::fs::create_dir(&real).unwrap();
+    let link = tmp.path().join("latest");
+    std::os::unix::fs::symlink("run-1", &link).unwrap();
+    let link_s = link.to_str().unwrap();
+    let f = run_hairfit(
+        &fit_args(&shipped("azimuthal_rgb.csv"), link_s, &[]),
+        &[],
+        Duration::from_secs(120),
+    );
+    assert!(f.status.success(), "{}", f.stderr);
+    let is_link = |p: &Path| {
+        std::fs::symlink_metadata(p)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    };
+    assert!(is_link(&link), "the link was replaced");
+    check_fit_dir(&real, "fit through a link");
+    let f = run_hairfit(
+        &["report", link_s, "--linear"],
+        &[],
+        Duration::from_secs(120),
+    );
+    assert!(f.status.success(), "{}", f.stderr);
+    assert!(is_link(&link), "report replaced the link");
+    check_fit_dir(&real, "report through a link");
+    assert_eq!(
+        names(tmp.path()),
+        [".run-1.hairfit-lock", "latest", "run-1"]
+    );
+}
