@@ -24,6 +24,13 @@ pub fn stop_writing() {
     STOPPING.store(true, Ordering::SeqCst);
 }
 
+/// True once a signal handler has begun removing the partial outputs: it is about to exit with
+/// the signal's code, and errors the removal causes elsewhere (a file vanished from under a
+/// writer) are its effect, not the run's outcome.
+pub fn stopping() -> bool {
+    STOPPING.load(Ordering::SeqCst)
+}
+
 fn refuse_when_stopping(path: &Path) -> Result<()> {
     if STOPPING.load(Ordering::SeqCst) {
         return Err(Error::Other(format!(

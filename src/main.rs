@@ -150,7 +150,9 @@ struct LoadArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(cli) {
+    let result = run(cli);
+    hairfit::cli::exit::wait_for_signal_exit();
+    match result {
         Ok(code) => ExitCode::from(code),
         Err(err) => {
             eprintln!("hairfit: error: {}", error_text(&err));

@@ -93,6 +93,18 @@ pub fn exit_on_signal() {
     });
 }
 
+/// Called by `main` before it exits: while a signal handler is removing the partial outputs, wait
+/// for it to end the process with the signal's code. Without this, a writer that failed because
+/// its staging directory was just removed could print that error and exit 1 first (seen under
+/// load after a second Ctrl-C).
+pub fn wait_for_signal_exit() {
+    if crate::atomic::stopping() {
+        loop {
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+    }
+}
+
 /// Run `handle` on a dedicated thread for each SIGINT/SIGTERM/SIGHUP (not inside the signal
 /// handler, so it may take locks and remove files).
 fn on_signals(mut handle: impl FnMut(i32) + Send + 'static) {
