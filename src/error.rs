@@ -88,11 +88,49 @@ impl Error {
             source,
         }
     }
+
+    /// A JSON syntax or schema error in `path` at serde_json's line and column (from 1: serde_json
+    /// says column 0 at the end of an empty file), with its message less serde_json's own
+    /// ` at line L column C`, and then `; hint` when a hint is given.
+    pub fn json(path: impl Into<PathBuf>, e: &serde_json::Error, hint: Option<&str>) -> Self {
+        let text = e.to_string();
+        let message = text
+            .rsplit_once(" at line ")
+            .map_or(text.as_str(), |(m, _)| m);
+        let message = match hint {
+            Some(hint) => format!("{message}; {hint}"),
+            None => message.to_string(),
+        };
+        Error::input(
+            path,
+            e.line().max(1) as u64,
+            e.column().max(1) as u64,
+            message,
+        )
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::readable_bytes;
+    use super::{readable_bytes, Error};
+
+    /// Positions count from 1 and serde_json's own position is not said twice.
+    #[test]
+    fn json_errors_name_a_position_from_one_and_say_it_once() {
+        let at = |text: &str| {
+            let e = serde_json::from_str::<serde_json::Value>(text).unwrap_err();
+            Error::json("p.json", &e, Some("hint")).to_string()
+        };
+        assert_eq!(at(""), "p.json:1:1: EOF while parsing a value; hint");
+        assert_eq!(
+            at("{\"a\": 1,\n  x}"),
+            "p.json:2:3: key must be a string; hint"
+        );
+        assert_eq!(
+            at("{\"a\": 1,\n"),
+            "p.json:2:1: EOF while parsing a value; hint"
+        );
+    }
 
     #[test]
     fn sizes_read_in_their_own_unit() {

@@ -226,9 +226,7 @@ impl FamilyParams {
                 }
                 let text = if tag.is_some() {
                     let mut v: serde_json::Map<String, serde_json::Value> =
-                        serde_json::from_str(&text).map_err(|e| {
-                            Error::input(path, e.line() as u64, e.column() as u64, e.to_string())
-                        })?;
+                        serde_json::from_str(&text).map_err(|e| Error::json(path, &e, None))?;
                     v.remove("model");
                     serde_json::to_string(&v).unwrap_or_default()
                 } else {

@@ -313,8 +313,8 @@ fn csv_error(path: &Path, e: csv::Error) -> Error {
 }
 
 fn json_rows(path: &Path, text: &str, options: &[FitOption]) -> Result<Vec<Row>> {
-    let value: serde_json::Value = serde_json::from_str(text)
-        .map_err(|e| Error::input(path, e.line() as u64, e.column() as u64, e.to_string()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| Error::json(path, &e, None))?;
     let array = value.as_array().ok_or_else(|| {
         Error::Other(format!(
             "{}: a JSON manifest is an array of objects like {{\"name\": \"a\", \"data\": \"a.csv\", \"loss\": \"cauchy\"}}",

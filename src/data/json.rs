@@ -34,16 +34,14 @@ struct SampleJson {
 
 /// A serde_json error as an input error at its line and column (column 0 = end of input).
 fn json_error(path: &Path, e: &serde_json::Error) -> Error {
-    let text = e.to_string();
-    let message = text
-        .rsplit_once(" at line ")
-        .map_or(text.as_str(), |(m, _)| m);
-    let hint = if e.is_eof() && e.line() <= 1 && e.column() == 0 {
-        "no data rows: the file is empty".to_string()
-    } else {
-        format!("{message} (expected a hairfit JSON dataset: {{\"samples\": [...]}})")
-    };
-    Error::input(path, e.line() as u64, e.column().max(1) as u64, hint)
+    if e.is_eof() && e.line() <= 1 && e.column() == 0 {
+        return Error::input(path, 1, 1, "no data rows: the file is empty");
+    }
+    Error::json(
+        path,
+        e,
+        Some("expected a hairfit JSON dataset: {\"samples\": [...]}"),
+    )
 }
 
 /// A hairfit file that is not a dataset, given where a dataset goes (`hairfit load`, `fit`,

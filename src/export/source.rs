@@ -129,14 +129,8 @@ impl SourceFit {
                     .unwrap_or_default(),
             },
             None | Some("marschner") => {
-                let mut value: Value = serde_json::from_str(&text).map_err(|e| {
-                    Error::input(
-                        &params_path,
-                        e.line() as u64,
-                        e.column() as u64,
-                        e.to_string(),
-                    )
-                })?;
+                let mut value: Value =
+                    serde_json::from_str(&text).map_err(|e| Error::json(&params_path, &e, None))?;
                 if let Some(map) = value.as_object_mut() {
                     map.remove("model");
                 }

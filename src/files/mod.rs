@@ -98,12 +98,7 @@ fn json_error(path: &Path, e: serde_json::Error, hint: &str) -> Error {
     if e.is_io() {
         return Error::Other(format!("{}: {e}", path.display()));
     }
-    Error::input(
-        path,
-        e.line() as u64,
-        e.column() as u64,
-        format!("{e}; {hint}"),
-    )
+    Error::json(path, &e, Some(hint))
 }
 
 /// Write the fit's files into `dir` (each atomically): `fit.json`, `params.json` (the fitted
