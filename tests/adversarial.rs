@@ -66,14 +66,23 @@ fn a_header_of_100k_columns_loads_in_linear_time() {
 
 #[test]
 fn input_without_line_breaks_is_refused_not_read_whole() {
-    // /dev/zero never ends: before the fix each of these read until the memory cap.
+    // Zeros with no line break: before the fix each of these read until the memory cap. The
+    // loader takes files only, so it reads a sparse 100 MiB file of zeros (no disk used), past
+    // the 64 MiB line limit; eval streams, so it reads /dev/zero, which never ends.
+    let dir = tempfile::tempdir().unwrap();
+    let zeros = dir.path().join("zeros");
+    std::fs::File::create(&zeros)
+        .unwrap()
+        .set_len(100 << 20)
+        .unwrap();
+    let zeros = s(&zeros);
     let limit = Duration::from_secs(30);
     let cases: [&[&str]; 4] = [
-        &["load", "/dev/zero", "--format", "csv"],
-        &["load", "/dev/zero", "--format", "json"],
+        &["load", zeros, "--format", "csv"],
+        &["load", zeros, "--format", "json"],
         &[
             "load",
-            "/dev/zero",
+            zeros,
             "--columns",
             "phi_r,radiance",
             "--fixed",
@@ -89,11 +98,19 @@ fn input_without_line_breaks_is_refused_not_read_whole() {
     ];
     for args in cases {
         let (out, _) = hairfit_within(limit, args);
-        assert_fails_with(
-            &out,
-            &["/dev/zero:1:1", "line 1 is longer than", "not a text table"],
+        let at = format!(
+            "{}:1:1",
+            if args[0] == "eval" {
+                "/dev/zero"
+            } else {
+                zeros
+            }
         );
+        assert_fails_with(&out, &[&at, "line 1 is longer than", "not a text table"]);
     }
+    // The loader refuses the device itself before reading a byte.
+    let (out, _) = hairfit_within(limit, &["load", "/dev/zero", "--format", "csv"]);
+    assert_fails_with(&out, &["/dev/zero: is a pipe or a device, not a file"]);
 }
 
 #[test]

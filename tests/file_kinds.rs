@@ -47,15 +47,14 @@ fn others(dir: &Path, known: &[&str]) -> Vec<String> {
         .collect()
 }
 
-/// `hairfit eval` of the shipped example angles into a plain file: the bytes every other target
-/// must receive.
-fn eval_into(dir: &Path, output: &Path) -> std::process::Output {
+/// `hairfit eval` of the shipped example angles (parameters `dir/p.json`) into `output`.
+fn eval_args(dir: &Path, output: &Path) -> Vec<String> {
     let params = dir.join("p.json");
     if !params.exists() {
         write(dir, "p.json", PARAMS);
     }
     let input = shipped("example_angles.csv");
-    hairfit(&[
+    [
         "eval",
         "--params",
         s(&params),
@@ -63,7 +62,14 @@ fn eval_into(dir: &Path, output: &Path) -> std::process::Output {
         s(&input),
         "--output",
         s(output),
-    ])
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn eval_into(dir: &Path, output: &Path) -> std::process::Output {
+    let args = eval_args(dir, output);
+    hairfit(&args.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
 fn reference(dir: &Path) -> Vec<u8> {
@@ -93,15 +99,8 @@ fn a_fifo_output_is_written_in_place_and_stays_a_fifo() {
             sender.send(got).unwrap();
         });
     }
-    let mut command = hairfit_command(&[
-        "eval",
-        "--params",
-        s(&dir.path().join("p.json")),
-        "--input",
-        s(&shipped("example_angles.csv")),
-        "--output",
-        s(&fifo),
-    ]);
+    let args = eval_args(dir.path(), &fifo);
+    let mut command = hairfit_command(&args.iter().map(String::as_str).collect::<Vec<_>>());
     command.env("RAYON_NUM_THREADS", "1");
     let (out, _) = run_within(command, Duration::from_secs(60));
     assert!(out.status.success(), "{}", stderr(&out));

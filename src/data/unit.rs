@@ -70,16 +70,20 @@ pub(crate) fn directive_in(
         if let Some(kept) = keep.as_deref_mut() {
             kept.extend_from_slice(&buf);
             if kept.len() > STREAM_PREAMBLE_LIMIT {
-                return Err(Error::input(
-                    path,
-                    line,
-                    1,
+                let mib = STREAM_PREAMBLE_LIMIT >> 20;
+                let message = if kept.len() > buf.len() {
                     format!(
-                        "more than {} MiB of comments and headers before the first data row of \
-                         a stream; save it to a file and give that file",
-                        STREAM_PREAMBLE_LIMIT >> 20
-                    ),
-                ));
+                        "more than {mib} MiB of comments and headers before the first data row \
+                         of a stream; save it to a file and give that file"
+                    )
+                } else {
+                    // The first line alone passes the bound (in the loader's words).
+                    format!(
+                        "line {line} is longer than {mib} MiB with no line break: not a text \
+                         table (a binary file or a device?)"
+                    )
+                };
+                return Err(Error::input(path, line, 1, message));
             }
         }
         let text = String::from_utf8_lossy(&buf);
