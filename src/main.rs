@@ -154,11 +154,23 @@ fn main() -> ExitCode {
     hairfit::cli::exit::wait_for_signal_exit();
     match result {
         Ok(code) => ExitCode::from(code),
+        // The reader stopped early (`hairfit eval … | head`): end quietly, with the code of a
+        // process SIGPIPE ended (128 + 13), as `cat` would.
+        Err(err) if is_broken_pipe(&err) => ExitCode::from(141),
         Err(err) => {
             eprintln!("hairfit: error: {}", error_text(&err));
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether writing failed because the output's reader went away.
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// The error and its causes joined by `: `, each said once: a library error that already quotes

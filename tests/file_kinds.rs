@@ -8,6 +8,7 @@
 //!   line are read again in front of the rest (a second open used to swallow the header). The
 //!   data loader reads a file more than once, so it refuses a pipe at once (it used to wait
 //!   forever on a FIFO's second open).
+//! - A reader that stops early (`eval … | head`) ends eval quietly with 141, not an error.
 //!
 //! The tests use FIFOs and links in a temporary directory, not `/dev/null`, so a regression
 //! cannot damage the machine.
@@ -283,4 +284,51 @@ fn the_loader_refuses_a_pipe_at_once() {
         "{err}"
     );
     assert!(!dir.path().join("fit").exists());
+}
+
+/// `hairfit eval … | head`: when the reader stops early, eval ends quietly with the code of a
+/// process SIGPIPE ended (141), as `cat` would, not with "error: Broken pipe".
+#[test]
+fn a_reader_that_stops_early_ends_eval_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = write(dir.path(), "p.json", PARAMS);
+    // 200k rows make ~11 MB of output: far more than a pipe holds.
+    let mut text = String::from("theta_i,phi_i,theta_r,phi_r\n");
+    for k in 0..200_000 {
+        let x = (k as f64 * 0.618_034).fract();
+        text += &format!(
+            "{:.6},{:.6},{:.6},{:.6}\n",
+            80.0 * x - 40.0,
+            300.0 * x,
+            20.0 - 40.0 * x,
+            -90.0 * x
+        );
+    }
+    let input = write(dir.path(), "a.csv", &text);
+    let mut child = hairfit_command(&["eval", "--params", s(&params), "--input", s(&input)])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the hairfit binary starts");
+    let mut stdout = child.stdout.take().unwrap();
+    let mut head = [0u8; 100];
+    stdout.read_exact(&mut head).unwrap();
+    assert!(head.starts_with(b"theta_i,phi_i,theta_r,phi_r,s\n"));
+    drop(stdout);
+    let mut errors = child.stderr.take().unwrap();
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            child.kill().unwrap();
+            panic!("eval into a closed pipe still runs after 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut err = String::new();
+    errors.read_to_string(&mut err).unwrap();
+    assert_eq!((status.code(), err.as_str()), (Some(141), ""));
 }
