@@ -164,6 +164,17 @@ fn main() -> ExitCode {
     }
 }
 
+/// Write `text` to stdout. `print!` would panic when the reader has gone (`hairfit fit … | true`);
+/// this returns the error, which main ends quietly on (see [`is_broken_pipe`]).
+fn say(text: impl AsRef<str>) -> anyhow::Result<()> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_ref().as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| hairfit::Error::io("<stdout>", e))?;
+    Ok(())
+}
+
 /// Whether writing failed because the output's reader went away.
 fn is_broken_pipe(err: &anyhow::Error) -> bool {
     err.chain().any(|cause| {
@@ -228,7 +239,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
         }
         Command::Load(args) => {
             let text = hairfit::data::load_command(&args.file, &args.options, args.json)?;
-            print!("{text}");
+            say(&text)?;
         }
         Command::Synth(args) => {
             remove_partial_output_on_interrupt();
@@ -275,7 +286,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
                 family,
             };
             let ledger = hairfit::cost::run_cost(&out, &options)?;
-            print!("{}", hairfit::cost::summary_text(&ledger));
+            say(hairfit::cost::summary_text(&ledger))?;
             eprintln!(
                 "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
                 out.display()
@@ -285,7 +296,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let stop = ctrl_c_flag();
             let cancel = Some(stop.flag.clone());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
-            print!("{}", fit_summary_and_report(&outcome, &a.out));
+            say(fit_summary_and_report(&outcome, &a.out))?;
             outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,
@@ -299,17 +310,14 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let cancel = Some(stop.flag.clone());
             let done = hairfit::cli::compare::compare_command(&a, cancel)?;
             for line in &done.report_lines {
-                print!("{line}");
+                say(line)?;
             }
-            print!(
-                "{}",
-                hairfit::compare::summary_text(&done.comparison, &a.out)
-            );
+            say(hairfit::compare::summary_text(&done.comparison, &a.out))?;
         }
         Command::Export(a) => {
             remove_partial_output_on_interrupt();
             let (summary, text) = hairfit::cli::export::export_command(&a)?;
-            print!("{}", text.unwrap_or_default());
+            say(text.unwrap_or_default())?;
             eprintln!("hairfit: {summary}");
         }
         Command::Demo(a) => {
@@ -317,8 +325,8 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let cancel = Some(stop.flag.clone());
             let opts = a.fit.options(cancel)?;
             let outcome = hairfit::fit::demo::demo_command(&opts, &a.out, a.fit.force)?;
-            print!("{}", fit_summary_and_report(&outcome, &a.out));
-            print!("{}", hairfit::fit::demo::truth_line(&a.out, opts.family));
+            say(fit_summary_and_report(&outcome, &a.out))?;
+            say(hairfit::fit::demo::truth_line(&a.out, opts.family))?;
             outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,

@@ -316,6 +316,29 @@ fn a_reader_that_stops_early_ends_eval_quietly() {
     stdout.read_exact(&mut head).unwrap();
     assert!(head.starts_with(b"theta_i,phi_i,theta_r,phi_r,s\n"));
     drop(stdout);
+    let (status, err) = wait_quiet(child, "eval into a closed pipe");
+    assert_eq!((status.code(), err.as_str()), (Some(141), ""));
+}
+
+/// A command whose summary goes to a reader that has already gone (`hairfit load … | true`)
+/// ends quietly with 141 too: `print!` used to panic there ("failed printing to stdout").
+#[test]
+fn a_summary_for_a_reader_that_has_gone_ends_quietly() {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let data = shipped("azimuthal_rgb.csv");
+    let child = hairfit_command(&["load", s(&data)])
+        .stdin(Stdio::null())
+        .stdout(Stdio::from(writer))
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the hairfit binary starts");
+    let (status, err) = wait_quiet(child, "load into a closed pipe");
+    assert_eq!((status.code(), err.as_str()), (Some(141), ""));
+}
+
+/// Wait at most 60 s for `child` (its stdout not piped to the test), then its stderr.
+fn wait_quiet(mut child: std::process::Child, what: &str) -> (std::process::ExitStatus, String) {
     let mut errors = child.stderr.take().unwrap();
     let start = std::time::Instant::now();
     let status = loop {
@@ -324,11 +347,11 @@ fn a_reader_that_stops_early_ends_eval_quietly() {
         }
         if start.elapsed() > Duration::from_secs(60) {
             child.kill().unwrap();
-            panic!("eval into a closed pipe still runs after 60 s");
+            panic!("{what}: still running after 60 s");
         }
         std::thread::sleep(Duration::from_millis(10));
     };
     let mut err = String::new();
     errors.read_to_string(&mut err).unwrap();
-    assert_eq!((status.code(), err.as_str()), (Some(141), ""));
+    (status, err)
 }
