@@ -71,20 +71,33 @@ pub fn output_columns(n_channels: usize, scalar: bool) -> Vec<String> {
     }
 }
 
-/// Evaluate `input` and write to `output` (atomically), or to stdout when `output` is `None`.
+/// `--input -` reads standard input, `--output -` writes standard output.
+pub const STDIO_NAME: &str = "-";
+
+/// Evaluate `input` and write to `output` (atomically), or to stdout when `output` is `None` or
+/// `-`; an `input` of `-` is standard input.
 pub fn eval_file(
     input: &Path,
     output: Option<&Path>,
     request: &EvalRequest,
 ) -> Result<EvalSummary> {
-    let file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
-    let meta = file.metadata().map_err(|e| Error::io(input, e))?;
-    if meta.is_dir() {
-        return Err(Error::Other(format!(
-            "--input {}: is a directory, not an angles CSV",
-            input.display()
-        )));
-    }
+    // `-` is standard input, named `<stdin>` in messages.
+    let stdin = input == Path::new(STDIO_NAME);
+    let (source, is_file): (Box<dyn Read>, bool) = if stdin {
+        (Box::new(std::io::stdin().lock()), false)
+    } else {
+        let file = std::fs::File::open(input).map_err(|e| Error::io(input, e))?;
+        let meta = file.metadata().map_err(|e| Error::io(input, e))?;
+        if meta.is_dir() {
+            return Err(Error::Other(format!(
+                "--input {}: is a directory, not an angles CSV",
+                input.display()
+            )));
+        }
+        (Box::new(file), meta.is_file())
+    };
+    let input = if stdin { Path::new("<stdin>") } else { input };
+    let output = output.filter(|out| *out != Path::new(STDIO_NAME));
     if let Some(out) = output {
         crate::atomic::refuse_directory_output("--output", out, "eval.csv")?;
     }
@@ -92,9 +105,9 @@ pub fn eval_file(
     // when neither the line nor `--angles` states one). A file is read again from its start; a
     // pipe or device can be read only once, so the lines read for the unit are kept and read
     // again in front of the rest.
-    let mut file = std::io::BufReader::with_capacity(1 << 16, TextGuard::new(file));
+    let mut file = std::io::BufReader::with_capacity(1 << 16, TextGuard::new(source));
     let mut preamble = Vec::new();
-    let directive = if meta.is_file() {
+    let directive = if is_file {
         crate::data::unit::file_directive(input, 1)?
     } else {
         let limit = crate::data::unit::STREAM_PREAMBLE_LIMIT as u64 + 1;

@@ -3,7 +3,7 @@
 //! Each subcommand is one `Command` variant holding its clap `Args` and one match arm in `run`
 //! that calls the library.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -124,10 +124,10 @@ struct EvalArgs {
     /// params.json (not its fit.json).
     #[arg(long)]
     params: PathBuf,
-    /// Angles CSV with a header; other columns are carried through.
+    /// Angles CSV with a header (`-`: standard input); other columns are carried through.
     #[arg(long)]
     input: PathBuf,
-    /// Output CSV file (written atomically; never --input or --params); stdout when absent.
+    /// Output CSV file (written atomically; never --input or --params); stdout when absent or `-`.
     #[arg(long)]
     output: Option<PathBuf>,
     #[command(flatten)]
@@ -229,7 +229,10 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             for warning in &summary.warnings {
                 eprintln!("hairfit: warning: {}: {warning}", args.input.display());
             }
-            if let Some(out) = args.output {
+            let to_file = args
+                .output
+                .filter(|o| *o != Path::new(hairfit::eval::STDIO_NAME));
+            if let Some(out) = to_file {
                 eprintln!(
                     "hairfit: evaluated {} rows into {}",
                     summary.rows,

@@ -201,10 +201,15 @@ fn a_device_that_refuses_the_write_is_named_in_the_error() {
 }
 
 /// Run eval with `input` written to its standard input (by a thread: the child may stop reading
-/// early, so write errors are the child's to report) and `--input /dev/stdin`.
+/// early, so write errors are the child's to report) and `--input /dev/stdin`, then `extra`.
 fn eval_from_pipe(dir: &Path, input: Vec<u8>, extra: &[&str]) -> std::process::Output {
+    eval_from_stdin(dir, "/dev/stdin", input, extra)
+}
+
+/// [`eval_from_pipe`] with `--input name` (`/dev/stdin` or `-`).
+fn eval_from_stdin(dir: &Path, name: &str, input: Vec<u8>, extra: &[&str]) -> std::process::Output {
     let params = write(dir, "p.json", PARAMS);
-    let mut args = vec!["eval", "--params", s(&params), "--input", "/dev/stdin"];
+    let mut args = vec!["eval", "--params", s(&params), "--input", name];
     args.extend_from_slice(extra);
     let mut child = hairfit_command(&args)
         .stdin(Stdio::piped())
@@ -233,20 +238,28 @@ fn eval_reads_a_pipe_once_with_its_unit_line_and_header() {
     let params = write(dir.path(), "p.json", PARAMS);
     let expected = hairfit(&["eval", "--params", s(&params), "--input", s(&file)]);
     assert!(expected.status.success(), "{}", stderr(&expected));
-    let piped = eval_from_pipe(dir.path(), text.into_bytes(), &[]);
-    assert!(piped.status.success(), "{}", stderr(&piped));
-    assert!(piped.stdout.starts_with(b"# angles: rad\ntheta_i,"));
-    assert_eq!(piped.stdout.len(), expected.stdout.len());
-    assert!(piped.stdout == expected.stdout, "the pipe's output differs");
-    // The unit line read from the pipe still meets --angles.
-    let text = "# angles: rad\ntheta_i,phi_i,theta_r,phi_r\n0.1,0.2,0.3,0.4\n";
-    let conflict = eval_from_pipe(dir.path(), text.into(), &["--angles", "deg"]);
-    assert!(!conflict.status.success());
-    assert!(
-        stderr(&conflict).contains("/dev/stdin:1:1"),
-        "{}",
-        stderr(&conflict)
-    );
+    // `-` reads standard input as /dev/stdin does (and `--output -` is standard output).
+    for (name, extra, shown) in [
+        ("/dev/stdin", &[][..], "/dev/stdin"),
+        ("-", &["--output", "-"][..], "<stdin>"),
+    ] {
+        let piped = eval_from_stdin(dir.path(), name, text.clone().into_bytes(), extra);
+        assert!(piped.status.success(), "{name}: {}", stderr(&piped));
+        assert!(piped.stdout.starts_with(b"# angles: rad\ntheta_i,"));
+        assert_eq!(piped.stdout.len(), expected.stdout.len(), "{name}");
+        assert!(
+            piped.stdout == expected.stdout,
+            "{name}: the pipe's output differs"
+        );
+        assert_eq!(stderr(&piped), "", "{name}");
+        // The unit line read from the pipe still meets --angles.
+        let unit = "# angles: rad\ntheta_i,phi_i,theta_r,phi_r\n0.1,0.2,0.3,0.4\n";
+        let conflict = eval_from_stdin(dir.path(), name, unit.into(), &["--angles", "deg"]);
+        assert!(!conflict.status.success());
+        let err = stderr(&conflict);
+        assert!(err.contains(&format!("{shown}:1:1")), "{name}: {err}");
+    }
+    assert!(!Path::new("-").exists() && !cli::root().join("-").exists());
 }
 
 #[test]
