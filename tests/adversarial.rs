@@ -66,28 +66,65 @@ fn a_header_of_100k_columns_loads_in_linear_time() {
 
 #[test]
 fn input_without_line_breaks_is_refused_not_read_whole() {
-    // Zeros with no line break: before the fix each of these read until the memory cap. The
-    // loader takes files only, so it reads a sparse 100 MiB file of zeros (no disk used), past
-    // the 64 MiB line limit; eval streams, so it reads /dev/zero, which never ends.
+    // No line break: before the fix each of these read until the memory cap. The loader takes
+    // files only, so it reads a 65 MiB line of `x`, past the 64 MiB line limit; eval streams,
+    // so it reads a pipe of endless `x` (its bound is 16 MiB before the first data row).
     let dir = tempfile::tempdir().unwrap();
-    let zeros = dir.path().join("zeros");
-    std::fs::File::create(&zeros)
-        .unwrap()
-        .set_len(100 << 20)
-        .unwrap();
-    let zeros = s(&zeros);
+    let long = dir.path().join("long");
+    std::fs::write(&long, vec![b'x'; 65 << 20]).unwrap();
+    let long = s(&long);
     let limit = Duration::from_secs(30);
-    let cases: [&[&str]; 4] = [
-        &["load", zeros, "--format", "csv"],
-        &["load", zeros, "--format", "json"],
+    let cases: [&[&str]; 3] = [
+        &["load", long, "--format", "csv"],
+        &["load", long, "--format", "json"],
         &[
             "load",
-            zeros,
+            long,
             "--columns",
             "phi_r,radiance",
             "--fixed",
             "theta_i=0,phi_i=0,theta_r=0",
         ],
+    ];
+    for args in cases {
+        let (out, _) = hairfit_within(limit, args);
+        let at = format!("{long}:1:1");
+        assert_fails_with(
+            &out,
+            &[&at, "line 1 is longer than 64 MiB", "not a text table"],
+        );
+    }
+    let mut child = cli::hairfit_command(&[
+        "eval",
+        "--params",
+        "data/example_params.json",
+        "--input",
+        "-",
+    ])
+    .stdin(std::process::Stdio::piped())
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    std::thread::spawn(move || {
+        let block = vec![b'x'; 1 << 20];
+        // Ends when eval stops reading and the pipe breaks.
+        while std::io::Write::write_all(&mut stdin, &block).is_ok() {}
+    });
+    let (out, _) = cli::wait_within(child, limit, "eval of an endless line");
+    assert_fails_with(
+        &out,
+        &[
+            "<stdin>:1:1",
+            "line 1 is longer than 16 MiB",
+            "not a text table",
+        ],
+    );
+    // Zeros (/dev/zero, a sparse file) are binary at the first byte; the loader refuses the
+    // device itself before reading a byte.
+    let (out, _) = hairfit_within(
+        limit,
         &[
             "eval",
             "--params",
@@ -95,20 +132,8 @@ fn input_without_line_breaks_is_refused_not_read_whole() {
             "--input",
             "/dev/zero",
         ],
-    ];
-    for args in cases {
-        let (out, _) = hairfit_within(limit, args);
-        let at = format!(
-            "{}:1:1",
-            if args[0] == "eval" {
-                "/dev/zero"
-            } else {
-                zeros
-            }
-        );
-        assert_fails_with(&out, &[&at, "line 1 is longer than", "not a text table"]);
-    }
-    // The loader refuses the device itself before reading a byte.
+    );
+    assert_fails_with(&out, &["/dev/zero:1:1", "NUL bytes"]);
     let (out, _) = hairfit_within(limit, &["load", "/dev/zero", "--format", "csv"]);
     assert_fails_with(&out, &["/dev/zero: is a pipe or a device, not a file"]);
 }

@@ -114,6 +114,38 @@ fn binary_garbage_is_an_error() {
     assert!(msg.starts_with(&format!("{}:1:", p.display())), "{msg}");
 }
 
+/// UTF-16 (what Excel saves as "Unicode text"), with either byte-order mark or none, is named
+/// with the fix, for a CSV, a JSON dataset and a scan, not read as a header of NUL-separated
+/// letters ("missing columns").
+#[test]
+fn utf16_text_is_named_with_the_fix() {
+    let text = format!("{HEADER}10,0,-10,30,1.5\n");
+    let units: Vec<u16> = text.encode_utf16().collect();
+    let le: Vec<u8> = units.iter().flat_map(|u| u.to_le_bytes()).collect();
+    let be: Vec<u8> = units.iter().flat_map(|u| u.to_be_bytes()).collect();
+    let cases = [
+        ("le_bom.csv", [&b"\xFF\xFE"[..], &le].concat()),
+        ("be_bom.csv", [&b"\xFE\xFF"[..], &be].concat()),
+        ("le.csv", le.clone()),
+        ("le.json", le),
+    ];
+    for (name, bytes) in cases {
+        let msg = expect_error(name, &bytes, 1, 1);
+        assert!(
+            msg.contains("UTF-16") && msg.contains("iconv"),
+            "{name}: {msg}"
+        );
+    }
+    // The check reads the first line only: a NUL in a later line is that line's error.
+    let msg = expect_error(
+        "late_nul.csv",
+        format!("{HEADER}10,0,-10,30,1\x00\n").as_bytes(),
+        2,
+        5,
+    );
+    assert!(!msg.contains("UTF-16"), "{msg}");
+}
+
 #[test]
 fn non_utf8_cell_names_its_column() {
     let mut content = format!("{HEADER}1,2,3,4,5\n1,2,").into_bytes();

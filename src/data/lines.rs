@@ -85,9 +85,10 @@ impl std::fmt::Display for NotText {
 
 impl std::error::Error for NotText {}
 
-/// A reader that refuses input no text table can be: a line longer than [`MAX_LINE_BYTES`], or
-/// a first line ended by a lone carriage return (a file whose line breaks are CR only, which
-/// would otherwise read as one long line: "a header but no samples").
+/// A reader that refuses input no text table can be: a line longer than [`MAX_LINE_BYTES`], a
+/// first line ended by a lone carriage return (a file whose line breaks are CR only, which
+/// would otherwise read as one long line: "a header but no samples"), or UTF-16 text or NUL
+/// bytes in the first line.
 pub(crate) struct TextGuard<R> {
     inner: R,
     /// Line feeds seen so far (the current line is `lf + 1`).
@@ -127,6 +128,20 @@ impl<R> TextGuard<R> {
     fn check(&mut self, chunk: &[u8]) -> std::io::Result<()> {
         // memchr: this sees every byte of every input, so a byte loop here was 5% of a load.
         let first_newline = memchr::memchr(b'\n', chunk);
+        if self.lf == 0 {
+            // UTF-16 (Excel's "Unicode text") is refused by name rather than read as a header
+            // of NUL-separated letters; NUL bytes anywhere in line 1 (a binary file) alike.
+            let line_1 = first_newline.map_or(chunk, |end| &chunk[..end]);
+            let at_start = self.in_line == 0 && !self.pending_cr;
+            let utf16 = chunk.starts_with(b"\xFF\xFE") || chunk.starts_with(b"\xFE\xFF");
+            if (at_start && utf16) || memchr::memchr(0, line_1).is_some() {
+                return Err(self.refuse(
+                    "the file is UTF-16 text (or binary: its first line holds NUL bytes); save \
+                     it as UTF-8, e.g. `iconv -f UTF-16 -t UTF-8 IN > OUT`"
+                        .into(),
+                ));
+            }
+        }
         if self.lf == 0 {
             // Only the first line is checked for CR-only breaks: later lone CRs are harmless.
             let first_line = first_newline.map_or(chunk, |end| &chunk[..end]);
