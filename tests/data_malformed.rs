@@ -146,6 +146,25 @@ fn utf16_text_is_named_with_the_fix() {
     assert!(!msg.contains("UTF-16"), "{msg}");
 }
 
+/// A decimal comma (a `;` table from a German or French locale) is named with its fix; a cell
+/// with two commas is not taken for one.
+#[test]
+fn a_decimal_comma_is_named_with_its_fix() {
+    let options = LoadOptions {
+        delimiter: Some(";".into()),
+        ..LoadOptions::default()
+    };
+    let text = "theta_i;phi_i;theta_r;phi_r;radiance\n10;0;-10;30;1,5\n";
+    let msg = expect_error_with("de.csv", text.as_bytes(), &options, 2, 5);
+    assert!(
+        msg.contains("`1,5` looks like a decimal comma: write `1.5`"),
+        "{msg}"
+    );
+    let text = "theta_i;phi_i;theta_r;phi_r;radiance\n10;0;-10;30;1,500,000\n";
+    let msg = expect_error_with("thousands.csv", text.as_bytes(), &options, 2, 5);
+    assert!(!msg.contains("decimal comma"), "{msg}");
+}
+
 #[test]
 fn non_utf8_cell_names_its_column() {
     let mut content = format!("{HEADER}1,2,3,4,5\n1,2,").into_bytes();

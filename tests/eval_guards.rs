@@ -259,3 +259,40 @@ fn an_unclosed_quote_names_where_it_opened() {
         ],
     );
 }
+
+/// A table saved in a German or French locale: `;` or tabs between the columns are named with a
+/// conversion (eval reads commas), and a decimal comma in a cell is named with its fix.
+#[test]
+fn semicolon_tables_and_decimal_commas_are_named_with_the_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = write(dir.path(), "p.json", PARAMS);
+    for (name, text) in [
+        ("semi.csv", "theta_i;phi_i;theta_r;phi_r\n10;0;20;30\n"),
+        ("tab.csv", "theta_i\tphi_i\ttheta_r\tphi_r\n10\t0\t20\t30\n"),
+    ] {
+        let input = write(dir.path(), name, text);
+        let out = eval(&params, &input, &[]);
+        assert_fails_with(
+            &out,
+            &[&format!("{name}:1:1"), "separated by `;` or tabs", "tr "],
+        );
+    }
+    // A header that merely lacks a column gets no such hint.
+    let input = write(dir.path(), "short.csv", "theta_i,phi_i,theta_r\n10,0,20\n");
+    let out = eval(&params, &input, &[]);
+    assert_fails_with(&out, &["missing column(s) phi_r"]);
+    assert!(!stderr(&out).contains("tabs"), "{}", stderr(&out));
+    let input = write(
+        dir.path(),
+        "comma.csv",
+        "theta_i,phi_i,theta_r,phi_r\n10,0,20,\"30,5\"\n",
+    );
+    let out = eval(&params, &input, &[]);
+    assert_fails_with(
+        &out,
+        &[
+            "comma.csv:2:4",
+            "`30,5` looks like a decimal comma: write `30.5`",
+        ],
+    );
+}

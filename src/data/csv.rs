@@ -302,8 +302,9 @@ pub(crate) fn parse_cell(
         column,
         format!(
             "column `{name}`: `{}` is not a number (write `{missing}` or leave the cell \
-             empty for a value that was not measured)",
-            text.chars().take(40).collect::<String>()
+             empty for a value that was not measured){}",
+            text.chars().take(40).collect::<String>(),
+            super::records::decimal_comma_hint(text)
         ),
     ))
 }

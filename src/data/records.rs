@@ -28,6 +28,22 @@ pub(crate) fn parse_f64_prefix(bytes: &[u8]) -> Option<(f64, usize)> {
     fast_float2::parse_partial::<f64, _>(bytes).ok()
 }
 
+/// For a cell that is not a number: when it reads as one with its single comma taken for a
+/// decimal point (`1,5` from a semicolon table saved in a German or French locale), the hint
+/// that says so, to append to the error.
+pub(crate) fn decimal_comma_hint(text: &str) -> String {
+    let fixed = text.replacen(',', ".", 1);
+    let one_comma = text.matches(',').count() == 1;
+    if one_comma && parse_f64(fixed.as_bytes()).is_some() {
+        format!(
+            "; `{text}` looks like a decimal comma: write `{fixed}` (save the table with a \
+             decimal point)"
+        )
+    } else {
+        String::new()
+    }
+}
+
 /// The lines of `block` as csv reads records from quote-free text: `f(line index, line)` for
 /// every line that is neither empty nor a `#` comment, the line without its `\n` or `\r\n`; the
 /// index counts every line of the block from 0. Returns false as soon as `f` does.

@@ -25,19 +25,31 @@ pub(super) fn locate_angle_columns(
         }
     }
     if missing.is_empty() {
-        Ok(index)
-    } else {
-        Err(Error::input(
-            source,
-            header_line,
-            1,
-            format!(
-                "missing column(s) {}; the header must name theta_i,phi_i,theta_r,phi_r (degrees), found: {}",
-                missing.join(", "),
-                headers.join(",")
-            ),
-        ))
+        return Ok(index);
     }
+    // A semicolon or tab table reads as one column: say so, with a conversion.
+    let other_delimiter = headers.len() == 1
+        && [';', '\t'].iter().any(|&d| {
+            ANGLE_COLUMNS
+                .iter()
+                .all(|n| headers[0].split(d).any(|h| h.trim() == *n))
+        });
+    let hint = if other_delimiter {
+        "; the columns are separated by `;` or tabs, and eval reads commas: convert the file, \
+         e.g. `tr ';\\t' ',,' < IN > OUT` (with no commas inside the cells)"
+    } else {
+        ""
+    };
+    Err(Error::input(
+        source,
+        header_line,
+        1,
+        format!(
+            "missing column(s) {}; the header must name theta_i,phi_i,theta_r,phi_r (degrees), found: {}{hint}",
+            missing.join(", "),
+            headers.join(",")
+        ),
+    ))
 }
 
 /// The unit's name in messages.
@@ -140,8 +152,9 @@ fn parse_text(
             line,
             col as u64 + 1,
             format!(
-                "`{}` is not a number (column `{header}`, {unit_name})",
-                text.trim()
+                "`{}` is not a number (column `{header}`, {unit_name}){}",
+                text.trim(),
+                crate::data::records::decimal_comma_hint(text.trim())
             ),
         )
     })
