@@ -74,6 +74,11 @@ pub fn output_columns(n_channels: usize, scalar: bool) -> Vec<String> {
 /// `--input -` reads standard input, `--output -` writes standard output.
 pub const STDIO_NAME: &str = "-";
 
+/// The file `--output` names: `None` for standard output (absent, or `-`).
+pub fn output_file(output: Option<&Path>) -> Option<&Path> {
+    output.filter(|out| *out != Path::new(STDIO_NAME))
+}
+
 /// Evaluate `input` and write to `output` (atomically), or to stdout when `output` is `None` or
 /// `-`; an `input` of `-` is standard input.
 pub fn eval_file(
@@ -97,7 +102,7 @@ pub fn eval_file(
         (Box::new(file), meta.is_file())
     };
     let input = if stdin { Path::new("<stdin>") } else { input };
-    let output = output.filter(|out| *out != Path::new(STDIO_NAME));
+    let output = output_file(output);
     if let Some(out) = output {
         crate::atomic::refuse_directory_output("--output", out, "eval.csv")?;
     }

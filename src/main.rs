@@ -3,7 +3,7 @@
 //! Each subcommand is one `Command` variant holding its clap `Args` and one match arm in `run`
 //! that calls the library.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -229,10 +229,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             for warning in &summary.warnings {
                 eprintln!("hairfit: warning: {}: {warning}", args.input.display());
             }
-            let to_file = args
-                .output
-                .filter(|o| *o != Path::new(hairfit::eval::STDIO_NAME));
-            if let Some(out) = to_file {
+            if let Some(out) = hairfit::eval::output_file(args.output.as_deref()) {
                 eprintln!(
                     "hairfit: evaluated {} rows into {}",
                     summary.rows,

@@ -132,7 +132,7 @@ impl<R> TextGuard<R> {
             // UTF-16 (Excel's "Unicode text") is refused by name rather than read as a header
             // of NUL-separated letters; NUL bytes anywhere in line 1 (a binary file) alike.
             let line_1 = first_newline.map_or(chunk, |end| &chunk[..end]);
-            let at_start = self.in_line == 0 && !self.pending_cr;
+            let at_start = self.in_line == 0;
             let utf16 = chunk.starts_with(b"\xFF\xFE") || chunk.starts_with(b"\xFE\xFF");
             if (at_start && utf16) || memchr::memchr(0, line_1).is_some() {
                 return Err(self.refuse(
