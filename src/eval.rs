@@ -5,6 +5,7 @@
 //! Output files are written atomically: an error on any row leaves no output file behind.
 
 use std::io::{Read, Write};
+use std::ops::Range;
 use std::path::Path;
 
 use rayon::prelude::*;
@@ -206,19 +207,31 @@ pub fn eval_stream_with<R: Read, W: Write + ?Sized>(
         while pos < block.len() {
             index += 1;
             if let Some(row) = eval.header.as_ref().and_then(|h| h.plain.read(block, pos)) {
-                eval.data_row(row.values, &block[pos..row.end])?;
+                eval.data_row(row.values, pos..row.end);
                 pos = row.next;
+                if eval.chunk_full() {
+                    eval.flush_chunk(Some(block))?;
+                }
                 continue;
             }
             let end = memchr::memchr(b'\n', &block[pos..]).map_or(block.len(), |i| pos + i);
-            let line = &block[pos..end];
-            let line = line.strip_suffix(b"\r").unwrap_or(line);
+            let text_end = if block[pos..end].ends_with(b"\r") {
+                end - 1
+            } else {
+                end
+            };
+            let line = &block[pos..text_end];
             if !line.is_empty() && line[0] != b'#' {
                 let split = SplitLine::new(line, &mut starts);
-                eval.record(line_base + index, &split, Some(line))?;
+                eval.record(line_base + index, &split, Some(pos..text_end))?;
+                if eval.chunk_full() {
+                    eval.flush_chunk(Some(block))?;
+                }
             }
             pos = end + 1;
         }
+        // The rows' text stays in the block: they are written before the next block is read.
+        eval.flush_chunk(Some(block))?;
         line_base += index;
     }
     if eval.header.is_none() {
@@ -255,7 +268,10 @@ fn eval_csv_rest<R: Read, W: Write + ?Sized>(
                         return Err(e);
                     }
                 }
-                eval.record(line, &record, None)?
+                eval.record(line, &record, None)?;
+                if eval.chunk_full() {
+                    eval.flush_chunk(None)?;
+                }
             }
             Ok(false) => {
                 if eval.header.is_none() {
@@ -339,9 +355,10 @@ struct Evaluation<'a, W: ?Sized> {
     n_channels: usize,
     chunk_rows: usize,
     angles: Vec<Angles>,
-    /// Each row's input fields as written out (comma-joined, quoted where needed), back to back.
-    passthrough: Vec<u8>,
-    passthrough_ends: Vec<usize>,
+    /// Each row's input text as written out: where it lies in the block being read, or, for
+    /// rows the csv crate read, in `joined` (fields comma-joined, quoted where needed).
+    spans: Vec<Range<usize>>,
+    joined: Vec<u8>,
     values: Vec<f64>,
     out: Vec<u8>,
     rows: u64,
@@ -367,17 +384,17 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             n_channels,
             chunk_rows,
             angles: Vec::with_capacity(chunk_rows),
-            passthrough: Vec::new(),
-            passthrough_ends: Vec::with_capacity(chunk_rows),
+            spans: Vec::with_capacity(chunk_rows),
+            joined: Vec::new(),
             values: Vec::with_capacity(chunk_rows * n_channels),
             out: Vec::new(),
             rows: 0,
         }
     }
 
-    /// Take one record at `line`: the header first, then data rows. `raw` is the line itself
-    /// when it can be copied to the output as it is.
-    fn record(&mut self, line: u64, fields: &impl Fields, raw: Option<&[u8]>) -> Result<()> {
+    /// Take one record at `line`: the header first, then data rows. `raw` is where the line
+    /// lies in the block being read when it can be copied to the output as it is.
+    fn record(&mut self, line: u64, fields: &impl Fields, raw: Option<Range<usize>>) -> Result<()> {
         let Some(header) = &self.header else {
             return self.header(line, fields);
         };
@@ -402,34 +419,30 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
             self.unit,
         )?;
         self.angles.push(to_angles(values, self.unit));
-        match raw {
-            Some(raw) => self.passthrough.extend_from_slice(raw),
-            None => {
-                for i in 0..fields.count() {
-                    if i > 0 {
-                        self.passthrough.push(b',');
-                    }
-                    push_csv_field(&mut self.passthrough, fields.field(i));
+        let span = raw.unwrap_or_else(|| {
+            let start = self.joined.len();
+            for i in 0..fields.count() {
+                if i > 0 {
+                    self.joined.push(b',');
                 }
+                push_csv_field(&mut self.joined, fields.field(i));
             }
-        }
-        self.end_row()
-    }
-
-    /// Take a data row the fast path read: its angles (in the file's unit) and its text.
-    fn data_row(&mut self, values: [f64; 4], raw: &[u8]) -> Result<()> {
-        self.angles.push(to_angles(values, self.unit));
-        self.passthrough.extend_from_slice(raw);
-        self.end_row()
-    }
-
-    /// Close the row just taken; evaluate and write the chunk once it is full.
-    fn end_row(&mut self) -> Result<()> {
-        self.passthrough_ends.push(self.passthrough.len());
-        if self.angles.len() == self.chunk_rows {
-            self.flush_chunk()?;
-        }
+            start..self.joined.len()
+        });
+        self.spans.push(span);
         Ok(())
+    }
+
+    /// Take a data row the fast path read: its angles (in the file's unit) and where its text
+    /// lies in the block.
+    fn data_row(&mut self, values: [f64; 4], raw: Range<usize>) {
+        self.angles.push(to_angles(values, self.unit));
+        self.spans.push(raw);
+    }
+
+    /// Whether the rows taken fill a chunk: the caller flushes it.
+    fn chunk_full(&self) -> bool {
+        self.angles.len() >= self.chunk_rows
     }
 
     /// Read the header at `line`, check it and write the output's header.
@@ -492,8 +505,12 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         Ok(())
     }
 
-    /// Evaluate the gathered rows and write them.
-    fn flush_chunk(&mut self) -> Result<()> {
+    /// Evaluate the gathered rows and write them: rows read from a block have their text in
+    /// `block`, rows the csv crate read (`block` is `None`) in `joined`.
+    fn flush_chunk(&mut self, block: Option<&[u8]>) -> Result<()> {
+        if self.angles.is_empty() {
+            return Ok(());
+        }
         if let Some(evidence) = &mut self.radians {
             // Degrees beyond ±π settle it at the first such row: the rest costs one test a chunk.
             for a in &self.angles {
@@ -522,16 +539,12 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
                 .zip(angles.par_chunks(EVAL_BATCH));
             batches.for_each(batch);
         }
+        let text = block.unwrap_or(&self.joined);
         if let Some(j) = self.values.iter().position(|v| !v.is_finite()) {
-            let row = j / n_channels;
-            let start = if row == 0 {
-                0
-            } else {
-                self.passthrough_ends[row - 1]
-            };
+            let row = &text[self.spans[j / n_channels].clone()];
             return Err(non_finite_error(
                 self.source,
-                &self.passthrough[start..self.passthrough_ends[row]],
+                row,
                 self.values[j],
                 self.request,
             ));
@@ -539,16 +552,11 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         // Values are appended as shortest round-trip text, all into one buffer.
         let mut digits = zmij::Buffer::new();
         // The longest value is 24 bytes.
+        let text_bytes: usize = self.spans.iter().map(|s| s.len()).sum();
         self.out
-            .reserve(self.passthrough.len() + self.values.len() * 25 + self.angles.len());
-        let mut start = 0;
-        for (&end, vals) in self
-            .passthrough_ends
-            .iter()
-            .zip(self.values.chunks(n_channels))
-        {
-            self.out.extend_from_slice(&self.passthrough[start..end]);
-            start = end;
+            .reserve(text_bytes + self.values.len() * 25 + self.angles.len());
+        for (span, vals) in self.spans.iter().zip(self.values.chunks(n_channels)) {
+            self.out.extend_from_slice(&text[span.clone()]);
             for &v in vals {
                 self.out.push(b',');
                 push_shortest(&mut self.out, &mut digits, v);
@@ -557,8 +565,8 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         }
         self.rows += self.angles.len() as u64;
         self.angles.clear();
-        self.passthrough.clear();
-        self.passthrough_ends.clear();
+        self.spans.clear();
+        self.joined.clear();
         self.write_out()
     }
 
@@ -572,9 +580,8 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
 
     /// Evaluate and write what is left; the summary.
     fn finish(mut self) -> Result<EvalSummary> {
-        if !self.angles.is_empty() {
-            self.flush_chunk()?;
-        }
+        // Rows read from blocks were written at each block's end.
+        self.flush_chunk(None)?;
         self.write_out()?;
         self.output.flush().map_err(|e| Error::io(OUTPUT_NAME, e))?;
         let warnings = self.radians.and_then(|e| e.warning()).into_iter().collect();
