@@ -14,6 +14,15 @@ use hairfit::eval::{eval_file, output_columns, EvalRequest};
 use hairfit::family::{FamilyModel, FamilyParams};
 use hairfit::files::Verdict;
 
+/// `eprintln!` that does not panic when stderr has gone (a pipe whose reader left): then there
+/// is no one left to tell, and the exit code still says how the run ended.
+macro_rules! tell {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "hairfit",
@@ -158,7 +167,7 @@ fn main() -> ExitCode {
         // process SIGPIPE ended (128 + 13), as `cat` would.
         Err(err) if is_broken_pipe(&err) => ExitCode::from(141),
         Err(err) => {
-            eprintln!("hairfit: error: {}", error_text(&err));
+            tell!("hairfit: error: {}", error_text(&err));
             ExitCode::FAILURE
         }
     }
@@ -217,7 +226,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let file = FamilyParams::load(&args.params, args.model.family)
                 .map_err(|e| name_parameter_file(e, &args.params))?;
             for warning in file.warnings() {
-                eprintln!("hairfit: warning: {}: {warning}", args.params.display());
+                tell!("hairfit: warning: {}: {warning}", args.params.display());
             }
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
@@ -227,10 +236,10 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             };
             let summary = eval_file(&args.input, args.output.as_deref(), &request)?;
             for warning in &summary.warnings {
-                eprintln!("hairfit: warning: {}: {warning}", args.input.display());
+                tell!("hairfit: warning: {}: {warning}", args.input.display());
             }
             if let Some(out) = hairfit::eval::output_file(args.output.as_deref()) {
-                eprintln!(
+                tell!(
                     "hairfit: evaluated {} rows into {}",
                     summary.rows,
                     out.display()
@@ -247,7 +256,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
             let command_line = hairfit::synth::command_line_string(argv);
             let summary = hairfit::synth::run(&args, Some(command_line))?;
-            eprintln!(
+            tell!(
                 "hairfit: wrote {} samples ({} outliers) to {} and the truth to {}",
                 summary.n_samples,
                 summary.n_outliers,
@@ -255,7 +264,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
                 summary.truth.display()
             );
             for note in &summary.notes {
-                eprintln!("hairfit: note: {note}");
+                tell!("hairfit: note: {note}");
             }
         }
         Command::Report { dir, linear } => {
@@ -265,9 +274,9 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
                 &hairfit::report::ReportOptions { linear },
             )?;
             for note in &summary.notes {
-                eprintln!("hairfit: note: {note}");
+                tell!("hairfit: note: {note}");
             }
-            eprintln!(
+            tell!(
                 "hairfit: wrote {} files; open {}",
                 summary.files.len(),
                 dir.join("index.html").display()
@@ -287,7 +296,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             };
             let ledger = hairfit::cost::run_cost(&out, &options)?;
             say(hairfit::cost::summary_text(&ledger))?;
-            eprintln!(
+            tell!(
                 "hairfit: wrote {}/{{cost.csv,cost.json,cost.svg,cost.png}}",
                 out.display()
             );
@@ -318,7 +327,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             remove_partial_output_on_interrupt();
             let (summary, text) = hairfit::cli::export::export_command(&a)?;
             say(text.unwrap_or_default())?;
-            eprintln!("hairfit: {summary}");
+            tell!("hairfit: {summary}");
         }
         Command::Demo(a) => {
             let stop = ctrl_c_flag();
@@ -344,7 +353,7 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
     let manifest = Manifest::load(&a.manifest)?;
     if a.merge {
         let m = merge::merge(&manifest, &a.out)?;
-        eprintln!(
+        tell!(
             "hairfit: {} items: wrote {} and {}",
             m.items,
             a.out.join("summary.csv").display(),
@@ -353,7 +362,7 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
         let problems = m.problems();
         if !problems.is_empty() {
             for line in &problems {
-                eprintln!("hairfit: {line}");
+                tell!("hairfit: {line}");
             }
             let bad = m.failed.len() + m.interrupted.len() + m.unreadable.len() + m.missing.len();
             anyhow::bail!(
@@ -391,10 +400,10 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
                 ItemOutcome::Failed(e) => format!("FAILED: {e}"),
                 ItemOutcome::Interrupted => "interrupted".into(),
             };
-            eprintln!("hairfit: [{shard}] {}: {what}", item.name);
+            tell!("hairfit: [{shard}] {}: {what}", item.name);
         },
     )?;
-    eprintln!("hairfit: {}", run.summary_line());
+    tell!("hairfit: {}", run.summary_line());
     if run.interrupted() || stop.received().is_some() {
         return Ok(exit_code(Verdict::Interrupted, a.strict, stop.received()));
     }
@@ -416,7 +425,7 @@ fn strict_exit(strict: bool, not_good: &[String]) -> u8 {
     if !strict || not_good.is_empty() {
         return 0;
     }
-    eprintln!(
+    tell!(
         "hairfit: --strict: {} items are poor_fit or undetermined: {}",
         not_good.len(),
         not_good.join(", ")

@@ -350,6 +350,55 @@ fn a_summary_for_a_reader_that_has_gone_ends_quietly() {
     assert_eq!((status.code(), err.as_str()), (Some(141), ""));
 }
 
+/// Messages to a stderr whose reader has gone (`hairfit … 2>&1 | true`) are dropped, and the
+/// exit code still tells: `eprintln!` used to panic there, so a failed run exited 101 and a
+/// finished one too.
+#[test]
+fn messages_to_a_stderr_that_has_gone_keep_the_exit_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = write(dir.path(), "p.json", PARAMS);
+    let input = write(
+        dir.path(),
+        "a.csv",
+        "theta_i,phi_i,theta_r,phi_r\n10,0,-10,180\n",
+    );
+    let output = dir.path().join("out.csv");
+    let missing = dir.path().join("missing.csv");
+    let cases: [(&[&str], i32); 2] = [
+        // Finished: "evaluated 1 rows into …" goes to stderr.
+        (
+            &[
+                "eval",
+                "--params",
+                s(&params),
+                "--input",
+                s(&input),
+                "--output",
+                s(&output),
+            ],
+            0,
+        ),
+        // Failed: the error message goes to stderr.
+        (&["eval", "--params", s(&params), "--input", s(&missing)], 1),
+    ];
+    for (args, code) in cases {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let status = hairfit_command(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::from(writer))
+            .status()
+            .expect("the hairfit binary starts");
+        assert_eq!(status.code(), Some(code), "{args:?}");
+    }
+    let written = std::fs::read_to_string(&output).unwrap();
+    assert!(
+        written.starts_with("theta_i,phi_i,theta_r,phi_r,s\n10,0,-10,180,"),
+        "{written}"
+    );
+}
+
 /// Wait at most 60 s for `child` (its stdout not piped to the test), then its stderr.
 fn wait_quiet(mut child: std::process::Child, what: &str) -> (std::process::ExitStatus, String) {
     let mut errors = child.stderr.take().unwrap();
