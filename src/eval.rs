@@ -209,9 +209,7 @@ pub fn eval_stream_with<R: Read, W: Write + ?Sized>(
             if let Some(row) = eval.header.as_ref().and_then(|h| h.plain.read(block, pos)) {
                 eval.data_row(row.values, pos..row.end);
                 pos = row.next;
-                if eval.chunk_full() {
-                    eval.flush_chunk(Some(block))?;
-                }
+                eval.flush_if_full(Some(block))?;
                 continue;
             }
             let end = memchr::memchr(b'\n', &block[pos..]).map_or(block.len(), |i| pos + i);
@@ -224,9 +222,7 @@ pub fn eval_stream_with<R: Read, W: Write + ?Sized>(
             if !line.is_empty() && line[0] != b'#' {
                 let split = SplitLine::new(line, &mut starts);
                 eval.record(line_base + index, &split, Some(pos..text_end))?;
-                if eval.chunk_full() {
-                    eval.flush_chunk(Some(block))?;
-                }
+                eval.flush_if_full(Some(block))?;
             }
             pos = end + 1;
         }
@@ -269,9 +265,7 @@ fn eval_csv_rest<R: Read, W: Write + ?Sized>(
                     }
                 }
                 eval.record(line, &record, None)?;
-                if eval.chunk_full() {
-                    eval.flush_chunk(None)?;
-                }
+                eval.flush_if_full(None)?;
             }
             Ok(false) => {
                 if eval.header.is_none() {
@@ -440,9 +434,13 @@ impl<'a, W: Write + ?Sized> Evaluation<'a, W> {
         self.spans.push(raw);
     }
 
-    /// Whether the rows taken fill a chunk: the caller flushes it.
-    fn chunk_full(&self) -> bool {
-        self.angles.len() >= self.chunk_rows
+    /// Evaluate and write the rows taken once they fill a chunk (`block`: see
+    /// [`Self::flush_chunk`]).
+    fn flush_if_full(&mut self, block: Option<&[u8]>) -> Result<()> {
+        if self.angles.len() < self.chunk_rows {
+            return Ok(());
+        }
+        self.flush_chunk(block)
     }
 
     /// Read the header at `line`, check it and write the output's header.

@@ -14,13 +14,11 @@ use hairfit::eval::{eval_file, output_columns, EvalRequest};
 use hairfit::family::{FamilyModel, FamilyParams};
 use hairfit::files::Verdict;
 
-/// `eprintln!` that does not panic when stderr has gone (a pipe whose reader left): then there
-/// is no one left to tell, and the exit code still says how the run ended.
+/// `eprintln!` without its panic when stderr has gone: see [`hairfit::cli::tell`].
 macro_rules! tell {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stderr(), $($arg)*);
-    }};
+    ($($arg:tt)*) => {
+        hairfit::cli::tell(format_args!($($arg)*))
+    };
 }
 
 #[derive(Parser)]

@@ -356,35 +356,18 @@ fn a_summary_for_a_reader_that_has_gone_ends_quietly() {
 #[test]
 fn messages_to_a_stderr_that_has_gone_keep_the_exit_code() {
     let dir = tempfile::tempdir().unwrap();
-    let params = write(dir.path(), "p.json", PARAMS);
-    let input = write(
-        dir.path(),
-        "a.csv",
-        "theta_i,phi_i,theta_r,phi_r\n10,0,-10,180\n",
-    );
     let output = dir.path().join("out.csv");
-    let missing = dir.path().join("missing.csv");
-    let cases: [(&[&str], i32); 2] = [
-        // Finished: "evaluated 1 rows into …" goes to stderr.
-        (
-            &[
-                "eval",
-                "--params",
-                s(&params),
-                "--input",
-                s(&input),
-                "--output",
-                s(&output),
-            ],
-            0,
-        ),
-        // Failed: the error message goes to stderr.
-        (&["eval", "--params", s(&params), "--input", s(&missing)], 1),
-    ];
-    for (args, code) in cases {
+    // Finished: "evaluated 180 rows into …" goes to stderr.
+    let finished = eval_args(dir.path(), &output);
+    // Failed: the error message goes to stderr.
+    let mut failed = finished.clone();
+    let input = failed.iter().position(|a| a == "--input").unwrap() + 1;
+    failed[input] = s(&dir.path().join("missing.csv")).to_string();
+    for (args, code) in [(finished, 0), (failed, 1)] {
         let (reader, writer) = std::io::pipe().unwrap();
         drop(reader);
-        let status = hairfit_command(args)
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let status = hairfit_command(&args)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::from(writer))
@@ -393,8 +376,10 @@ fn messages_to_a_stderr_that_has_gone_keep_the_exit_code() {
         assert_eq!(status.code(), Some(code), "{args:?}");
     }
     let written = std::fs::read_to_string(&output).unwrap();
+    let input = std::fs::read_to_string(shipped("example_angles.csv")).unwrap();
+    assert_eq!(written.lines().count(), input.lines().count(), "{written}");
     assert!(
-        written.starts_with("theta_i,phi_i,theta_r,phi_r,s\n10,0,-10,180,"),
+        written.starts_with("theta_i,phi_i,theta_r,phi_r,s\n-30,0,35,-170,"),
         "{written}"
     );
 }

@@ -117,14 +117,9 @@ fn on_signals(mut handle: impl FnMut(i32) + Send + 'static) {
                 }
             });
         }
-        Err(e) => {
-            // Not eprintln!: it panics when stderr is a pipe whose reader left.
-            use std::io::Write as _;
-            let _ = writeln!(
-                std::io::stderr(),
-                "hairfit: warning: Ctrl-C will not stop cleanly: {e}"
-            );
-        }
+        Err(e) => super::tell(format_args!(
+            "hairfit: warning: Ctrl-C will not stop cleanly: {e}"
+        )),
     }
 }
 

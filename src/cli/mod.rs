@@ -16,6 +16,14 @@ use crate::error::{Error, Result};
 use crate::family::ModelFamily;
 use crate::model::{Effects, Measurement, ModelConfig, RootMode};
 
+/// Write one line to stderr, as `eprintln!` would, but without its panic when stderr has gone (a
+/// pipe whose reader left): then no one is left to tell, and the exit code still says how the
+/// run ended.
+pub fn tell(line: std::fmt::Arguments<'_>) {
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stderr(), "{line}");
+}
+
 /// The model family (`--model`), its accuracy knobs and effect switches (Marschner: `--mode`,
 /// `--lobes`, `--no-glints`, `--no-eccentricity`; Chiang: `--terms`, `--width-nodes`).
 #[derive(Debug, Clone, Args)]
