@@ -153,9 +153,9 @@ fn bench_batch(c: &mut Criterion) {
     group.finish();
 }
 
-/// `hairfit eval`'s f64 path: the batch four samples per vector against the scalar batch, all
-/// effects, cubic mode, 1 and 3 channels; "four lanes" is the kernel this CPU gets (AVX2 where
-/// it has it), "wide lanes" the SSE2 kernel every x86-64 CPU runs.
+/// `hairfit eval`'s f64 path: the batch on each lane kernel this CPU runs (`Wide`: wide's SSE2
+/// halves, any x86-64 CPU; `Avx2`: four lanes in one register; `Avx512`: eight; eval picks the
+/// last listed) against the scalar batch, all effects, cubic mode, 1 and 3 channels.
 fn bench_lanes(c: &mut Criterion) {
     let angles = angle_set();
     let config = ModelConfig::default();
@@ -172,18 +172,14 @@ fn bench_lanes(c: &mut Criterion) {
                 out[0]
             })
         });
-        group.bench_function(format!("four lanes, {nc} ch"), |b| {
-            b.iter(|| {
-                scattering_lanes(black_box(&p), &config, &angles, &mut out);
-                out[0]
-            })
-        });
-        group.bench_function(format!("wide lanes, {nc} ch"), |b| {
-            b.iter(|| {
-                scattering_lanes_on(LaneKernel::Wide, black_box(&p), &config, &angles, &mut out);
-                out[0]
-            })
-        });
+        for kernel in LaneKernel::on_this_cpu() {
+            group.bench_function(format!("{kernel:?} lanes, {nc} ch"), |b| {
+                b.iter(|| {
+                    scattering_lanes_on(kernel, black_box(&p), &config, &angles, &mut out);
+                    out[0]
+                })
+            });
+        }
     }
     let mut p = params();
     p.sigma_a = vec![0.4];

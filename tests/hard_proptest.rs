@@ -2,7 +2,7 @@
 //! every fit bound (`hairfit::fit::bounds::Bound::of`), random angles reaching within 1e-9 rad of
 //! grazing, both root modes, random effect sets → S finite and ≥ 0, every Jacobian entry finite,
 //! and reciprocity of S and of its gradient (swapping ω_i and ω_r changes neither); and the
-//! four-lane path `hairfit eval` runs agrees with the scalar model there.
+//! vector path `hairfit eval` runs agrees with the scalar model there.
 //!
 //! tests/model_proptest.rs already covers S over the wider model domain; this adds derivatives.
 
@@ -124,7 +124,7 @@ proptest! {
         }
     }
 
-    /// Eight directions (two vector groups) per case, on each lane kernel this CPU runs.
+    /// Eight directions (one or two vector groups) per case, on each lane kernel this CPU runs.
     /// Tolerance as in tests/model_lanes.rs (1e-11 × (1 + η'), the grazing conditioning, plus
     /// 1e-15 of the largest value), widened where rounding is amplified in both paths alike
     /// (worst measured over 5 × 90,000 cases):
@@ -157,11 +157,7 @@ proptest! {
             1e-11
         };
         let floor = 1e-15 * reference.iter().fold(0.0f64, |m, v| m.max(*v)) + 1e-300;
-        let mut kernels = vec![LaneKernel::Wide];
-        if LaneKernel::avx2_available() {
-            kernels.push(LaneKernel::Avx2);
-        }
-        for kernel in kernels {
+        for kernel in LaneKernel::on_this_cpu() {
             let mut lanes = vec![0.0; 24];
             scattering_lanes_on(kernel, &p, &cfg, &angles, &mut lanes);
             for (k, (a, b)) in lanes.iter().zip(&reference).enumerate() {

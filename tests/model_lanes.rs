@@ -1,11 +1,11 @@
-//! `scattering_lanes` (four samples per vector, what `hairfit eval` runs) against the scalar
+//! `scattering_lanes` (four or eight samples per vector, what `hairfit eval` runs) against the scalar
 //! reference `scattering_batch`, over the whole domain, every effect set, parameter sets that
 //! reach the fast path's limits (TT fold, past the glint merge, strong absorption, narrow lobes)
 //! and the hard directions (grazing, φ = ±φ_c, φ = ±π).
 //!
-//! Both lane kernels are tested: wide's vectors on any CPU, and the AVX2 one where the CPU has
-//! it (the one `scattering_lanes` picks there); they do the same IEEE operations, so they must
-//! give the same bits.
+//! Every lane kernel the CPU runs is tested: wide's vectors on any CPU, the AVX2 one and the
+//! eight-lane AVX-512 one where the CPU has them (`scattering_lanes` picks the widest); they do
+//! the same IEEE operations, so they must give the same bits.
 //!
 //! Tolerance: the lanes and the scalar model do the same operations (a few products regrouped)
 //! except the transcendental functions (the lanes' own vector sin/cos/exp/asin/acos against
@@ -34,14 +34,14 @@ use hairfit::model::{
 
 const TOLERANCE: f64 = 1e-11;
 
-/// The kernels this CPU runs: wide's always, the AVX2 one where the CPU has AVX2 and FMA.
+/// The kernels this CPU runs: wide's always, the AVX2 one where the CPU has AVX2, the AVX-512
+/// one where it has AVX-512F and DQ.
 fn kernels() -> Vec<LaneKernel> {
-    if LaneKernel::avx2_available() {
-        vec![LaneKernel::Wide, LaneKernel::Avx2]
-    } else {
-        eprintln!("this CPU has no AVX2+FMA: the AVX2 kernel is not tested here");
-        vec![LaneKernel::Wide]
+    let kernels = LaneKernel::on_this_cpu();
+    if kernels.len() < 3 {
+        eprintln!("this CPU runs only {kernels:?}: the others are not tested here");
     }
+    kernels
 }
 
 /// `1 + η'` at the largest index any lobe of `params` sees at this direction: the conditioning
@@ -385,10 +385,10 @@ fn a_sample_gets_the_same_bits_wherever_it_stands() {
     }
 }
 
-/// `hairfit eval` prints the same digits on any CPU: the AVX2 kernel gives wide's bits, for
-/// every effect set and parameter set, channel counts 1, 3 and 5 included.
+/// `hairfit eval` prints the same digits on any CPU: the AVX2 and AVX-512 kernels give wide's
+/// bits, for every effect set and parameter set, channel counts 1, 3 and 5 included.
 #[test]
-fn both_kernels_give_the_same_bits() {
+fn every_kernel_gives_the_same_bits() {
     let angles = random_angles(1001, 13);
     for (pname, params) in parameter_sets() {
         for (ename, effects) in effect_sets() {

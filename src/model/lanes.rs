@@ -1,10 +1,11 @@
-//! `S` four samples at a time, for plain f64 in cubic mode (what `hairfit eval` runs): each step
-//! of the scalar [`super::evaluate`] done on four-lane vectors ([`vector::Lane`]). On CPUs with
-//! AVX2 the vector is one 256-bit register ([`avx2`], chosen at run time); elsewhere it is
-//! `wide::f64x4`, which the default x86-64 target builds as two SSE2 halves. Both run the lanes'
-//! own exp, sin/cos, asin and acos ([`functions`]) and the same IEEE operations, so they give the
-//! same bits. Per sample with every effect on (random directions, callgrind): the scalar model
-//! takes 2,520 instructions, the AVX2 lanes about 670 (the README has the times).
+//! `S` four or eight samples at a time, for plain f64 in cubic mode (what `hairfit eval` runs):
+//! each step of the scalar [`super::evaluate`] done on vectors ([`vector::Lane`]). The vector is
+//! chosen at run time: eight lanes in one 512-bit register on CPUs with AVX-512 ([`avx512`]),
+//! four in one 256-bit register on CPUs with AVX2 ([`avx2`]), elsewhere `wide::f64x4`, which the
+//! default x86-64 target builds as two SSE2 halves. All run the lanes' own exp, sin/cos, asin and
+//! acos ([`functions`]) and the same IEEE operations, so they give the same bits. Per sample with
+//! every effect on (random directions, callgrind): the scalar model takes 2,520 instructions, the
+//! AVX2 lanes about 670 (the README has the times).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
@@ -22,22 +23,23 @@ use super::{evaluate_into, scattering_batch, Angles, ModelConfig, Params, Prepar
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 mod functions;
 mod vector;
 use functions::floor;
-use vector::Lane;
+use vector::{Lane, MAX_LANES};
 
-/// Lanes per group.
-const LANES: usize = 4;
-
-/// Which vector type runs the lanes (both give the same bits).
+/// Which vector type runs the lanes (all give the same bits).
 #[doc(hidden)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LaneKernel {
     /// `wide::f64x4` (two SSE2 halves in the default build), on any CPU.
     Wide,
-    /// One AVX register where the CPU has AVX2 (what `scattering_lanes` runs), else `Wide`.
+    /// One AVX register where the CPU has AVX2, else `Wide`.
     Avx2,
+    /// Eight lanes in one AVX-512 register where the CPU has AVX-512F and DQ, else `Avx2`.
+    Avx512,
 }
 
 impl LaneKernel {
@@ -48,9 +50,30 @@ impl LaneKernel {
         #[cfg(not(target_arch = "x86_64"))]
         return false;
     }
+
+    /// Whether this CPU runs the AVX-512 kernel.
+    pub fn avx512_available() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        return avx512::available();
+        #[cfg(not(target_arch = "x86_64"))]
+        return false;
+    }
+
+    /// The kernels this CPU runs as themselves (not by falling back), `Wide` first; the last is
+    /// the one `scattering_lanes` picks.
+    pub fn on_this_cpu() -> Vec<LaneKernel> {
+        let mut kernels = vec![LaneKernel::Wide];
+        if Self::avx2_available() {
+            kernels.push(LaneKernel::Avx2);
+        }
+        if Self::avx512_available() {
+            kernels.push(LaneKernel::Avx512);
+        }
+        kernels
+    }
 }
 
-/// [`super::scattering_batch`] for f64: `out[k * nc + c]`. Cubic mode runs four samples per
+/// [`super::scattering_batch`] for f64: `out[k * nc + c]`. Cubic mode runs four or eight samples per
 /// vector (each sample's value depends on that sample only, not on its neighbours or its place
 /// in the batch); exact mode runs the scalar model.
 pub fn scattering_lanes(
@@ -59,7 +82,7 @@ pub fn scattering_lanes(
     angles: &[Angles],
     out: &mut [f64],
 ) {
-    scattering_lanes_on(LaneKernel::Avx2, params, config, angles, out)
+    scattering_lanes_on(LaneKernel::Avx512, params, config, angles, out)
 }
 
 /// [`scattering_lanes`] on a chosen kernel (tests and benchmarks compare them).
@@ -88,10 +111,17 @@ pub fn scattering_lanes_on(
         config,
     };
     #[cfg(target_arch = "x86_64")]
-    if kernel == LaneKernel::Avx2 && avx2::available() {
-        // SAFETY: the CPU has AVX2.
-        unsafe { groups_avx2(&lanes, angles, out, &scalar) };
-        return;
+    {
+        if kernel == LaneKernel::Avx512 && avx512::available() {
+            // SAFETY: the CPU has AVX-512F and AVX-512DQ.
+            unsafe { groups_avx512(&lanes, angles, out, &scalar) };
+            return;
+        }
+        if kernel != LaneKernel::Wide && avx2::available() {
+            // SAFETY: the CPU has AVX2.
+            unsafe { groups_avx2(&lanes, angles, out, &scalar) };
+            return;
+        }
     }
     groups::<f64x4>(&lanes, angles, out, &scalar);
 }
@@ -110,6 +140,18 @@ unsafe fn groups_avx2(
     groups::<avx2::F64x4>(lanes, angles, out, scalar)
 }
 
+/// The groups on [`avx512::F64x8`], compiled for AVX-512 as `groups_avx2` is for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f,avx512dq")]
+unsafe fn groups_avx512(
+    lanes: &Lanes<'_>,
+    angles: &[Angles],
+    out: &mut [f64],
+    scalar: &dyn Fn(&Angles, &mut [f64]),
+) {
+    groups::<avx512::F64x8>(lanes, angles, out, scalar)
+}
+
 #[inline(always)]
 fn groups<V: Lane>(
     lanes: &Lanes<'_>,
@@ -118,18 +160,18 @@ fn groups<V: Lane>(
     scalar: &dyn Fn(&Angles, &mut [f64]),
 ) {
     let nc = lanes.params.sigma_a.len();
+    let n = V::LANES;
     let mut sums = vec![V::ZERO; nc];
-    let (groups, tail) = angles.split_at(angles.len() / LANES * LANES);
-    for (group, o) in groups.chunks_exact(LANES).zip(out.chunks_mut(LANES * nc)) {
-        let group: &[Angles; LANES] = group.try_into().expect("chunks of LANES");
-        one_group(lanes, group, LANES, o, &mut sums, scalar);
+    let (groups, tail) = angles.split_at(angles.len() / n * n);
+    for (group, o) in groups.chunks_exact(n).zip(out.chunks_mut(n * nc)) {
+        one_group(lanes, group, n, o, &mut sums, scalar);
     }
     if let Some(last) = tail.last() {
         // A short last group repeats its last sample: a lane's value depends on its own sample
         // only, so every sample gets the same bits wherever it stands in the batch.
-        let full: [Angles; LANES] = std::array::from_fn(|l| *tail.get(l).unwrap_or(last));
+        let full: [Angles; MAX_LANES] = std::array::from_fn(|l| *tail.get(l).unwrap_or(last));
         let o = &mut out[groups.len() * nc..];
-        one_group(lanes, &full, tail.len(), o, &mut sums, scalar);
+        one_group(lanes, &full[..n], tail.len(), o, &mut sums, scalar);
     }
 }
 
@@ -138,7 +180,7 @@ fn groups<V: Lane>(
 #[inline(always)]
 fn one_group<V: Lane>(
     lanes: &Lanes<'_>,
-    group: &[Angles; LANES],
+    group: &[Angles],
     used: usize,
     o: &mut [f64],
     sums: &mut [V],
@@ -147,8 +189,8 @@ fn one_group<V: Lane>(
     let nc = sums.len();
     let irregular = lanes.group(group, sums);
     for (c, s) in sums.iter().enumerate() {
-        for (l, v) in s.to_array().into_iter().take(used).enumerate() {
-            o[l * nc + c] = v;
+        for (l, v) in s.to_array().as_ref().iter().take(used).enumerate() {
+            o[l * nc + c] = *v;
         }
     }
     for (l, a) in group.iter().take(used).enumerate() {
@@ -256,7 +298,7 @@ fn fresnel<V: Lane>(eta_p: V, eta_pp: V, cos_gi: V, cos_gt: V) -> V {
     (s * s + q * q) / (d * d) * 0.5
 }
 
-/// The cubic exit-angle map `Φ̂ = aγ³ + bγ + pπ` of one lobe on four lanes, with the
+/// The cubic exit-angle map `Φ̂ = aγ³ + bγ + pπ` of one lobe on the lanes, with the
 /// closed-form root's per-map quantities (`1/a`, `P/3 = b/(3a)`).
 struct Cubic<V> {
     p: f64,
@@ -324,7 +366,7 @@ impl<V: Lane> Cubic<V> {
             let cardano = u.cmp_eq(V::ZERO).blend(V::ZERO, u - p3 / u);
             root = cardano_lanes.blend(cardano, root);
         }
-        if bits(cardano_lanes) != 0b1111 {
+        if bits(cardano_lanes) != V::all_bits() {
             let arg = (-half_q / (r * r * r)).max(V::splat(-1.0)).min(V::ONE);
             let third = arg.acos() * (1.0 / 3.0);
             let viete = r * 2.0 * (third - j * (TAU / 3.0)).cos();
@@ -335,13 +377,14 @@ impl<V: Lane> Cubic<V> {
 }
 
 /// `roots::cube_root_start` per lane: the exponent divided by 3 through the bits, then two
-/// Halley steps on four lanes.
+/// Halley steps on the lanes.
 #[inline(always)]
 fn cube_root_start<V: Lane>(s: V) -> V {
     let m = s.abs();
-    let guess = m
-        .to_array()
-        .map(|v| f64::from_bits(v.to_bits() / 3 + 0x2A9F_7893_0000_0000));
+    let mut guess = m.to_array();
+    for v in guess.as_mut() {
+        *v = f64::from_bits(v.to_bits() / 3 + 0x2A9F_7893_0000_0000);
+    }
     let u = halley(halley(V::new(guess), m), m).copysign(s);
     // 0 and non-finite values pass through, as in the scalar start.
     let pass = s.cmp_eq(V::ZERO) | !s.is_finite();
@@ -355,7 +398,7 @@ fn halley<V: Lane>(u: V, m: V) -> V {
     u * (u3 + m * 2.0) / (u3 * 2.0 + m)
 }
 
-/// One monotone piece `[lo, hi]` of a map on four lanes, with the map's values at its ends.
+/// One monotone piece `[lo, hi]` of a map on the lanes, with the map's values at its ends.
 struct Piece<V> {
     lo: V,
     hi: V,
@@ -461,16 +504,17 @@ impl Lanes<'_> {
         self.add_through_fiber(p, br, h, cos_gi, cos_gi / denom * scale, valid, sums);
     }
 
-    /// `S` of four samples into `sums` (one vector per channel); returns the lanes the scalar
-    /// model must evaluate instead, as bits.
+    /// `S` of `V::LANES` samples into `sums` (one vector per channel); returns the lanes the
+    /// scalar model must evaluate instead, as bits.
     #[inline(always)]
-    fn group<V: Lane>(&self, angles: &[Angles; LANES], sums: &mut [V]) -> u32 {
+    fn group<V: Lane>(&self, angles: &[Angles], sums: &mut [V]) -> u32 {
+        let angles = &angles[..V::LANES];
         // `half_angles` on the lanes (the same operations, so the same bits); a φ_r − φ_i
         // beyond ±4π, which `wrap` would need its fmod for, is the scalar model's.
-        let theta_i = V::new([0, 1, 2, 3].map(|l| angles[l].theta_i));
-        let theta_r = V::new([0, 1, 2, 3].map(|l| angles[l].theta_r));
-        let phi_i = V::new([0, 1, 2, 3].map(|l| angles[l].phi_i));
-        let phi_r = V::new([0, 1, 2, 3].map(|l| angles[l].phi_r));
+        let theta_i = V::from_fn(|l| angles[l].theta_i);
+        let theta_r = V::from_fn(|l| angles[l].theta_r);
+        let phi_i = V::from_fn(|l| angles[l].phi_i);
+        let phi_r = V::from_fn(|l| angles[l].phi_r);
         let theta_h = (theta_i + theta_r) * 0.5;
         let theta_d = (theta_r - theta_i) * 0.5;
         let (phi, far) = wrap(phi_r - phi_i);
@@ -480,7 +524,7 @@ impl Lanes<'_> {
         let inv_cos_td = V::ONE / cos_td;
         let inv_cos2 = inv_cos_td * inv_cos_td;
         let lobes = self.config.effects.lobes;
-        let all = V::new([f64::from_bits(u64::MAX); 4]);
+        let all = V::splat(f64::from_bits(u64::MAX));
         sums.fill(V::ZERO);
 
         if lobes.r || lobes.tt {
@@ -589,7 +633,7 @@ impl Lanes<'_> {
         irregular
     }
 
-    /// `glint_geometry` and the fade of `add_trt_with_glints` on four lanes; the second value
+    /// `glint_geometry` and the fade of `add_trt_with_glints` on the lanes; the second value
     /// flags lanes whose `φ_c` the two-branch wrap does not cover.
     #[inline(always)]
     fn glint_geometry<V: Lane>(
@@ -649,7 +693,7 @@ impl Lanes<'_> {
     }
 }
 
-/// The TRT glint on four lanes.
+/// The TRT glint on the lanes.
 struct GlintLanes<V> {
     t: V,
     h_c: V,
@@ -733,8 +777,8 @@ mod tests {
         };
         let mut sums = vec![f64x4::ZERO; 3];
         let fell_back: u32 = angles
-            .chunks_exact(LANES)
-            .map(|g| lanes.group(g.try_into().unwrap(), &mut sums).count_ones())
+            .chunks_exact(f64x4::LANES)
+            .map(|g| lanes.group(g, &mut sums).count_ones())
             .sum();
         assert!(
             (fell_back as usize) * 100 < angles.len(),

@@ -87,6 +87,8 @@ macro_rules! compare {
 }
 
 impl Lane for F64x4 {
+    const LANES: usize = 4;
+    type Array = [f64; 4];
     // SAFETY (both): [f64; 4] and __m256d have the same size, and every bit pattern is valid.
     const ZERO: Self = F64x4(unsafe { std::mem::transmute::<[f64; 4], __m256d>([0.0; 4]) });
     const ONE: Self = F64x4(unsafe { std::mem::transmute::<[f64; 4], __m256d>([1.0; 4]) });

@@ -1,8 +1,9 @@
-//! What the lanes need of a four-lane f64 vector, as one trait: the arithmetic, comparisons that
-//! return all-ones masks, `blend`, a bit shift, and (provided, from [`super::functions`]) exp,
-//! sin/cos, asin and acos. Two types implement it: `wide::f64x4` (any x86-64; the default target
-//! builds it as two SSE2 halves) and, on CPUs with AVX2, [`super::avx2::F64x4`], one 256-bit
-//! register. Both do the same IEEE operations, so they give the same bits.
+//! What the lanes need of an f64 vector, as one trait: the arithmetic, comparisons that return
+//! all-ones masks, `blend`, a bit shift, and (provided, from [`super::functions`]) exp, sin/cos,
+//! asin and acos. Three types implement it: `wide::f64x4` (any x86-64; the default target builds
+//! it as two SSE2 halves), on CPUs with AVX2 [`super::avx2::F64x4`], one 256-bit register, and on
+//! CPUs with AVX-512 [`super::avx512::F64x8`], eight lanes in one 512-bit register. All do the
+//! same IEEE operations lane by lane, so they give the same bits.
 
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
@@ -10,7 +11,10 @@ use wide::{f64x4, u64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt, CmpNe};
 
 use super::functions;
 
-/// Four f64 lanes; masks are vectors whose set lanes have every bit set.
+/// The most lanes any [`Lane`] type has.
+pub(super) const MAX_LANES: usize = 8;
+
+/// `LANES` f64 lanes; masks are vectors whose set lanes have every bit set.
 pub(super) trait Lane:
     Copy
     + Add<Output = Self>
@@ -27,11 +31,15 @@ pub(super) trait Lane:
     + BitXor<Output = Self>
     + Not<Output = Self>
 {
+    /// How many samples one vector holds (at most [`MAX_LANES`]).
+    const LANES: usize;
+    /// `[f64; LANES]`.
+    type Array: Copy + Default + AsRef<[f64]> + AsMut<[f64]>;
     const ZERO: Self;
     const ONE: Self;
     fn splat(x: f64) -> Self;
-    fn new(lanes: [f64; 4]) -> Self;
-    fn to_array(self) -> [f64; 4];
+    fn new(lanes: Self::Array) -> Self;
+    fn to_array(self) -> Self::Array;
     /// The sign bits, lane 0 lowest.
     fn move_mask(self) -> i32;
     /// `self`'s set lanes take `t`, the others `f`.
@@ -56,6 +64,21 @@ pub(super) trait Lane:
     fn is_finite(self) -> Self;
     /// Each lane's bits shifted left by `N`.
     fn shl_bits<const N: i32>(self) -> Self;
+
+    /// Lane `l` is `f(l)`.
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
+        let mut lanes = Self::Array::default();
+        for (l, x) in lanes.as_mut().iter_mut().enumerate() {
+            *x = f(l);
+        }
+        Self::new(lanes)
+    }
+    /// [`Lane::move_mask`] with every lane set.
+    #[inline(always)]
+    fn all_bits() -> u32 {
+        (1u32 << Self::LANES) - 1
+    }
 
     /// `self · b + c`, not fused: a fused multiply-add would round differently on the CPUs that
     /// have one.
@@ -100,6 +123,8 @@ macro_rules! delegate {
 /// wide's own methods (not its transcendental functions: the lanes' own are as fast on SSE2 and
 /// give the AVX2 kernel's bits).
 impl Lane for f64x4 {
+    const LANES: usize = 4;
+    type Array = [f64; 4];
     const ZERO: Self = f64x4::ZERO;
     const ONE: Self = f64x4::ONE;
     #[inline(always)]

@@ -1,0 +1,194 @@
+//! [`F64x8`]: eight f64 lanes in one AVX-512 register, for CPUs with AVX-512F and AVX-512DQ.
+//! Twice the samples per instruction of [`super::avx2::F64x4`], with the same IEEE operations
+//! lane by lane, so the same bits. AVX-512 compares give bit masks (`k` registers), not vectors;
+//! the trait's all-ones mask vectors are made from them with `vpmovm2q` and read back with
+//! `vpmovq2m`, which the compiler folds away where a mask goes straight into a blend.
+//!
+//! As in `avx2`: every method is `#[inline(always)]` so that inside a
+//! `#[target_feature(enable = "avx512f,avx512dq")]` caller each intrinsic is one instruction, and
+//! a value of this type exists only after the CPU was found to have both ([`available`]): that
+//! is what makes the `unsafe` blocks sound.
+
+use std::arch::x86_64::*;
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
+
+use super::vector::Lane;
+
+/// Eight f64 lanes in an AVX-512 register (see the module's safety note).
+#[derive(Clone, Copy)]
+pub(super) struct F64x8(__m512d);
+
+/// Whether this CPU runs [`F64x8`].
+pub(super) fn available() -> bool {
+    std::arch::is_x86_feature_detected!("avx512f")
+        && std::arch::is_x86_feature_detected!("avx512dq")
+}
+
+/// `f64`'s sign bit.
+const SIGN: f64 = -0.0;
+
+impl F64x8 {
+    /// The lanes set in `k` all ones, the others zero.
+    #[inline(always)]
+    fn from_mask(k: __mmask8) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe { _mm512_castsi512_pd(_mm512_movm_epi64(k)) })
+    }
+
+    /// The lanes whose sign bit is set (as `vblendvpd` and `movmskpd` read a mask).
+    #[inline(always)]
+    fn to_mask(self) -> __mmask8 {
+        // SAFETY: as in `splat`.
+        unsafe { _mm512_movepi64_mask(_mm512_castpd_si512(self.0)) }
+    }
+}
+
+/// `impl $trait for F64x8` by one intrinsic on the two registers.
+macro_rules! lanewise {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        impl $trait for F64x8 {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                // SAFETY: as in `splat`.
+                F64x8(unsafe { $intrinsic(self.0, o.0) })
+            }
+        }
+    };
+}
+
+/// [`lanewise`], and the same with an `f64` on the right (splat to every lane).
+macro_rules! arithmetic {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        lanewise!($trait, $method, $intrinsic);
+        impl $trait<f64> for F64x8 {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: f64) -> Self {
+                self.$method(Self::splat(o))
+            }
+        }
+    };
+}
+arithmetic!(Add, add, _mm512_add_pd);
+arithmetic!(Sub, sub, _mm512_sub_pd);
+arithmetic!(Mul, mul, _mm512_mul_pd);
+arithmetic!(Div, div, _mm512_div_pd);
+lanewise!(BitAnd, bitand, _mm512_and_pd);
+lanewise!(BitOr, bitor, _mm512_or_pd);
+lanewise!(BitXor, bitxor, _mm512_xor_pd);
+
+impl Neg for F64x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self ^ Self::splat(SIGN)
+    }
+}
+
+impl Not for F64x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        self ^ Self::splat(f64::from_bits(u64::MAX))
+    }
+}
+
+macro_rules! compare {
+    ($method:ident, $predicate:ident) => {
+        #[inline(always)]
+        fn $method(self, o: Self) -> Self {
+            // SAFETY: as in `splat`.
+            Self::from_mask(unsafe { _mm512_cmp_pd_mask::<$predicate>(self.0, o.0) })
+        }
+    };
+}
+
+impl Lane for F64x8 {
+    const LANES: usize = 8;
+    type Array = [f64; 8];
+    // SAFETY (both): [f64; 8] and __m512d have the same size, and every bit pattern is valid.
+    const ZERO: Self = F64x8(unsafe { std::mem::transmute::<[f64; 8], __m512d>([0.0; 8]) });
+    const ONE: Self = F64x8(unsafe { std::mem::transmute::<[f64; 8], __m512d>([1.0; 8]) });
+
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        // SAFETY: values of this type exist only on CPUs with AVX-512F and DQ (module note).
+        F64x8(unsafe { _mm512_set1_pd(x) })
+    }
+    #[inline(always)]
+    fn new(lanes: [f64; 8]) -> Self {
+        // SAFETY: as in `splat`; the array holds eight f64.
+        F64x8(unsafe { _mm512_loadu_pd(lanes.as_ptr()) })
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f64; 8] {
+        let mut lanes = [0.0; 8];
+        // SAFETY: as in `splat`; the array holds eight f64.
+        unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), self.0) };
+        lanes
+    }
+    #[inline(always)]
+    fn move_mask(self) -> i32 {
+        i32::from(self.to_mask())
+    }
+    #[inline(always)]
+    fn blend(self, t: Self, f: Self) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe { _mm512_mask_blend_pd(self.to_mask(), f.0, t.0) })
+    }
+    compare!(cmp_eq, _CMP_EQ_OQ);
+    compare!(cmp_ne, _CMP_NEQ_UQ);
+    compare!(cmp_lt, _CMP_LT_OQ);
+    compare!(cmp_le, _CMP_LE_OQ);
+    compare!(cmp_gt, _CMP_GT_OQ);
+    compare!(cmp_ge, _CMP_GE_OQ);
+    #[inline(always)]
+    fn abs(self) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe { _mm512_andnot_pd(Self::splat(SIGN).0, self.0) })
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe { _mm512_sqrt_pd(self.0) })
+    }
+    /// `vrndscalepd` with scale 0 rounds as `vroundpd` does: to nearest, ties to even.
+    #[inline(always)]
+    fn round(self) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe {
+            _mm512_roundscale_pd::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(self.0)
+        })
+    }
+    /// `o` where either is NaN, as the AVX2 kernel's `vminpd`.
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe { _mm512_min_pd(self.0, o.0) })
+    }
+    /// As `min`.
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        // SAFETY: as in `splat`.
+        F64x8(unsafe { _mm512_max_pd(self.0, o.0) })
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        self.abs() | (sign & Self::splat(SIGN))
+    }
+    #[inline(always)]
+    fn is_finite(self) -> Self {
+        // False for NaN too (an unordered comparison).
+        self.abs().cmp_lt(Self::splat(f64::INFINITY))
+    }
+
+    #[inline(always)]
+    fn shl_bits<const N: i32>(self) -> Self {
+        // SAFETY: as in `splat`. The count is a constant: the compiler emits the immediate form.
+        F64x8(unsafe {
+            let count = _mm512_set1_epi64(i64::from(N));
+            _mm512_castsi512_pd(_mm512_sllv_epi64(_mm512_castpd_si512(self.0), count))
+        })
+    }
+}
