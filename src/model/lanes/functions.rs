@@ -311,7 +311,12 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if super::super::avx2::available() {
             let avx = check::<super::super::avx2::F64x4>();
-            assert!(wide == avx, "the AVX2 kernel differs from wide's");
+            assert!(wide == avx, "the AVX2 vector differs from wide's");
+            let pair = check::<super::super::vector::Pair<super::super::avx2::F64x4>>();
+            assert!(
+                wide == pair,
+                "the AVX2 kernel (a pair of vectors) differs from wide's"
+            );
         } else {
             eprintln!("this CPU has no AVX2: its kernel is not tested here");
         }
@@ -363,6 +368,7 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         if super::super::avx2::available() {
             edges::<super::super::avx2::F64x4>();
+            edges::<super::super::vector::Pair<super::super::avx2::F64x4>>();
         }
         #[cfg(target_arch = "x86_64")]
         if super::super::avx512::available() {

@@ -1,9 +1,10 @@
 //! What the lanes need of an f64 vector, as one trait: the arithmetic, comparisons that return
 //! all-ones masks, `blend`, a bit shift, and (provided, from [`super::functions`]) exp, sin/cos,
-//! asin and acos. Three types implement it: `wide::f64x4` (any x86-64; the default target builds
-//! it as two SSE2 halves), on CPUs with AVX2 [`super::avx2::F64x4`], one 256-bit register, and on
-//! CPUs with AVX-512 [`super::avx512::F64x8`], eight lanes in one 512-bit register. All do the
-//! same IEEE operations lane by lane, so they give the same bits.
+//! asin and acos. It is implemented by `wide::f64x4` (any x86-64; the default target builds it
+//! as two SSE2 halves), on CPUs with AVX2 by [`super::avx2::F64x4`], one 256-bit register (run
+//! as a [`Pair`] of them), and on CPUs with AVX-512 by [`super::avx512::F64x8`], eight lanes in
+//! one 512-bit register. All do the same IEEE operations lane by lane, so they give the same
+//! bits.
 
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
@@ -157,5 +158,120 @@ impl Lane for f64x4 {
     fn shl_bits<const N: i32>(self) -> Self {
         let bits: u64x4 = bytemuck::cast(self);
         bytemuck::cast(bits << N)
+    }
+}
+
+/// Two vectors side by side as one of twice the lanes: the same operations on each half, so
+/// the same bits as the halves alone; two independent chains of work for the CPU to overlap.
+#[derive(Clone, Copy)]
+pub(super) struct Pair<V>(V, V);
+
+macro_rules! pair_binary {
+    ($trait:ident, $method:ident) => {
+        impl<V: Lane> $trait for Pair<V> {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                Pair(self.0.$method(o.0), self.1.$method(o.1))
+            }
+        }
+    };
+}
+
+macro_rules! pair_scalar {
+    ($trait:ident, $method:ident) => {
+        impl<V: Lane> $trait<f64> for Pair<V> {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: f64) -> Self {
+                Pair(self.0.$method(o), self.1.$method(o))
+            }
+        }
+    };
+}
+pair_binary!(Add, add);
+pair_binary!(Sub, sub);
+pair_binary!(Mul, mul);
+pair_binary!(Div, div);
+pair_binary!(BitAnd, bitand);
+pair_binary!(BitOr, bitor);
+pair_binary!(BitXor, bitxor);
+pair_scalar!(Add, add);
+pair_scalar!(Sub, sub);
+pair_scalar!(Mul, mul);
+pair_scalar!(Div, div);
+
+impl<V: Lane> Neg for Pair<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Pair(-self.0, -self.1)
+    }
+}
+
+impl<V: Lane> Not for Pair<V> {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Pair(!self.0, !self.1)
+    }
+}
+
+macro_rules! pair_each {
+    ($($name:ident($($arg:ident),*);)*) => {
+        $(
+            #[inline(always)]
+            fn $name(self $(, $arg: Self)*) -> Self {
+                Pair(self.0.$name($($arg.0),*), self.1.$name($($arg.1),*))
+            }
+        )*
+    };
+}
+
+impl<V: Lane<Array = [f64; 4]>> Lane for Pair<V> {
+    const LANES: usize = 8;
+    type Array = [f64; 8];
+    const ZERO: Self = Pair(V::ZERO, V::ZERO);
+    const ONE: Self = Pair(V::ONE, V::ONE);
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        Pair(V::splat(x), V::splat(x))
+    }
+    #[inline(always)]
+    fn new(lanes: [f64; 8]) -> Self {
+        let [a, b, c, d, e, f, g, h] = lanes;
+        Pair(V::new([a, b, c, d]), V::new([e, f, g, h]))
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f64; 8] {
+        let ([a, b, c, d], [e, f, g, h]) = (self.0.to_array(), self.1.to_array());
+        [a, b, c, d, e, f, g, h]
+    }
+    #[inline(always)]
+    fn move_mask(self) -> i32 {
+        self.0.move_mask() | (self.1.move_mask() << 4)
+    }
+    #[inline(always)]
+    fn blend(self, t: Self, f: Self) -> Self {
+        Pair(self.0.blend(t.0, f.0), self.1.blend(t.1, f.1))
+    }
+    pair_each! {
+        cmp_eq(o);
+        cmp_ne(o);
+        cmp_lt(o);
+        cmp_le(o);
+        cmp_gt(o);
+        cmp_ge(o);
+        abs();
+        sqrt();
+        round();
+        min(o);
+        max(o);
+        copysign(sign);
+        is_finite();
+    }
+    #[inline(always)]
+    fn shl_bits<const N: i32>(self) -> Self {
+        Pair(self.0.shl_bits::<N>(), self.1.shl_bits::<N>())
     }
 }
