@@ -154,7 +154,7 @@ fn bench_batch(c: &mut Criterion) {
 }
 
 /// `hairfit eval`'s f64 path: the batch on each lane kernel this CPU runs (`Wide`: wide's SSE2
-/// halves, any x86-64 CPU; `Avx2`: four lanes in one register; `Avx512`: eight; eval picks the
+/// halves, any x86-64 CPU; `Avx2`: eight lanes in two AVX registers; `Avx512`: eight in one; eval picks the
 /// last listed) against the scalar batch, all effects, cubic mode, 1 and 3 channels.
 fn bench_lanes(c: &mut Criterion) {
     let angles = angle_set();
@@ -205,7 +205,7 @@ fn bench_lanes(c: &mut Criterion) {
             mode: RootMode::Cubic,
             effects,
         };
-        group.bench_function(format!("four lanes, {name}"), |b| {
+        group.bench_function(format!("picked lanes, {name}"), |b| {
             b.iter(|| {
                 scattering_lanes(black_box(&p), &config, &angles, &mut out);
                 out[0]
