@@ -11,7 +11,7 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
-use super::vector::Lane;
+use super::vector::{register_operators, Lane};
 
 /// Four f64 lanes in an AVX register (see the module's safety note).
 #[derive(Clone, Copy)]
@@ -25,56 +25,15 @@ pub(super) fn available() -> bool {
 /// `f64`'s sign bit.
 const SIGN: f64 = -0.0;
 
-/// `impl $trait for F64x4` by one intrinsic on the two registers.
-macro_rules! lanewise {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for F64x4 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                // SAFETY: as in `splat`.
-                F64x4(unsafe { $intrinsic(self.0, o.0) })
-            }
-        }
-    };
-}
-
-/// [`lanewise`], and the same with an `f64` on the right (splat to every lane).
-macro_rules! arithmetic {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        lanewise!($trait, $method, $intrinsic);
-        impl $trait<f64> for F64x4 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: f64) -> Self {
-                self.$method(Self::splat(o))
-            }
-        }
-    };
-}
-arithmetic!(Add, add, _mm256_add_pd);
-arithmetic!(Sub, sub, _mm256_sub_pd);
-arithmetic!(Mul, mul, _mm256_mul_pd);
-arithmetic!(Div, div, _mm256_div_pd);
-lanewise!(BitAnd, bitand, _mm256_and_pd);
-lanewise!(BitOr, bitor, _mm256_or_pd);
-lanewise!(BitXor, bitxor, _mm256_xor_pd);
-
-impl Neg for F64x4 {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        self ^ Self::splat(SIGN)
-    }
-}
-
-impl Not for F64x4 {
-    type Output = Self;
-    #[inline(always)]
-    fn not(self) -> Self {
-        self ^ Self::splat(f64::from_bits(u64::MAX))
-    }
-}
+register_operators!(F64x4 {
+    arithmetic Add::add = _mm256_add_pd;
+    arithmetic Sub::sub = _mm256_sub_pd;
+    arithmetic Mul::mul = _mm256_mul_pd;
+    arithmetic Div::div = _mm256_div_pd;
+    bits BitAnd::bitand = _mm256_and_pd;
+    bits BitOr::bitor = _mm256_or_pd;
+    bits BitXor::bitxor = _mm256_xor_pd;
+});
 
 macro_rules! compare {
     ($method:ident, $predicate:ident) => {
@@ -155,15 +114,6 @@ impl Lane for F64x4 {
     fn max(self, o: Self) -> Self {
         // SAFETY: as in `splat`.
         F64x4(unsafe { _mm256_max_pd(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn copysign(self, sign: Self) -> Self {
-        self.abs() | (sign & Self::splat(SIGN))
-    }
-    #[inline(always)]
-    fn is_finite(self) -> Self {
-        // False for NaN too (an unordered comparison).
-        self.abs().cmp_lt(Self::splat(f64::INFINITY))
     }
 
     #[inline(always)]

@@ -12,7 +12,7 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
-use super::vector::Lane;
+use super::vector::{register_operators, Lane};
 
 /// Eight f64 lanes in an AVX-512 register (see the module's safety note).
 #[derive(Clone, Copy)]
@@ -43,56 +43,15 @@ impl F64x8 {
     }
 }
 
-/// `impl $trait for F64x8` by one intrinsic on the two registers.
-macro_rules! lanewise {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for F64x8 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                // SAFETY: as in `splat`.
-                F64x8(unsafe { $intrinsic(self.0, o.0) })
-            }
-        }
-    };
-}
-
-/// [`lanewise`], and the same with an `f64` on the right (splat to every lane).
-macro_rules! arithmetic {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        lanewise!($trait, $method, $intrinsic);
-        impl $trait<f64> for F64x8 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: f64) -> Self {
-                self.$method(Self::splat(o))
-            }
-        }
-    };
-}
-arithmetic!(Add, add, _mm512_add_pd);
-arithmetic!(Sub, sub, _mm512_sub_pd);
-arithmetic!(Mul, mul, _mm512_mul_pd);
-arithmetic!(Div, div, _mm512_div_pd);
-lanewise!(BitAnd, bitand, _mm512_and_pd);
-lanewise!(BitOr, bitor, _mm512_or_pd);
-lanewise!(BitXor, bitxor, _mm512_xor_pd);
-
-impl Neg for F64x8 {
-    type Output = Self;
-    #[inline(always)]
-    fn neg(self) -> Self {
-        self ^ Self::splat(SIGN)
-    }
-}
-
-impl Not for F64x8 {
-    type Output = Self;
-    #[inline(always)]
-    fn not(self) -> Self {
-        self ^ Self::splat(f64::from_bits(u64::MAX))
-    }
-}
+register_operators!(F64x8 {
+    arithmetic Add::add = _mm512_add_pd;
+    arithmetic Sub::sub = _mm512_sub_pd;
+    arithmetic Mul::mul = _mm512_mul_pd;
+    arithmetic Div::div = _mm512_div_pd;
+    bits BitAnd::bitand = _mm512_and_pd;
+    bits BitOr::bitor = _mm512_or_pd;
+    bits BitXor::bitxor = _mm512_xor_pd;
+});
 
 macro_rules! compare {
     ($method:ident, $predicate:ident) => {
@@ -172,15 +131,6 @@ impl Lane for F64x8 {
     fn max(self, o: Self) -> Self {
         // SAFETY: as in `splat`.
         F64x8(unsafe { _mm512_max_pd(self.0, o.0) })
-    }
-    #[inline(always)]
-    fn copysign(self, sign: Self) -> Self {
-        self.abs() | (sign & Self::splat(SIGN))
-    }
-    #[inline(always)]
-    fn is_finite(self) -> Self {
-        // False for NaN too (an unordered comparison).
-        self.abs().cmp_lt(Self::splat(f64::INFINITY))
     }
 
     #[inline(always)]

@@ -61,8 +61,15 @@ pub(super) trait Lane:
     /// As `min`.
     fn max(self, o: Self) -> Self;
     /// `self`'s magnitude with `sign`'s sign.
-    fn copysign(self, sign: Self) -> Self;
-    fn is_finite(self) -> Self;
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        self.abs() | (sign & Self::splat(-0.0))
+    }
+    /// False for NaN too (an unordered comparison).
+    #[inline(always)]
+    fn is_finite(self) -> Self {
+        self.abs().cmp_lt(Self::splat(f64::INFINITY))
+    }
     /// Each lane's bits shifted left by `N`.
     fn shl_bits<const N: i32>(self) -> Self;
 
@@ -108,6 +115,57 @@ pub(super) trait Lane:
         functions::acos(self)
     }
 }
+
+/// The operators of a one-register vector type `$t` (`avx2::F64x4`, `avx512::F64x8`), each by
+/// one intrinsic: `+ − × ÷` lane-wise, also with an `f64` on the right (splat to every lane),
+/// `& | ^` on the bits, and `−x`, `!x` by xor with the sign bit and with all ones. The caller
+/// imports [`Lane`] and `std::ops`' traits; the intrinsics are sound where the type's module
+/// says its values exist only on CPUs with their feature.
+#[cfg(target_arch = "x86_64")]
+macro_rules! register_operators {
+    ($t:ident {
+        $(arithmetic $trait:ident::$method:ident = $intrinsic:ident;)*
+        $(bits $btrait:ident::$bmethod:ident = $bintrinsic:ident;)*
+    }) => {
+        $(
+            register_operators!(@lanewise $t, $trait, $method, $intrinsic);
+            impl $trait<f64> for $t {
+                type Output = Self;
+                #[inline(always)]
+                fn $method(self, o: f64) -> Self {
+                    self.$method(Self::splat(o))
+                }
+            }
+        )*
+        $(register_operators!(@lanewise $t, $btrait, $bmethod, $bintrinsic);)*
+        impl Neg for $t {
+            type Output = Self;
+            #[inline(always)]
+            fn neg(self) -> Self {
+                self ^ Self::splat(-0.0)
+            }
+        }
+        impl Not for $t {
+            type Output = Self;
+            #[inline(always)]
+            fn not(self) -> Self {
+                self ^ Self::splat(f64::from_bits(u64::MAX))
+            }
+        }
+    };
+    (@lanewise $t:ident, $trait:ident, $method:ident, $intrinsic:ident) => {
+        impl $trait for $t {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                // SAFETY: values of `$t` exist only on CPUs with the intrinsic's feature.
+                $t(unsafe { $intrinsic(self.0, o.0) })
+            }
+        }
+    };
+}
+#[cfg(target_arch = "x86_64")]
+pub(super) use register_operators;
 
 /// `fn $name(self, …) -> $out` of [`Lane`] as wide's function of the same name.
 macro_rules! delegate {
