@@ -1,7 +1,8 @@
 //! [`F64x4`]: four f64 lanes in one AVX register, for CPUs with AVX2. The default x86-64 build
 //! has no AVX, so wide's vectors are two SSE2 halves; this type is chosen at run time
 //! (`is_x86_feature_detected!`) and does the same IEEE operations on the whole register, so it
-//! gives the same bits in about half the instructions.
+//! gives the same bits in about half the instructions. The AVX2 kernel runs two of them side by
+//! side ([`super::vector::Pair`]).
 //!
 //! Every method is `#[inline(always)]`, so inside a `#[target_feature(enable = "avx2")]` caller
 //! the intrinsics inline to single instructions (out of line, every intrinsic is a call). A value
