@@ -154,8 +154,9 @@ fn bench_batch(c: &mut Criterion) {
 }
 
 /// `hairfit eval`'s f64 path: the batch on each lane kernel this CPU runs (`Wide`: wide's SSE2
-/// halves, any x86-64 CPU; `Avx2`: eight lanes in two AVX registers; `Avx512`: eight in one; eval picks the
-/// last listed) against the scalar batch, all effects, cubic mode, 1 and 3 channels.
+/// halves, any x86-64 CPU; `Avx2`: eight lanes in two AVX registers; `Avx512`: eight in one;
+/// eval picks the last listed) against the scalar batch, all effects, cubic mode, 1 and 3
+/// channels. "picked lanes" below is the kernel eval picks, per effect set.
 fn bench_lanes(c: &mut Criterion) {
     let angles = angle_set();
     let config = ModelConfig::default();

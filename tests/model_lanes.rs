@@ -1,7 +1,7 @@
-//! `scattering_lanes` (four or eight samples per vector, what `hairfit eval` runs) against the scalar
-//! reference `scattering_batch`, over the whole domain, every effect set, parameter sets that
-//! reach the fast path's limits (TT fold, past the glint merge, strong absorption, narrow lobes)
-//! and the hard directions (grazing, φ = ±φ_c, φ = ±π).
+//! `scattering_lanes` (four or eight samples per vector, what `hairfit eval` runs) against the
+//! scalar reference `scattering_batch`, over the whole domain, every effect set, parameter sets
+//! that reach the fast path's limits (TT fold, past the glint merge, strong absorption, narrow
+//! lobes) and the hard directions (grazing, φ = ±φ_c, φ = ±π).
 //!
 //! Every lane kernel the CPU runs is tested: wide's vectors on any CPU, the AVX2 one and the
 //! eight-lane AVX-512 one where the CPU has them (`scattering_lanes` picks the widest); they do

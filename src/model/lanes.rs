@@ -2,10 +2,11 @@
 //! each step of the scalar [`super::evaluate`] done on vectors ([`vector::Lane`]). The vector is
 //! chosen at run time: eight lanes in one 512-bit register on CPUs with AVX-512 ([`avx512`]),
 //! eight in two 256-bit registers on CPUs with AVX2 ([`avx2`], [`vector::Pair`]), elsewhere four
-//! in `wide::f64x4`, which the default x86-64 target builds as two SSE2 halves. All run the lanes' own exp, sin/cos, asin and
-//! acos ([`functions`]) and the same IEEE operations, so they give the same bits. Per sample with
-//! every effect on (random directions, callgrind): the scalar model takes 2,520 instructions, the
-//! AVX2 lanes about 670 (the README has the times).
+//! in `wide::f64x4`, which the default x86-64 target builds as two SSE2 halves. All run the
+//! lanes' own exp, sin/cos, asin and acos ([`functions`]) and the same IEEE operations, so they
+//! give the same bits. Per sample with every effect on (random directions, callgrind): the scalar
+//! model takes 2,520 instructions, the four-lane AVX2 kernel about 670 (the README has the
+//! times).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
@@ -43,39 +44,26 @@ pub enum LaneKernel {
 }
 
 impl LaneKernel {
-    /// Whether this CPU runs the AVX2 kernel.
-    pub fn avx2_available() -> bool {
-        #[cfg(target_arch = "x86_64")]
-        return avx2::available();
-        #[cfg(not(target_arch = "x86_64"))]
-        return false;
-    }
-
-    /// Whether this CPU runs the AVX-512 kernel.
-    pub fn avx512_available() -> bool {
-        #[cfg(target_arch = "x86_64")]
-        return avx512::available();
-        #[cfg(not(target_arch = "x86_64"))]
-        return false;
-    }
-
     /// The kernels this CPU runs as themselves (not by falling back), `Wide` first; the last is
     /// the one `scattering_lanes` picks.
     pub fn on_this_cpu() -> Vec<LaneKernel> {
         let mut kernels = vec![LaneKernel::Wide];
-        if Self::avx2_available() {
-            kernels.push(LaneKernel::Avx2);
-        }
-        if Self::avx512_available() {
-            kernels.push(LaneKernel::Avx512);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if avx2::available() {
+                kernels.push(LaneKernel::Avx2);
+            }
+            if avx512::available() {
+                kernels.push(LaneKernel::Avx512);
+            }
         }
         kernels
     }
 }
 
-/// [`super::scattering_batch`] for f64: `out[k * nc + c]`. Cubic mode runs four or eight samples per
-/// vector (each sample's value depends on that sample only, not on its neighbours or its place
-/// in the batch); exact mode runs the scalar model.
+/// [`super::scattering_batch`] for f64: `out[k * nc + c]`. Cubic mode runs four or eight samples
+/// per vector (each sample's value depends on that sample only, not on its neighbours or its
+/// place in the batch); exact mode runs the scalar model.
 pub fn scattering_lanes(
     params: &Params<f64>,
     config: &ModelConfig,
@@ -128,9 +116,9 @@ pub fn scattering_lanes_on(
 
 /// The groups on two [`avx2::F64x4`] side by side (eight samples: two independent chains of
 /// work, 6% less time in eval than one register, measured on an Intel CPU run with AVX2 only),
-/// compiled for AVX2 so that its intrinsics inline. Every helper
-/// below is `#[inline(always)]` (and none is a closure) for that reason: a helper left out of
-/// line has no AVX2 context, and each intrinsic in it becomes a call (eval ran 3× slower).
+/// compiled for AVX2 so that its intrinsics inline. Every helper below is `#[inline(always)]`
+/// (and none is a closure) for that reason: a helper left out of line has no AVX2 context, and
+/// each intrinsic in it becomes a call (eval ran 3× slower).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn groups_avx2(

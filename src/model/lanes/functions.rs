@@ -1,7 +1,7 @@
 //! exp, sin/cos, asin and acos on the lanes, written once over [`Lane`]'s basic operations, so
 //! every kernel (wide's SSE2 halves, AVX registers, one AVX-512 register) runs the same
-//! operations and gives the same bits on any CPU. Nothing is fused (`Lane::mul_add` rounds twice): a fused multiply-add
-//! would change the last bits on CPUs that have it. Their domain is the model's: arguments of
+//! operations and gives the same bits on any CPU. Nothing is fused (`Lane::mul_add` rounds
+//! twice): a fused multiply-add would change the last bits on CPUs that have it. Their domain is the model's: arguments of
 //! moderate size (|x| ≲ 10⁵ for sin/cos), where a three-part reduction stays exact enough. Each
 //! is within 1 ulp of libm (tests below).
 

@@ -158,7 +158,7 @@ macro_rules! register_operators {
             type Output = Self;
             #[inline(always)]
             fn $method(self, o: Self) -> Self {
-                // SAFETY: values of `$t` exist only on CPUs with the intrinsic's feature.
+                // SAFETY: values of the type exist only on CPUs with the intrinsic's feature.
                 $t(unsafe { $intrinsic(self.0, o.0) })
             }
         }
@@ -307,7 +307,7 @@ impl<V: Lane<Array = [f64; 4]>> Lane for Pair<V> {
     }
     #[inline(always)]
     fn move_mask(self) -> i32 {
-        self.0.move_mask() | (self.1.move_mask() << 4)
+        self.0.move_mask() | (self.1.move_mask() << V::LANES)
     }
     #[inline(always)]
     fn blend(self, t: Self, f: Self) -> Self {
