@@ -8,7 +8,7 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use hairfit::fit::demo::synthesize;
+use hairfit::demo::synthesize;
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::{fit, EffectsChoice, FitOptions};
 use hairfit::model::{Angles, ModelConfig, Params};

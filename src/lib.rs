@@ -33,6 +33,7 @@ pub mod cli;
 pub mod compare;
 pub mod cost;
 pub mod data;
+pub mod demo;
 pub mod error;
 pub mod eval;
 pub mod export;
@@ -46,6 +47,7 @@ pub mod params;
 pub mod plot;
 pub mod report;
 pub mod rng;
+pub mod slices;
 pub mod synth;
 
 pub use error::{Error, Result};

@@ -331,9 +331,9 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let stop = ctrl_c_flag();
             let cancel = Some(stop.flag.clone());
             let opts = a.fit.options(cancel)?;
-            let outcome = hairfit::fit::demo::demo_command(&opts, &a.out, a.fit.force)?;
+            let outcome = hairfit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
-            say(hairfit::fit::demo::truth_line(&a.out, opts.family))?;
+            say(hairfit::demo::truth_line(&a.out, opts.family))?;
             outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,
@@ -432,7 +432,10 @@ fn strict_exit(strict: bool, not_good: &[String]) -> u8 {
 }
 
 /// The fit's summary, then where its plotted report is.
-fn fit_summary_and_report(run: &hairfit::outdir::PublishedFit, dir: &std::path::Path) -> String {
+fn fit_summary_and_report(
+    run: &hairfit::report::publish::PublishedFit,
+    dir: &std::path::Path,
+) -> String {
     hairfit::cli::summary::summary(&run.outcome, Some(dir)) + &run.report_line(dir)
 }
 

@@ -103,12 +103,12 @@ fn one_longitudinal_scan_names_the_azimuthal_parameters_and_the_assumed_away_ecc
 
 #[test]
 fn the_demo_design_gets_no_design_caveat() {
-    let data = hairfit::fit::demo::synthesize(
-        &hairfit::fit::demo::demo_truth(),
+    let data = hairfit::demo::synthesize(
+        &hairfit::demo::demo_truth(),
         &ModelConfig::default(),
-        &hairfit::fit::demo::demo_geometry(),
-        &hairfit::fit::demo::DEMO_SCALE,
-        hairfit::fit::demo::DEMO_NOISE,
+        &hairfit::demo::demo_geometry(),
+        &hairfit::demo::DEMO_SCALE,
+        hairfit::demo::DEMO_NOISE,
         1,
     );
     let design = Design::of(&data);

@@ -11,8 +11,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 use std::time::Duration;
 
+use hairfit::demo::synthesize;
 use hairfit::fit::bounds::{reference_params, Bound};
-use hairfit::fit::demo::synthesize;
 use hairfit::fit::problem::{Evaluator, FitData, ModelForward, Space};
 use hairfit::fit::solve::run_local;
 use hairfit::fit::{fit, free_parameters, EffectsChoice, FitOptions, Loss};

@@ -6,7 +6,7 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use hairfit::fit::design::SplitMix64;
-use hairfit::report::slices::{find_slices, Sample};
+use hairfit::slices::{find_slices, Sample};
 
 /// `n` samples, each with its own incidence.
 fn scattered(n: u64) -> Vec<Sample> {

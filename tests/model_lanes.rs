@@ -24,7 +24,7 @@
 
 use std::f64::consts::PI;
 
-use hairfit::fit::demo::demo_truth;
+use hairfit::demo::demo_truth;
 use hairfit::model::azimuthal::caustic_position;
 use hairfit::model::eccentricity::eccentric_terms;
 use hairfit::model::{

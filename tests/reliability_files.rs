@@ -10,7 +10,7 @@ use std::os::unix::fs::PermissionsExt;
 use std::path::Path;
 use std::time::Duration;
 
-use hairfit::fit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
+use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
 use hairfit::model::ModelConfig;
 use hard_common::*;
 

@@ -12,7 +12,7 @@ use std::path::Path;
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
-use hairfit::fit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
+use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
 use hairfit::fit::design::SplitMix64;
 use hairfit::model::{Angles, ModelConfig};
 use hard_common::*;

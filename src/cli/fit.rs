@@ -16,7 +16,7 @@ use crate::files::CurvesMode;
 use crate::fit::{
     fit_family, into_fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
-use crate::outdir::{publish_fit, PublishedFit};
+use crate::report::publish::{publish_fit, PublishedFit};
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
 #[derive(Debug, Clone, Args)]

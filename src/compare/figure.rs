@@ -7,8 +7,8 @@ use plotters::prelude::*;
 use crate::error::Result;
 use crate::files::CurveRow;
 use crate::plot::{cartesian, de, draw_key, header, line_glyph, range_of, Axes, Figure, Frame};
-use crate::report::decimate::stride_indices;
-use crate::report::slices::{collect_samples, find_slices, short};
+use crate::slices::decimate::stride_indices;
+use crate::slices::{collect_samples, find_slices, short};
 
 /// Most slices drawn (evenly spread over all of them).
 const MAX_PANELS: usize = 12;

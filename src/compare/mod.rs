@@ -442,7 +442,7 @@ pub fn compare_command(
         let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), &opts)?;
         outcome.json.options.load = Some(format!("{load_options:?}"));
         let dir = set.sub_dir(family.as_str())?;
-        let written = set.write_fit(&dir, outcome)?;
+        let written = crate::report::publish::write_fit(&set, &dir, outcome)?;
         report_lines.push(written.report_line(&out.join(family.as_str())));
         outcomes.push(written.outcome);
         staged.push(dir);

@@ -5,9 +5,9 @@
 use std::time::Instant;
 
 use super::{CostRow, COST_SEED};
+use crate::demo::{demo_geometry, demo_truth, synthesize, DEMO_NOISE, DEMO_SCALE};
 use crate::error::Result;
 use crate::fit::bounds::typical_range;
-use crate::fit::demo::{demo_geometry, demo_truth, synthesize, DEMO_NOISE, DEMO_SCALE};
 use crate::fit::{fit, free_parameters, param, EffectsChoice, FitData, FitOptions, Global};
 use crate::model::{Effects, ModelConfig};
 

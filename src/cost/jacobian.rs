@@ -2,8 +2,8 @@
 //! the solver's parameters, time per full Jacobian and the error of each column.
 
 use super::{time_per_call, CostRow};
+use crate::demo::demo_truth;
 use crate::error::Result;
-use crate::fit::demo::demo_truth;
 use crate::fit::{free_parameters, param, Evaluator, FitData, Loss, ModelForward, Space};
 use crate::model::{Effects, Measurement, ModelConfig};
 

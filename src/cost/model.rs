@@ -2,7 +2,7 @@
 //! time per evaluation against the relative error of S to exact roots with every effect.
 
 use super::{time_per_call, CostRow, COST_SEED};
-use crate::fit::demo::demo_truth;
+use crate::demo::demo_truth;
 use crate::model::{scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
 use crate::rng::SplitMix64;
 

@@ -19,7 +19,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-pub use crate::params::ParamFile;
 
 pub use curves::{
     read_curves_csv, write_curves_csv, CurveRow, CurveValues, Curves, CurvesMode, CURVES_HEADER,

@@ -384,7 +384,7 @@ fn written_samples(mode: CurvesMode, data: &FitData, e: &Evaluation) -> Vec<usiz
     let nc = data.n_channels().max(1);
     match mode {
         CurvesMode::Full => (0..data.len()).collect(),
-        CurvesMode::Summary => crate::report::summary_samples(
+        CurvesMode::Summary => crate::slices::summary_samples(
             data.len(),
             |i| data.angles_deg(i),
             |i| {

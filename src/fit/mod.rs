@@ -13,7 +13,6 @@
 pub mod assemble;
 pub mod auto;
 pub mod bounds;
-pub mod demo;
 pub mod design;
 pub mod diagnostics;
 pub mod fixes;

@@ -12,6 +12,8 @@
 use crate::files::{FitJson, ParamStatus, Suggestion, Verdict};
 use crate::fit::FitData;
 use crate::model::angles::wrap_deg;
+// Degrees in a reason: at most two decimals, no trailing zeros (as the report's titles).
+use crate::slices::short as deg;
 
 /// A scan "across" θ_h or φ must span more than this (degrees): the narrowest lobe, R, is
 /// β_R ≈ 5–10° wide, so a degree tells nothing about its shape.
@@ -154,17 +156,6 @@ pub struct Caveats {
     pub reasons: Vec<String>,
     pub suggestions: Vec<Suggestion>,
     pub undetermined: bool,
-}
-
-/// Degrees in a reason: at most two decimals, no trailing zeros.
-fn deg(v: f64) -> String {
-    let s = format!("{v:.2}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".into()
-    } else {
-        s.into()
-    }
 }
 
 /// The caveats `design` and the fit `json` (its parameters, interval method and effect choice)

@@ -11,7 +11,7 @@ use super::verdict::{Evidence, LARGE_RESIDUAL};
 use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
 use crate::fit::Loss;
 use crate::model::{Measurement, RootMode};
-use crate::report::slices::Slice;
+use crate::slices::Slice;
 
 /// A robust loss is suggested when the large residuals are at most this fraction of the data…
 const MAX_OUTLIER_FRACTION: f64 = 0.25;

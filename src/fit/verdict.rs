@@ -17,7 +17,7 @@ use crate::files::{
 };
 use crate::fit::Loss;
 use crate::model::ModelConfig;
-use crate::report::slices::{find_slices_by, Slice};
+use crate::slices::{find_slices_by, Slice};
 
 /// A test rejects the model when its p-value is below 1e-3: with the handful of tests applied
 /// to one fit, a model that does describe its data is called poor about once in 300–1000 fits,

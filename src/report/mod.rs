@@ -9,12 +9,10 @@
 //! Without curves (`--curves none`) the report shows parameters and verdict only; with a
 //! summary (`--curves summary`) it draws the rows the summary kept ([`summary_rows`]).
 
-pub mod decimate;
 pub mod figures;
 mod html;
 mod panels;
-pub mod slices;
-mod summary;
+pub mod publish;
 
 use std::path::Path;
 
@@ -27,21 +25,18 @@ use crate::files::{CurveRow, Curves, CurvesMode, FitJson};
 use crate::model::Angles;
 
 use crate::plot::{render, YScale};
-use decimate::stride_indices;
+use crate::slices::decimate::stride_indices;
+pub use crate::slices::summary::{summary_rows, summary_samples, SUMMARY_SAMPLES};
+use crate::slices::{find_slices, samples_of, Slice, SliceKind};
+pub use crate::slices::{MAX_PANELS, MAX_SLICE_POINTS};
 use figures::{
     channel_color, ConvergenceFigure, CorrelationFigure, CurvesFigure, PolarFigure, ProfileFigure,
     ProfilePanel, SlicePanel,
 };
 use panels::Ctx;
-use slices::{find_slices, samples_of, Slice, SliceKind};
-pub use summary::{summary_rows, summary_samples, SUMMARY_SAMPLES};
 
 /// Points of the dense model curve per slice (the curve is never decimated).
 pub const DENSE_POINTS: usize = 721;
-/// Most slice panels drawn; more slices are sampled evenly.
-pub const MAX_PANELS: usize = 12;
-/// Most measured points drawn per channel in one slice panel.
-pub const MAX_SLICE_POINTS: usize = 600;
 /// Most points drawn in a scatter figure (data against fit, each residual panel).
 pub const MAX_SCATTER_POINTS: usize = 6000;
 
@@ -124,7 +119,7 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(Error::io(&curves_path, e)),
     };
-    set.keep_all_but(crate::outdir::is_report_file)?;
+    set.keep_all_but(publish::is_report_file)?;
     let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)?;
     set.publish()?;
     Ok(summary)

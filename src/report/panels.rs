@@ -4,13 +4,13 @@
 
 use plotters::prelude::RGBColor;
 
-use super::decimate::{envelope_indices, stride_indices};
 use super::figures::{ChannelSeries, DataVsFitFigure, Point, ResidualsFigure, SlicePanel};
-use super::slices::{theta_h_deg, wrap_deg, Sample, Slice};
 use super::{LobeModel, ReportSummary, DENSE_POINTS, MAX_SCATTER_POINTS, MAX_SLICE_POINTS};
 use crate::files::{Curves, FitJson};
 use crate::model::Angles;
 use crate::plot::{fmt_num, YScale};
+use crate::slices::decimate::{envelope_indices, stride_indices};
+use crate::slices::{theta_h_deg, wrap_deg, Sample, Slice};
 
 /// Samples per slice at which the dense curve is checked against the fit column.
 const CHECK_SAMPLES: usize = 64;

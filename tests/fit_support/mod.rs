@@ -3,7 +3,7 @@
 //! through `hairfit::synth` from rig and noise specs (as `hairfit synth` would).
 #![allow(dead_code)]
 
-use hairfit::fit::demo::synthesize;
+use hairfit::demo::synthesize;
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::FitData;
 use hairfit::model::{Angles, ModelConfig, Params};

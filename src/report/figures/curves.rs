@@ -9,7 +9,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::{SlicePanel, LEGEND_HEADER_H};
 use crate::error::Result;
 use crate::plot::{cartesian, de, header, range_of, Axes, Figure, Frame, YScale, FONT, LABEL_PX};
-use crate::report::slices::short;
+use crate::slices::short;
 
 /// Style of a lobe line (R, TT, TRT): (dash length, gap) in pixels, 0 gap = solid.
 const LOBE_STYLE: [(u32, u32); 3] = [(10, 5), (3, 3), (1, 0)];

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::plot::{
     cartesian, de, draw_key, header, line_glyph, range_of, Figure, Frame, YScale, FONT, LABEL_PX,
 };
-use crate::report::slices::{short, wrap_deg};
+use crate::slices::{short, wrap_deg};
 
 /// Decades shown on the log radius of the polar view.
 const POLAR_DECADES: f64 = 6.0;

@@ -12,7 +12,7 @@ use crate::plot::{
     cartesian, de, draw_key, header, line_glyph, range_of, Axes, Chart, Figure, Frame, FONT,
     LABEL_PX,
 };
-use crate::report::slices::short;
+use crate::slices::short;
 
 /// Normalised residuals against φ and θ_h, and their histogram.
 pub struct ResidualsFigure {

@@ -2,9 +2,13 @@
 //! Deterministic (no randomness, only the table's order), so the same fit writes the same file.
 
 use super::decimate::stride_indices;
-use super::slices::{find_slices_by, samples_of};
-use super::{MAX_PANELS, MAX_SLICE_POINTS};
+use super::{find_slices_by, samples_of};
 use crate::files::Curves;
+
+/// Most slice panels a report draws; more slices are sampled evenly.
+pub const MAX_PANELS: usize = 12;
+/// Most measured points a report draws per channel in one slice panel.
+pub const MAX_SLICE_POINTS: usize = 600;
 
 /// Samples of the even spread over the whole table (beyond the slices and outliers).
 pub const SUMMARY_SAMPLES: usize = 2000;

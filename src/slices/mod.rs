@@ -1,23 +1,19 @@
-//! Samples and slices: `curves.csv` rows regrouped by sample, and the samples grouped into
-//! measurement slices — azimuthal scans (fixed θ_i, φ_i, θ_r; φ_r swept) or longitudinal scans
-//! (fixed θ_i, φ_i, φ_r; θ_r swept) — detected from the data, with the rest left as scattered.
+//! Measurement slices: samples grouped into azimuthal scans (fixed θ_i, φ_i, θ_r; φ_r swept)
+//! or longitudinal scans (fixed θ_i, φ_i, φ_r; θ_r swept), detected from their angles, with the
+//! rest left as scattered; a curves table's rows regrouped by sample ([`samples`]); and which of them a report draws ([`summary`], [`decimate`]). Below
+//! both the fit (which reads the scan design from them) and the report (which draws them).
+
+pub mod decimate;
+pub mod samples;
+pub mod summary;
 
 use std::collections::BTreeMap;
 
-use crate::files::{CurveRow, Curves};
+pub use samples::{collect_samples, find_slices, samples_of, Sample};
+pub use summary::{summary_samples, MAX_PANELS, MAX_SLICE_POINTS, SUMMARY_SAMPLES};
 
 /// Fewest distinct swept values that make a slice worth drawing as a curve.
 pub const MIN_SLICE_POINTS: usize = 3;
-
-/// One sample (one direction pair) and its rows in `curves.csv`, one per channel.
-#[derive(Debug, Clone)]
-pub struct Sample {
-    pub id: u64,
-    /// θ_i, φ_i, θ_r, φ_r in degrees.
-    pub angles: [f64; 4],
-    /// Indices into the row list, one per channel present.
-    pub rows: Vec<usize>,
-}
 
 /// Which angle a slice sweeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,85 +97,13 @@ pub fn theta_h_deg(angles: &[f64; 4]) -> f64 {
     0.5 * (angles[0] + angles[2])
 }
 
-/// Regroup rows by sample id, in order of first appearance.
-pub fn collect_samples(rows: &[CurveRow]) -> Vec<Sample> {
-    let mut index: std::collections::HashMap<u64, usize> = std::collections::HashMap::new();
-    let mut samples: Vec<Sample> = Vec::new();
-    for (i, row) in rows.iter().enumerate() {
-        let k = *index.entry(row.sample).or_insert_with(|| {
-            samples.push(Sample {
-                id: row.sample,
-                angles: row.angles_deg(),
-                rows: Vec::new(),
-            });
-            samples.len() - 1
-        });
-        samples[k].rows.push(i);
-    }
-    samples
-}
-
-/// The samples of a curves table, regrouped by sample id in order of first appearance (as
-/// [`collect_samples`]; a fit's table has each sample's rows together, so this is one pass).
-pub fn samples_of(curves: &Curves) -> Vec<Sample> {
-    let mut index: std::collections::HashMap<u64, usize> =
-        std::collections::HashMap::with_capacity(curves.n_samples());
-    let mut samples: Vec<Sample> = Vec::with_capacity(curves.n_samples());
-    // A fit's table numbers its samples in increasing order: each is new, no lookup needed.
-    let increasing = curves.sample_id.windows(2).all(|w| w[0] < w[1]);
-    if increasing {
-        samples.extend(
-            curves
-                .sample_id
-                .iter()
-                .zip(&curves.sample_angles)
-                .map(|(&id, &angles)| Sample {
-                    id,
-                    angles,
-                    rows: Vec::new(),
-                }),
-        );
-        for r in 0..curves.len() {
-            samples[curves.sample_of(r)].rows.push(r);
-        }
-        return samples;
-    }
-    let mut last: Option<(usize, usize)> = None;
-    for r in 0..curves.len() {
-        let s = curves.sample_of(r);
-        let k = match last {
-            Some((table, k)) if table == s => k,
-            _ => {
-                let id = curves.sample_id[s];
-                *index.entry(id).or_insert_with(|| {
-                    samples.push(Sample {
-                        id,
-                        angles: curves.sample_angles[s],
-                        rows: Vec::new(),
-                    });
-                    samples.len() - 1
-                })
-            }
-        };
-        last = Some((s, k));
-        samples[k].rows.push(r);
-    }
-    samples
-}
-
 /// A grouping key for an angle in degrees: equal to 1e-6° count as the same setting.
 fn key(v: f64) -> i64 {
     (v * 1e6).round() as i64
 }
 
-/// Group samples into slices; returns the slices (sorted by kind and fixed angles) and the
-/// indices of samples in no slice.
-pub fn find_slices(samples: &[Sample]) -> (Vec<Slice>, Vec<usize>) {
-    find_slices_by(samples.len(), |i| samples[i].angles)
-}
-
-/// [`find_slices`] of `n` samples whose angles (degrees) `angles(i)` gives, so a caller with
-/// the angles at hand (a fit's data) needs no [`Sample`] per sample.
+/// Group `n` samples whose angles (degrees) `angles(i)` gives into slices; returns the slices
+/// (sorted by kind and fixed angles) and the indices of samples in no slice.
 pub fn find_slices_by(n: usize, angles: impl Fn(usize) -> [f64; 4]) -> (Vec<Slice>, Vec<usize>) {
     // Incidence groups by one sort (in key order, members in sample order, as a map would
     // give them) rather than a map of a Vec per group: scattered data has a group per sample.
@@ -282,35 +206,21 @@ fn sub_slices(
 mod tests {
     use super::*;
 
-    fn sample(id: u64, angles: [f64; 4]) -> Sample {
-        Sample {
-            id,
-            angles,
-            rows: vec![id as usize],
-        }
-    }
-
     #[test]
     fn azimuthal_and_longitudinal_scans_are_told_apart() {
-        let mut s = Vec::new();
+        let mut s: Vec<[f64; 4]> = Vec::new();
         // An azimuthal scan at θ_i = −20, θ_r = 25 over φ_r.
         for k in 0..10 {
-            s.push(sample(
-                s.len() as u64,
-                [-20.0, 0.0, 25.0, -90.0 + 20.0 * k as f64],
-            ));
+            s.push([-20.0, 0.0, 25.0, -90.0 + 20.0 * k as f64]);
         }
         // A longitudinal scan at θ_i = 10, φ_r = 180 over θ_r.
         for k in 0..7 {
-            s.push(sample(
-                s.len() as u64,
-                [10.0, 0.0, -60.0 + 20.0 * k as f64, 180.0],
-            ));
+            s.push([10.0, 0.0, -60.0 + 20.0 * k as f64, 180.0]);
         }
         // Two isolated samples.
-        s.push(sample(s.len() as u64, [33.0, 5.0, 1.0, 2.0]));
-        s.push(sample(s.len() as u64, [33.0, 5.0, 7.0, 9.0]));
-        let (slices, scattered) = find_slices(&s);
+        s.push([33.0, 5.0, 1.0, 2.0]);
+        s.push([33.0, 5.0, 7.0, 9.0]);
+        let (slices, scattered) = find_slices_by(s.len(), |i| s[i]);
         assert_eq!(slices.len(), 2);
         assert_eq!(slices[0].kind, SliceKind::Azimuthal { theta_r: 25.0 });
         assert_eq!(slices[0].samples.len(), 10);
@@ -321,7 +231,7 @@ mod tests {
         let xs: Vec<f64> = slices[1]
             .samples
             .iter()
-            .map(|&i| slices[1].x_of(&s[i].angles))
+            .map(|&i| slices[1].x_of(&s[i]))
             .collect();
         assert!(xs.windows(2).all(|w| w[0] <= w[1]));
     }

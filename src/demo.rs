@@ -4,14 +4,13 @@
 
 use std::path::Path;
 
-use super::problem::FitData;
-use super::FitOptions;
-use super::{fit_family, FitOutcome};
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily};
 use crate::files::LoadReport;
+use crate::fit::problem::FitData;
+use crate::fit::{fit_family, FitOptions, FitOutcome};
 use crate::model::{Angles, ModelConfig, Params};
-use crate::outdir::PublishedFit;
+use crate::report::publish::PublishedFit;
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
 pub fn demo_truth() -> Params<f64> {
@@ -81,7 +80,7 @@ pub fn synthesize(
         seed,
     )
     .expect("valid synthetic inputs");
-    super::fit_data(&dataset)
+    crate::fit::fit_data(&dataset)
 }
 
 /// The demo geometry as `[θ_i, φ_i, θ_r, φ_r]` in degrees (for the synthesizer).
@@ -113,9 +112,9 @@ pub fn chiang_demo_truth() -> crate::chiang::ChiangParams<f64> {
 pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
     // A bad --fix is an error about the option, before anything touches the output directory.
     if opts.family == ModelFamily::Marschner {
-        super::parse_fixes(&opts.fix, demo_truth().sigma_a.len())?;
+        crate::fit::parse_fixes(&opts.fix, demo_truth().sigma_a.len())?;
     }
-    crate::outdir::publish_fit(out, "hairfit demo", force, &[], |staging| {
+    crate::report::publish::publish_fit(out, "hairfit demo", force, &[], |staging| {
         demo_into(opts, out, staging)
     })
 }
@@ -186,7 +185,7 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
         )],
         ..LoadReport::default()
     };
-    let data = super::fit_data(&dataset);
+    let data = crate::fit::fit_data(&dataset);
     fit_family(&data, &data_path.display().to_string(), report, opts)
 }
 
