@@ -146,7 +146,7 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
                     model: opts.chiang.clone(),
                 },
                 FamilyParams::Chiang(crate::chiang::ChiangParamFile::from_params(&truth)),
-                crate::chiang::fit::lobes_config(&opts.chiang.effects),
+                crate::chiang::lobes_config(&opts.chiang.effects),
                 Some(ChiangRecord {
                     effects: opts.chiang.effects,
                     width_nodes: opts.chiang.width_nodes(),

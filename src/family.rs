@@ -8,12 +8,10 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::chiang::{
-    self, scattering_batch, AzimuthalTable, ChiangEffects, ChiangModel, ChiangParamFile,
-    ChiangParams,
+    self, scattering_batch, ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams,
 };
 use crate::error::{Error, Result};
 use crate::files::ParameterFile;
-use crate::model::angles::wrap;
 use crate::model::{
     scattering_batch as marschner_batch, scattering_by_lobe, scattering_lanes, Angles, ModelConfig,
     Params,
@@ -308,35 +306,9 @@ impl FamilyModel {
                 scattering_by_lobe(params, config, angles, out)
             }
             FamilyModel::Chiang { params, model } => {
-                chiang_by_lobe(params, model, angles, out);
+                chiang::evaluator::scattering_by_lobe(params, model, angles, out);
             }
         }
-    }
-}
-
-/// Chiang's `S` split into `[R, TT, TRT + residual]` per channel (one width integral).
-pub fn chiang_by_lobe(
-    params: &ChiangParams<f64>,
-    model: &ChiangModel,
-    angles: &Angles,
-    out: &mut [[f64; 3]],
-) {
-    let n = params.sigma_a.len();
-    let mut table = AzimuthalTable::zeros(n);
-    let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    table.fill(params, &model.effects, model.rule(), angles.theta_r, phi);
-    let m = chiang::evaluator::longitudinal_terms(
-        params,
-        &model.effects,
-        angles.theta_i,
-        angles.theta_r,
-    );
-    let cos_i = angles.theta_i.cos();
-    for (c, o) in out.iter_mut().enumerate() {
-        let l = &table.lobes[c];
-        o[0] = m[0] * l[0] / cos_i;
-        o[1] = m[1] * l[1] / cos_i;
-        o[2] = (m[2] * l[2] + m[3] * table.residual[c] * 0.5 * std::f64::consts::FRAC_1_PI) / cos_i;
     }
 }
 

@@ -10,8 +10,9 @@
 //! - [`fixed_eta`]: the fit's f64 values and Jacobian with η fixed (hand-written chain rule);
 //! - [`file`]: the Chiang parameter file (JSON names of CHIANG.md);
 //! - [`jacobian`]: seeding dual numbers, Jacobians of a batch;
-//! - [`forward`]: the model as the fit's `Forward` (values and exact Jacobians per batch);
-//! - [`fit`]: `hairfit fit --model chiang` through the shared fit pipeline.
+//!
+//! The fit's side of the family (its `Forward`, free parameters, `--fix` names) is
+//! `crate::fit::family::chiang`.
 //!
 //! Angles reuse [`crate::model::Angles`]: the frame and sign conventions are MODEL.md's.
 
@@ -22,15 +23,13 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::model::Angles;
+use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub mod azimuthal;
 pub mod bessel;
 pub mod evaluator;
 pub mod file;
-pub mod fit;
 pub mod fixed_eta;
-pub mod forward;
 pub mod jacobian;
 pub mod longitudinal;
 pub mod quadrature;
@@ -454,4 +453,45 @@ pub fn combine<T: DualNum<f64>>(m: &[T; 4], lobes: &[T; 3], residual: &T, cos_th
         + m[2].clone() * lobes[2].clone()
         + m[3].clone() * residual.clone() * std::f64::consts::FRAC_1_PI * 0.5;
     sum / cos_theta_i
+}
+
+/// Every Chiang parameter for `nc` channels, in output order (the table's order).
+pub fn all_parameters(nc: usize) -> Vec<ChiangParamName> {
+    let mut v = vec![ChiangParamName::Eta];
+    v.extend((0..nc).map(ChiangParamName::SigmaA));
+    v.extend([
+        ChiangParamName::BetaM,
+        ChiangParamName::BetaN,
+        ChiangParamName::Alpha,
+    ]);
+    v
+}
+
+/// The table's reference values: what a fit holds a parameter it does not vary at.
+pub fn reference_params(nc: usize) -> ChiangParams<f64> {
+    let r = |i: usize| PARAMETERS[i].reference;
+    ChiangParams {
+        eta: r(0),
+        sigma_a: vec![r(1); nc],
+        beta_m: r(2),
+        beta_n: r(3),
+        alpha: r(4).to_radians(),
+    }
+}
+
+/// The Marschner-shaped record of a Chiang fit's lobes (fit.json `model`): its lobes on, no
+/// glints, no eccentricity (the report draws those lobes).
+pub fn lobes_config(effects: &ChiangEffects) -> ModelConfig {
+    ModelConfig {
+        mode: Default::default(),
+        effects: Effects {
+            lobes: Lobes {
+                r: effects.r,
+                tt: effects.tt,
+                trt: effects.trt || effects.residual,
+            },
+            glints: false,
+            eccentricity: false,
+        },
+    }
 }

@@ -104,10 +104,7 @@ impl FitArgs {
 
     /// Check every `--fix` against data of `nc` channels (names, values, channel indices).
     pub fn check_fixes(&self, nc: usize) -> Result<()> {
-        match self.model.family {
-            ModelFamily::Marschner => crate::fit::parse_fixes(&self.fix, nc).map(drop),
-            ModelFamily::Chiang => crate::chiang::fit::parse_fixes(&self.fix, nc).map(drop),
-        }
+        crate::fit::family::family_fit(self.model.family).check_fixes(&self.fix, nc)
     }
 
     /// The fit options these arguments ask for.

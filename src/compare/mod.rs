@@ -347,7 +347,7 @@ fn shared_names<P: crate::fit::problem::FitParam>(all: Vec<P>) -> Vec<String> {
 pub fn check_fixes(fix: &[String], nc: Option<usize>) -> Result<()> {
     use crate::fit::fixes::{channel_index, channels_named};
     let marschner = shared_names(crate::fit::all_parameters(1));
-    let chiang = shared_names(crate::chiang::fit::all_parameters(1));
+    let chiang = shared_names(crate::chiang::all_parameters(1));
     let both: Vec<&str> = marschner
         .iter()
         .filter(|n| chiang.contains(n))
@@ -400,8 +400,9 @@ pub fn check_fixes(fix: &[String], nc: Option<usize>) -> Result<()> {
         Some(nc) => nc,
         None => channels_named(fix)?,
     };
-    crate::fit::parse_fixes(fix, nc)?;
-    crate::chiang::fit::parse_fixes(fix, nc)?;
+    for family in ModelFamily::ALL {
+        crate::fit::family::family_fit(family).check_fixes(fix, nc)?;
+    }
     Ok(())
 }
 

@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn errors_name_the_item_and_the_family() {
-        let all = crate::chiang::fit::all_parameters(1);
+        let all = crate::chiang::all_parameters(1);
         let e = |v: &[&str]| {
             parse_fixes::<ChiangParamName>(&items(v), &all, "Chiang parameter", "beta_n=0.3")
                 .unwrap_err()

@@ -1,5 +1,5 @@
-//! The fit (`hairfit fit`, `hairfit demo`): least squares of a model family (Marschner, or
-//! Chiang through `crate::chiang::fit`) to samples, with
+//! The fit (`hairfit fit`, `hairfit demo`): least squares of a model family (each one type
+//! behind [`family::FamilyFit`]) to samples, with
 //! exact AD Jacobians, bounds by smooth transforms, per-channel scale by variable projection,
 //! robust losses, a seeded parallel multi-start, LM polish, and uncertainties in natural units.
 //!
@@ -15,6 +15,7 @@ pub mod auto;
 pub mod bounds;
 pub mod design;
 pub mod diagnostics;
+pub mod family;
 pub mod fixes;
 pub mod gof;
 pub mod loss;
@@ -35,6 +36,7 @@ use serde::{Deserialize, Serialize};
 
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
+pub use family::marschner::{fit, parse_fixes};
 pub use loss::{Loss, LossScale};
 pub use problem::{
     Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
@@ -49,7 +51,6 @@ use crate::files::{
     Curves, CurvesMode, FitJson, FitStatus, Floored, LoadReport, OptionsRecord, Timing,
 };
 use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
-use crate::params::ParamFile;
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -218,16 +219,6 @@ pub use crate::model::parameters::all_parameters;
 /// The model's parameters that a fit under `effects` varies before `--fix` (from the table).
 pub use crate::model::parameters::fitted_parameters as free_parameters;
 
-/// Parse `--fix NAME=VALUE` items into natural-unit values (`sigma_a=v` fixes every channel).
-pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>> {
-    fixes::parse_fixes(
-        items,
-        &all_parameters(nc),
-        "parameter",
-        "eccentricity=1 or --fix alpha_r_deg=-7",
-    )
-}
-
 /// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,
 /// or a parameter file of either family from [`fit_family`]), the curves curves.csv gets (all
 /// rows, the summary's, or none, as fit.json's `options.curves` says) and the run's wall-clock
@@ -281,71 +272,15 @@ pub fn written_curves<P>(out: &FitOutcome<P>) -> Option<std::borrow::Cow<'_, Cur
     }
 }
 
-/// Fit `data` (from file `file`, loader report `load_report`) with `opts`, the Marschner model
-/// (`opts.family` is not consulted: [`fit_family`] dispatches on it).
-pub fn fit(
-    data: &FitData,
-    file: &str,
-    load_report: LoadReport,
-    opts: &FitOptions,
-) -> Result<FitOutcome> {
-    let started = Instant::now();
-    let nc = require_samples(data, file)?;
-    let mut warnings = Vec::new();
-    let choice = stages::choose_model(data, opts);
-    let forward = ModelForward {
-        config: choice.config,
-        measurement: opts.measurement,
-    };
-    let set = stages::free_set(&choice.config.effects, nc, opts, &mut warnings)?;
-    let options = |sub: usize, explicit: bool, floored| {
-        stages::options_record(opts, &choice, &set, sub, explicit, floored)
-    };
-    let why = |p: ParamName, params: &Params<f64>, partners: &[String]| {
-        diagnostics::why_undetermined(p, data, choice.config.mode, params, partners)
-    };
-    fit_with(
-        FitRun {
-            data,
-            file,
-            load_report,
-            opts,
-            forward: &forward,
-            screening: None,
-            base: set.base.clone(),
-            free: set.free.clone(),
-            options: &options,
-            config: choice.config,
-            chiang: None,
-            all: all_parameters(nc),
-            why: &why,
-            params_file: |p| FamilyParams::Marschner(ParamFile::from_params(p)),
-            started,
-        },
-        warnings,
-    )
-}
-
-/// Fit `data` with the model family `opts.family`; the outcome's parameters as a parameter
-/// file of that family.
+/// Fit `data` with the model family `opts.family` (through its [`family::FamilyFit`]); the
+/// outcome's parameters as a parameter file of that family.
 pub fn fit_family(
     data: &FitData,
     file: &str,
     load_report: LoadReport,
     opts: &FitOptions,
 ) -> Result<FitOutcome<FamilyParams>> {
-    match opts.family {
-        ModelFamily::Marschner => {
-            let out = fit(data, file, load_report, opts)?;
-            Ok(out.map_params(|p| FamilyParams::Marschner(ParamFile::from_params(p))))
-        }
-        ModelFamily::Chiang => {
-            let out = crate::chiang::fit::fit_chiang(data, file, load_report, opts)?;
-            Ok(out.map_params(|p| {
-                FamilyParams::Chiang(crate::chiang::ChiangParamFile::from_params(p))
-            }))
-        }
-    }
+    family::family_fit(opts.family).fit(data, file, load_report, opts)
 }
 
 /// The number of channels of `data`, or an error when there is nothing to fit.

@@ -106,7 +106,7 @@ pub fn synthesize_directions(
 pub struct Source<'a> {
     pub model: &'a FamilyModel,
     pub file: &'a FamilyParams,
-    /// The truth's `model` (for Chiang data: its lobes, see `chiang::fit::lobes_config`).
+    /// The truth's `model` (for Chiang data: its lobes, see `chiang::lobes_config`).
     pub config: &'a ModelConfig,
     pub chiang: Option<ChiangRecord>,
 }
@@ -371,7 +371,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     let (config, record) = match &file {
         FamilyParams::Marschner(_) => (config, None),
         FamilyParams::Chiang(_) => (
-            crate::chiang::fit::lobes_config(&chiang.effects),
+            crate::chiang::lobes_config(&chiang.effects),
             Some(ChiangRecord {
                 effects: chiang.effects,
                 width_nodes: chiang.width_nodes(),

@@ -1,5 +1,5 @@
 //! The Chiang model as the fit sees it: [`FitParam`] for [`ChiangParamName`] (bounds and
-//! reporting facts from [`super::PARAMETERS`]) and [`ChiangForward`], whose values and exact
+//! reporting facts from [`crate::chiang::PARAMETERS`]) and [`ChiangForward`], whose values and exact
 //! Jacobians come from the batch evaluators, so a chunk pays the width integral once per exit
 //! direction: with η fixed (the default) the plain-f64 [`fixed_eta`] path, with `--free eta`
 //! stack duals for every realistic parameter count.
@@ -7,8 +7,11 @@
 use nalgebra::{Dyn, U1};
 use num_dual::DualDVec64;
 
-use super::jacobian::{batch_jacobian_static, seeded};
-use super::{fixed_eta, scattering_batch, ChiangModel, ChiangParamName, ChiangParams};
+use crate::chiang::evaluator::scattering_by_lobe;
+use crate::chiang::{
+    batch_jacobian_static, fixed_eta, scattering_batch, seeded, ChiangModel, ChiangParamName,
+    ChiangParams,
+};
 use crate::fit::bounds::Bound;
 use crate::fit::problem::{FitParam, Forward};
 use crate::model::{Angles, Measurement};
@@ -114,7 +117,7 @@ impl Forward for ChiangForward {
     }
 
     fn by_lobe(&self, p: &ChiangParams<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {
-        crate::family::chiang_by_lobe(p, &self.model, angles, out);
+        scattering_by_lobe(p, &self.model, angles, out);
         self.measurement
             .apply(std::slice::from_ref(angles), out.as_flattened_mut());
         true

@@ -1,12 +1,16 @@
 //! `hairfit fit --model chiang`: the Chiang family's part of a fit — its free parameters (what
 //! the terms in play depend on, minus `--fix`, η only on `--free eta`), its `--fix` names, the
-//! words for an undetermined parameter — handed to the shared stages ([`crate::fit::fit_with`]).
+//! words for an undetermined parameter — handed to the shared stages ([`crate::fit::fit_with`]);
+//! its model as the fit evaluates it is [`forward`].
+
+pub mod forward;
 
 use std::time::Instant;
 
-use super::forward::ChiangForward;
-use super::{
-    ChiangEffects, ChiangModel, ChiangParamFile, ChiangParamName, ChiangParams, PARAMETERS,
+use super::FamilyFit;
+use crate::chiang::{
+    all_parameters, lobes_config, reference_params, ChiangEffects, ChiangModel, ChiangParamFile,
+    ChiangParamName, ChiangParams,
 };
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
@@ -15,36 +19,36 @@ use crate::fit::fixes::FreeSet;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
 use crate::model::angles::wrap;
-use crate::model::{Effects, Lobes, ModelConfig};
+pub use forward::ChiangForward;
+
+/// The Chiang 2016 family (CHIANG.md).
+pub struct Chiang;
+
+impl FamilyFit for Chiang {
+    fn fit(
+        &self,
+        data: &FitData,
+        file: &str,
+        load_report: LoadReport,
+        opts: &FitOptions,
+    ) -> Result<FitOutcome<FamilyParams>> {
+        let out = fit_chiang(data, file, load_report, opts)?;
+        Ok(out.map_params(|p| FamilyParams::Chiang(ChiangParamFile::from_params(p))))
+    }
+
+    fn parameter_names(&self, nc: usize) -> Vec<String> {
+        all_parameters(nc).iter().map(|p| p.json_name()).collect()
+    }
+
+    fn check_fixes(&self, fix: &[String], nc: usize) -> Result<()> {
+        parse_fixes(fix, nc).map(drop)
+    }
+}
 
 /// Width nodes of the multi-start stage (when the fit asks for more): S within 3.5e-2 relative
 /// at the narrowest azimuthal lobes (β_n = 0.05) and to rounding at β_n ≥ 0.3 (docs/chiang.md),
 /// enough to find the basin, a quarter of the default rule's cost.
 pub const SCREENING_WIDTH_NODES: usize = 256;
-
-/// Every Chiang parameter for `nc` channels, in output order (the table's order).
-pub fn all_parameters(nc: usize) -> Vec<ChiangParamName> {
-    let mut v = vec![ChiangParamName::Eta];
-    v.extend((0..nc).map(ChiangParamName::SigmaA));
-    v.extend([
-        ChiangParamName::BetaM,
-        ChiangParamName::BetaN,
-        ChiangParamName::Alpha,
-    ]);
-    v
-}
-
-/// The table's reference values: what a fit holds a parameter it does not vary at.
-pub fn reference_params(nc: usize) -> ChiangParams<f64> {
-    let r = |i: usize| PARAMETERS[i].reference;
-    ChiangParams {
-        eta: r(0),
-        sigma_a: vec![r(1); nc],
-        beta_m: r(2),
-        beta_n: r(3),
-        alpha: r(4).to_radians(),
-    }
-}
 
 /// Parse `--fix NAME=VALUE` with CHIANG.md's names (file units; `sigma_a=v` fixes every
 /// channel) into natural-unit values inside the fit bounds.
@@ -55,23 +59,6 @@ pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ChiangParamName, 
         "Chiang parameter",
         "beta_n=0.3 or --fix alpha_deg=-2",
     )
-}
-
-/// The Marschner-shaped record of a Chiang fit's lobes (fit.json `model`): its lobes on, no
-/// glints, no eccentricity (the report draws those lobes).
-pub fn lobes_config(effects: &ChiangEffects) -> ModelConfig {
-    ModelConfig {
-        mode: Default::default(),
-        effects: Effects {
-            lobes: Lobes {
-                r: effects.r,
-                tt: effects.tt,
-                trt: effects.trt || effects.residual,
-            },
-            glints: false,
-            eccentricity: false,
-        },
-    }
 }
 
 /// Why the data cannot determine `p`: the geometry that shows it, then its partners.

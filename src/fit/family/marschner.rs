@@ -1,0 +1,98 @@
+//! `hairfit fit --model marschner`: the Marschner family's part of a fit — the effects the data
+//! call for, its free parameters and `--fix` names, the words for an undetermined parameter —
+//! handed to the shared stages ([`crate::fit::fit_with`]).
+
+use std::time::Instant;
+
+use super::FamilyFit;
+use crate::error::Result;
+use crate::family::FamilyParams;
+use crate::files::LoadReport;
+use crate::fit::{
+    all_parameters, diagnostics, fit_with, fixes, require_samples, stages, FitData, FitOptions,
+    FitOutcome, FitParam, FitRun, ModelForward,
+};
+use crate::model::{ParamName, Params};
+use crate::params::ParamFile;
+
+/// The Marschner 2003 family (MODEL.md).
+pub struct Marschner;
+
+impl FamilyFit for Marschner {
+    fn fit(
+        &self,
+        data: &FitData,
+        file: &str,
+        load_report: LoadReport,
+        opts: &FitOptions,
+    ) -> Result<crate::fit::FitOutcome<FamilyParams>> {
+        let out = fit(data, file, load_report, opts)?;
+        Ok(out.map_params(|p| FamilyParams::Marschner(ParamFile::from_params(p))))
+    }
+
+    fn parameter_names(&self, nc: usize) -> Vec<String> {
+        all_parameters(nc)
+            .into_iter()
+            .map(|p| p.json_name())
+            .collect()
+    }
+
+    fn check_fixes(&self, fix: &[String], nc: usize) -> Result<()> {
+        parse_fixes(fix, nc).map(drop)
+    }
+}
+
+/// Parse `--fix NAME=VALUE` items into natural-unit values (`sigma_a=v` fixes every channel).
+pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>> {
+    fixes::parse_fixes(
+        items,
+        &all_parameters(nc),
+        "parameter",
+        "eccentricity=1 or --fix alpha_r_deg=-7",
+    )
+}
+
+/// Fit `data` (from file `file`, loader report `load_report`) with `opts`, the Marschner model
+/// (`opts.family` is not consulted: [`crate::fit::fit_family`] dispatches on it).
+pub fn fit(
+    data: &FitData,
+    file: &str,
+    load_report: LoadReport,
+    opts: &FitOptions,
+) -> Result<FitOutcome> {
+    let started = Instant::now();
+    let nc = require_samples(data, file)?;
+    let mut warnings = Vec::new();
+    let choice = stages::choose_model(data, opts);
+    let forward = ModelForward {
+        config: choice.config,
+        measurement: opts.measurement,
+    };
+    let set = stages::free_set(&choice.config.effects, nc, opts, &mut warnings)?;
+    let options = |sub: usize, explicit: bool, floored| {
+        stages::options_record(opts, &choice, &set, sub, explicit, floored)
+    };
+    let why = |p: ParamName, params: &Params<f64>, partners: &[String]| {
+        diagnostics::why_undetermined(p, data, choice.config.mode, params, partners)
+    };
+    fit_with(
+        FitRun {
+            data,
+            file,
+            load_report,
+            opts,
+            forward: &forward,
+            screening: None,
+            base: set.base.clone(),
+            free: set.free.clone(),
+            options: &options,
+            config: choice.config,
+            chiang: None,
+            all: all_parameters(nc),
+            why: &why,
+            params_file: |p| FamilyParams::Marschner(ParamFile::from_params(p)),
+            started,
+        },
+        warnings,
+    )
+}
