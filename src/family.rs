@@ -11,7 +11,7 @@ use crate::chiang::{
     self, scattering_batch, ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams,
 };
 use crate::error::{Error, Result};
-use crate::files::ParameterFile;
+use crate::json_file::ParameterFile;
 use crate::model::{
     scattering_batch as marschner_batch, scattering_by_lobe, scattering_lanes, Angles, ModelConfig,
     Params,

@@ -40,6 +40,7 @@ pub mod export;
 pub mod family;
 pub mod files;
 pub mod fit;
+pub mod json_file;
 pub mod lm;
 pub mod model;
 pub mod outdir;

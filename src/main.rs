@@ -47,7 +47,7 @@ enum Command {
     #[command(after_help = hairfit::cli::exit::EXIT_CODES_HELP)]
     Demo(DemoArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
-    Synth(hairfit::synth::SynthArgs),
+    Synth(hairfit::cli::synth::SynthArgs),
     /// Plot a fit: SVG/PNG figures and an offline index.html in the fit's directory.
     Report {
         /// The fit's directory (holds fit.json and curves.csv, written by `hairfit fit`).
@@ -252,8 +252,8 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             remove_partial_output_on_interrupt();
             // argv[0] varies with the install; record the command as a user types it.
             let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
-            let command_line = hairfit::synth::command_line_string(argv);
-            let summary = hairfit::synth::run(&args, Some(command_line))?;
+            let command_line = hairfit::cli::synth::command_line_string(argv);
+            let summary = hairfit::cli::synth::run(&args, Some(command_line))?;
             tell!(
                 "hairfit: wrote {} samples ({} outliers) to {} and the truth to {}",
                 summary.n_samples,

@@ -119,7 +119,7 @@ impl SigmaA {
 }
 
 /// Reading, parsing and validating a parameter file (`load`, `from_json_str`, `validate`).
-pub use crate::files::ParameterFile;
+pub use crate::json_file::ParameterFile;
 
 /// The JSON parameter file, angles in degrees.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -140,7 +140,7 @@ pub struct ParamFile {
     pub delta_h_m: f64,
 }
 
-impl crate::files::ParameterFile for ParamFile {
+impl crate::json_file::ParameterFile for ParamFile {
     fn hint() -> String {
         format!(
             "a parameter file is a JSON object with keys {}",

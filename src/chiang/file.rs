@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ChiangParams;
 use crate::error::{Error, Result};
-pub use crate::files::ParameterFile;
+pub use crate::json_file::ParameterFile;
 use crate::params::SigmaA;
 
 /// The model tag a Chiang file may carry.
@@ -31,7 +31,7 @@ pub struct ChiangParamFile {
     pub alpha_deg: f64,
 }
 
-impl crate::files::ParameterFile for ChiangParamFile {
+impl crate::json_file::ParameterFile for ChiangParamFile {
     fn hint() -> String {
         "a Chiang parameter file is a JSON object with keys model (optional, \"chiang\"), eta \
          (optional, 1.55), sigma_a (number or array), beta_m, beta_n, alpha_deg"

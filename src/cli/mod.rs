@@ -8,6 +8,7 @@ pub mod exit;
 pub mod export;
 pub mod fit;
 pub mod summary;
+pub mod synth;
 
 use clap::Args;
 

@@ -10,9 +10,9 @@ use serde::{Deserialize, Serialize};
 
 use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
+use super::settings::{Global, Loss, Space};
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
-use crate::fit::{Global, Loss, Space};
 use crate::model::{Measurement, ModelConfig, RootMode};
 
 /// How a fit (or one solver run) ended.
@@ -161,12 +161,12 @@ pub struct GoodnessOfFit {
     /// Scan slices (fixed incidence and one outgoing angle, ≥ 3 points) the structure tests use.
     pub slices: usize,
     /// Wald–Wolfowitz runs test of residual signs along the slices.
-    pub runs: Option<crate::fit::gof::RunsTest>,
+    pub runs: Option<super::statistics::RunsTest>,
     /// Lag-1 autocorrelation of residuals along the slices.
-    pub lag1: Option<crate::fit::gof::Autocorrelation>,
+    pub lag1: Option<super::statistics::Autocorrelation>,
     /// Directions (per channel) measured more than once, and the lack-of-fit F test on them.
     pub replicate_groups: usize,
-    pub lack_of_fit: Option<crate::fit::gof::LackOfFit>,
+    pub lack_of_fit: Option<super::statistics::LackOfFit>,
     pub thresholds: GofThresholds,
 }
 

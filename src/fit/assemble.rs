@@ -462,7 +462,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
     } else {
         status
     };
-    let judgement = super::verdict::judge(&super::verdict::Evidence {
+    let judgement = super::verdict::judge(&super::evidence::Evidence {
         data,
         ev,
         e: &e,

@@ -2,8 +2,9 @@
 //! when it is not, structure along scan slices (residual runs, lag-1 autocorrelation) and the
 //! pure-error lack-of-fit F test on repeated measurements. Pure functions of residuals.
 
-use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor, Normal};
+
+pub use crate::files::statistics::{Autocorrelation, LackOfFit, RunsTest};
 
 /// Upper-tail probability of a χ² at least `chi2` with `dof` degrees of freedom: the chance that
 /// noise alone, as the `sigma` column describes it, gives a fit this poor.
@@ -16,20 +17,6 @@ pub fn chi2_p_value(chi2: f64, dof: f64) -> Option<f64> {
 
 fn standard_normal() -> Normal {
     Normal::new(0.0, 1.0).expect("unit normal")
-}
-
-/// The Wald–Wolfowitz runs test of residual signs, pooled over slices: residuals of a model that
-/// fits change sign at random along a scan; a systematic misfit gives long runs of one sign.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RunsTest {
-    /// Runs observed, summed over slices.
-    pub runs: usize,
-    /// Runs expected for random signs with the same counts.
-    pub expected: f64,
-    /// (runs − expected)/sd: strongly negative means too few runs.
-    pub z: f64,
-    /// Lower-tail p-value: the chance of this few runs or fewer by chance.
-    pub p_value: f64,
 }
 
 /// Runs test over `slices` (each one scan in measurement order; zero residuals are skipped).
@@ -64,20 +51,6 @@ pub fn runs_test<'a>(slices: impl IntoIterator<Item = &'a [f64]>) -> Option<Runs
     })
 }
 
-/// Lag-1 autocorrelation of residuals along slices, pooled: neighbours on a scan that fits are
-/// uncorrelated; a smooth misfit makes them alike.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Autocorrelation {
-    /// Σ r_t r_{t+1} / Σ r_t² over neighbouring pairs within slices.
-    pub r1: f64,
-    /// Neighbouring pairs used.
-    pub pairs: usize,
-    /// r1·√pairs, ~N(0, 1) for independent residuals.
-    pub z: f64,
-    /// Upper-tail p-value of z (positive correlation is the misfit signature).
-    pub p_value: f64,
-}
-
 /// Pooled lag-1 autocorrelation over `slices`; `None` with fewer than 3 pairs.
 pub fn lag1_autocorrelation<'a>(
     slices: impl IntoIterator<Item = &'a [f64]>,
@@ -108,24 +81,6 @@ pub fn lag1_autocorrelation<'a>(
         z,
         p_value: standard_normal().sf(z),
     })
-}
-
-/// The lack-of-fit F test: residual scatter between repeated measurements of one direction
-/// (pure error) against the misfit of the direction means (lack of fit).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct LackOfFit {
-    /// Σ over replicate groups of Σ (r − group mean)².
-    pub ss_pure_error: f64,
-    pub dof_pure_error: usize,
-    /// Residual sum of squares minus the pure error.
-    pub ss_lack_of_fit: f64,
-    pub dof_lack_of_fit: usize,
-    /// (SS_lof/dof_lof) / (SS_pe/dof_pe).
-    pub f: f64,
-    /// Upper-tail p-value of F.
-    pub p_value: f64,
-    /// The noise level the replicates show: √(SS_pe/dof_pe), in residual units.
-    pub pure_error_sd: f64,
 }
 
 /// Lack-of-fit test of `residuals` grouped by `group` (equal ids = the same direction and

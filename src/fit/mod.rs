@@ -15,6 +15,7 @@ pub mod auto;
 pub mod bounds;
 pub mod design;
 pub mod diagnostics;
+pub mod evidence;
 pub mod family;
 pub mod fixes;
 pub mod gof;
@@ -32,8 +33,6 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::{Deserialize, Serialize};
-
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
 pub use family::marschner::{fit, parse_fixes};
@@ -42,6 +41,8 @@ pub use problem::{
     Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
 };
 pub use profile::Intervals;
+
+pub use crate::files::settings::Global;
 
 use crate::chiang::ChiangModel;
 use crate::data::Dataset;
@@ -77,42 +78,6 @@ pub enum EffectsChoice {
     All,
     /// Exactly these (from `--lobes/--no-glints/--no-eccentricity`).
     Explicit(Effects),
-}
-
-/// Optional global stage between the multi-start and the polish.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum Global {
-    #[default]
-    None,
-    /// argmin's Nelder–Mead on the subsample cost, from the best multi-start point.
-    NelderMead,
-    /// argmin's particle swarm on the subsample cost over the start box (seeded).
-    Pso,
-}
-
-impl std::fmt::Display for Global {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Global::None => "none",
-            Global::NelderMead => "nelder-mead",
-            Global::Pso => "pso",
-        })
-    }
-}
-
-impl std::str::FromStr for Global {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "none" => Ok(Global::None),
-            "nelder-mead" | "neldermead" | "nm" => Ok(Global::NelderMead),
-            "pso" => Ok(Global::Pso),
-            other => Err(Error::Other(format!(
-                "unknown global stage `{other}`: use none, pso or nelder-mead"
-            ))),
-        }
-    }
 }
 
 /// Everything a fit needs besides the data.

@@ -7,16 +7,17 @@ use nalgebra::DVector;
 
 use crate::model::Angles;
 
+mod evaluation;
 mod evaluator;
 mod forward;
 mod linearize;
 mod projection;
 mod residual;
 
+pub use evaluation::{chunked_sum, Evaluation, ScaleMode, CHUNK};
 pub use evaluator::{Evaluator, Floored, Space, LOG_MIN_SNR};
 pub use forward::{gradients, FitParam, Forward, ModelForward, ParamSet};
 pub use linearize::Linearization;
-pub use residual::{chunked_sum, Evaluation, ScaleMode, CHUNK};
 
 /// Samples to fit: angles (radians) and values row-major `i * n_channels + c`.
 #[derive(Debug, Clone, Default)]

@@ -5,9 +5,9 @@
 
 use rayon::prelude::*;
 
+use super::evidence::{Evidence, LARGE_RESIDUAL};
 use super::gof;
 use super::problem::{FitParam, Forward, ScaleMode, Space, CHUNK};
-use super::verdict::{Evidence, LARGE_RESIDUAL};
 use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
 use crate::fit::Loss;
 use crate::model::{Measurement, RootMode};

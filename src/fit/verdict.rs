@@ -8,15 +8,16 @@
 
 use rayon::prelude::*;
 
+use super::evidence::Evidence;
+use super::evidence::LARGE_RESIDUAL;
 use super::gof;
-use super::problem::{Evaluation, Evaluator, FitData, Forward, ParamSet};
+use super::problem::{FitData, Forward};
 use super::suggest::suggestions;
 use crate::files::{
-    FitJson, FitStatus, GofThresholds, GoodnessOfFit, ParamStatus, ParameterEntry, ScaleEntry,
-    Suggestion, TraceStage, Verdict,
+    FitJson, FitStatus, GofThresholds, GoodnessOfFit, ParamStatus, ParameterEntry, Suggestion,
+    Verdict,
 };
 use crate::fit::Loss;
-use crate::model::ModelConfig;
 use crate::slices::{find_slices_by, Slice};
 
 /// A test rejects the model when its p-value is below 1e-3: with the handful of tests applied
@@ -49,36 +50,8 @@ pub const ROBUST_EXCLUSION_SIGMA: f64 = 5.0;
 /// model misses the bulk of the data.
 pub const MAX_OUTLIER_FRACTION: f64 = 0.25;
 
-/// A residual beyond this many robust noise levels is "large" (evidence for a robust loss).
-pub const LARGE_RESIDUAL: f64 = 5.0;
-
 /// At most this many rows are named in one reason (the count says how many more).
 const NAMED_ROWS: usize = 3;
-
-/// What the verdict looks at: the fit's data, its evaluator and final evaluation, and the
-/// entries already assembled for fit.json.
-pub struct Evidence<'a, 'e, 'f, F: Forward> {
-    pub data: &'a FitData,
-    pub ev: &'e Evaluator<'f, F>,
-    pub e: &'a Evaluation,
-    pub config: &'a ModelConfig,
-    /// Every parameter at the optimum (natural units).
-    pub params: &'a ParamSet<F>,
-    pub status: FitStatus,
-    pub parameters: &'a [ParameterEntry],
-    pub scale: &'a [ScaleEntry],
-    pub trace: &'a [TraceStage],
-    pub warnings: &'a [String],
-    /// Residual degrees of freedom (residuals − free parameters − scales).
-    pub dof: usize,
-}
-
-impl<F: Forward> Evidence<'_, '_, '_, F> {
-    /// Number of fitted quantities: free parameters and per-channel scales.
-    pub fn n_fitted(&self) -> usize {
-        self.e.raw.len().saturating_sub(self.dof)
-    }
-}
 
 /// The verdict with its reasons, statistics and suggestions.
 #[derive(Debug, Clone)]

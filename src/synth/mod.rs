@@ -7,7 +7,7 @@
 //! build; the model values themselves can differ in the last digit with the platform's `libm`.
 
 pub mod memory;
-mod noise;
+pub mod noise;
 pub mod random;
 mod rig;
 
@@ -15,13 +15,12 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use crate::cli::{MeasurementArgs, ModelArgs};
-use crate::data::{round_trip_degrees, write_csv, Dataset};
+use crate::data::{round_trip_degrees, Dataset};
 use crate::error::{Error, Result};
 use crate::family::{ChiangRecord, FamilyModel, FamilyParams};
 pub use crate::files::{ScaleEntry, Truth};
 use crate::model::{Angles, Measurement, ModelConfig, Params};
-use crate::params::{ParamFile, SigmaA};
+use crate::params::ParamFile;
 
 pub use self::noise::{Noise, Noisy, OutlierKind, OUTLIER_FACTOR};
 pub use self::rig::{Rig, MAX_THETA_DEG};
@@ -202,7 +201,7 @@ pub fn synthesize_model(
 }
 
 /// Keep the truth in the dataset's metadata too (key `truth`), for in-memory users.
-fn record_truth(dataset: &mut Dataset, truth: &Truth) -> Result<()> {
+pub fn record_truth(dataset: &mut Dataset, truth: &Truth) -> Result<()> {
     let value = serde_json::to_value(truth).map_err(|e| Error::Other(e.to_string()))?;
     dataset.meta.insert("truth".into(), value);
     Ok(())
@@ -257,229 +256,7 @@ fn clean_values(
     Ok(values)
 }
 
-/// Options of `hairfit synth`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct SynthArgs {
-    /// Parameter file with the true parameters (JSON, MODEL.md's names; CHIANG.md's with
-    /// --model chiang).
-    #[arg(long)]
-    pub params: PathBuf,
-    /// Sample geometry: azimuthal, longitudinal, sphere or photo, with options, e.g.
-    /// `azimuthal:incidences=15,30,45:steps=180` (see data/README.md).
-    #[arg(long)]
-    pub rig: String,
-    /// Noise: `none`, or terms joined by `+`: relative:R, photon:N, floor:F, outliers:P.
-    #[arg(long, default_value = "none")]
-    pub noise: String,
-    /// What an outlier (`outliers:P` in --noise) does to its sample: `spike` (× 3–10), `dropout`
-    /// (a near-zero reading, × 0–0.01), `sign` (negated), `offset` (± 1–10 × the channel's
-    /// median value) or `mixed` (each outlier one of the four) [default: spike].
-    #[arg(long)]
-    pub outlier_kind: Option<noise::OutlierKind>,
-    /// The outliers' magnitude range `LO..HI` for --outlier-kind (e.g. `5..50` for spikes ×5–50;
-    /// for `mixed` it sets the spikes') [default: the kind's range above].
-    #[arg(long, value_parser = noise::parse_outlier_range)]
-    pub outlier_range: Option<(f64, f64)>,
-    /// Seed of every random draw (same seed, same bytes).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// Number of colour channels; a scalar sigma_a is replicated to every channel, an array
-    /// must have exactly this many entries [default: sigma_a's length].
-    #[arg(long)]
-    pub channels: Option<usize>,
-    /// Scale factor(s): one for all channels, or one per channel, comma-separated.
-    #[arg(
-        long,
-        default_value = "1",
-        value_delimiter = ',',
-        allow_negative_numbers = true
-    )]
-    pub scale: Vec<f64>,
-    /// Output CSV (`FILE.csv`); the truth goes to `FILE.truth.json`. Both written atomically.
-    #[arg(long)]
-    pub output: PathBuf,
-    #[command(flatten)]
-    pub model: ModelArgs,
-    #[command(flatten)]
-    pub measurement: MeasurementArgs,
-    /// Most memory the dataset may take, e.g. 500M or 2G (checked before allocating)
-    /// [default: half this machine's memory].
-    #[arg(long, value_parser = memory::parse_size)]
-    pub max_memory: Option<u64>,
-}
-
-/// What `hairfit synth` wrote.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SynthSummary {
-    pub csv: PathBuf,
-    pub truth: PathBuf,
-    pub n_samples: usize,
-    pub n_outliers: usize,
-    /// Choices made on the user's behalf (also in the truth file).
-    pub notes: Vec<String>,
-}
-
 /// The sidecar path: `FILE.csv` → `FILE.truth.json`.
 pub fn truth_path(csv: &Path) -> PathBuf {
     csv.with_extension("truth.json")
-}
-
-/// Run `hairfit synth`: load and reconcile the inputs, synthesize, write the CSV and the truth
-/// file. `command_line` is recorded in the truth file.
-pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummary> {
-    let is_csv = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    if !is_csv {
-        return Err(Error::Other(format!(
-            "--output {}: name the file FILE.csv (the loader picks the format by extension; the \
-             truth goes to FILE.truth.json)",
-            args.output.display()
-        )));
-    }
-    if crate::atomic::is_special_file(&args.output) {
-        return Err(Error::Other(format!(
-            "--output {}: is a device, FIFO or socket; synth writes the CSV and its truth file \
-             (FILE.truth.json) beside each other, so --output names a file",
-            args.output.display()
-        )));
-    }
-    refuse_overwriting_input(&args.params, &args.output)?;
-    let rig = Rig::parse(&args.rig)?;
-    let noise =
-        Noise::parse(&args.noise)?.with_outlier_options(args.outlier_kind, args.outlier_range)?;
-    args.model.check_family_options()?;
-    let config = args.model.config()?;
-    let chiang = args.model.chiang()?;
-    let file = FamilyParams::load(&args.params, args.model.family)?;
-    let (file, notes) = reconcile_channels(file, args.channels, &args.params)?;
-    let nc = file.n_channels();
-    let limit = args.max_memory.unwrap_or_else(memory::machine_default);
-    rig.check_memory(nc, &args.rig, limit)?;
-    let scale = match args.scale.len() {
-        1 => vec![args.scale[0]; nc],
-        n if n == nc => args.scale.clone(),
-        n => {
-            return Err(Error::Other(format!(
-                "--scale has {n} values but there are {nc} channels: give one value for all \
-                 channels or exactly {nc}"
-            )))
-        }
-    };
-    let model = FamilyModel::new(&file, config, &chiang);
-    let (config, record) = match &file {
-        FamilyParams::Marschner(_) => (config, None),
-        FamilyParams::Chiang(_) => (
-            crate::chiang::lobes_config(&chiang.effects),
-            Some(ChiangRecord {
-                effects: chiang.effects,
-                width_nodes: chiang.width_nodes(),
-            }),
-        ),
-    };
-    let source = Source {
-        model: &model,
-        file: &file,
-        config: &config,
-        chiang: record,
-    };
-    let directions = rig.angles(&mut random::generator(args.seed, random::Stream::Angles));
-    let (mut dataset, mut truth) = synthesize_model(
-        &source,
-        &directions,
-        &rig.to_string(),
-        &noise,
-        &scale,
-        args.measurement.measurement,
-        args.seed,
-    )?;
-    truth.params = file;
-    truth.notes = notes;
-    truth.command_line = command_line;
-    record_truth(&mut dataset, &truth)?;
-
-    // The data and its truth are published together: both or neither.
-    let truth_file = truth_path(&args.output);
-    let mut staged = crate::atomic::StagedFiles::new();
-    let csv_tmp = staged.stage(&args.output)?;
-    write_csv(&dataset, &csv_tmp).map_err(|e| name_target(e, &csv_tmp, &args.output))?;
-    let truth_tmp = staged.stage(&truth_file)?;
-    truth
-        .save(&truth_tmp)
-        .map_err(|e| name_target(e, &truth_tmp, &truth_file))?;
-    staged.publish()?;
-    Ok(SynthSummary {
-        csv: args.output.clone(),
-        truth: truth_file,
-        n_samples: truth.n_samples,
-        n_outliers: truth.outliers.len(),
-        notes: truth.notes,
-    })
-}
-
-/// `--params X.truth.json --output X.csv` would replace the parameter file being read (or the
-/// CSV itself): refuse, by the rule `eval` applies too.
-fn refuse_overwriting_input(params: &Path, output: &Path) -> Result<()> {
-    let inputs = [("--params", params)];
-    crate::atomic::refuse_replacing_inputs("--output", output, &inputs)?;
-    crate::atomic::refuse_replacing_inputs("--output's truth file", &truth_path(output), &inputs)
-}
-
-/// An error about the staged temporary file `tmp`, worded about the file the user asked for.
-fn name_target(e: Error, tmp: &Path, target: &Path) -> Error {
-    let text = e.to_string();
-    let tmp = tmp.display().to_string();
-    if text.contains(&tmp) {
-        Error::Other(text.replace(&tmp, &target.display().to_string()))
-    } else {
-        e
-    }
-}
-
-/// Apply `--channels`: a scalar sigma_a is replicated (with a note), an array must match.
-fn reconcile_channels(
-    mut file: FamilyParams,
-    channels: Option<usize>,
-    path: &Path,
-) -> Result<(FamilyParams, Vec<String>)> {
-    let mut notes = Vec::new();
-    match (channels, file.sigma_a_mut().clone()) {
-        (Some(0), _) => {
-            return Err(Error::Other(
-                "--channels 0: give at least one colour channel".into(),
-            ))
-        }
-        (Some(n), SigmaA::Scalar(s)) if n > 1 => {
-            *file.sigma_a_mut() = SigmaA::PerChannel(vec![s; n]);
-            notes.push(format!(
-                "sigma_a = {s} (a scalar in {}) replicated to all {n} channels",
-                path.display()
-            ));
-        }
-        (Some(n), SigmaA::PerChannel(v)) if v.len() != n => {
-            return Err(Error::Other(format!(
-                "--channels {n}, but sigma_a in {} has {} values: give one sigma_a per channel, \
-                 or a single number to use in every channel",
-                path.display(),
-                v.len()
-            )))
-        }
-        _ => {}
-    }
-    Ok((file, notes))
-}
-
-/// The command line as one string, arguments with spaces or quotes single-quoted.
-pub fn command_line_string(args: impl IntoIterator<Item = String>) -> String {
-    args.into_iter()
-        .map(|a| {
-            if a.is_empty() || a.contains([' ', '\'', '"', '\t']) {
-                format!("'{}'", a.replace('\'', r"'\''"))
-            } else {
-                a
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(" ")
 }

@@ -2,48 +2,14 @@
 //! (log-space values that are not significantly positive become linear residuals), and the
 //! mapping between solver parameters and natural parameter values.
 
-use serde::{Deserialize, Serialize};
-
+use super::evaluation::{Evaluation, ScaleMode};
 use super::forward::{FitParam, Forward, ParamSet};
-use super::residual::{Evaluation, ScaleMode};
 use super::FitData;
 use crate::fit::bounds::Bound;
 use crate::fit::loss::Loss;
 use crate::model::Angles;
 
-/// Residual space.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Space {
-    /// `w (y − s·S)`.
-    Linear,
-    /// `w (ln y − ln s − ln S)`: radiance spans orders of magnitude, so relative errors matter.
-    #[default]
-    Log,
-}
-
-impl std::str::FromStr for Space {
-    type Err = crate::Error;
-    /// The [`Display`](std::fmt::Display) name of a space, in any case.
-    fn from_str(s: &str) -> crate::Result<Self> {
-        let key = s.trim().to_ascii_lowercase();
-        [Space::Linear, Space::Log]
-            .into_iter()
-            .find(|space| space.to_string() == key)
-            .ok_or_else(|| {
-                crate::Error::Other(format!("unknown space `{key}`: use `linear` or `log`"))
-            })
-    }
-}
-
-impl std::fmt::Display for Space {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Space::Linear => "linear",
-            Space::Log => "log",
-        })
-    }
-}
+pub use crate::files::settings::Space;
 
 /// Data prepared for one fit space plus everything fixed during a fit.
 pub struct Evaluator<'f, F: Forward> {

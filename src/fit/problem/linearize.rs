@@ -28,9 +28,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
+use super::evaluation::{ScaleMode, CHUNK};
 use super::evaluator::{Evaluator, Space};
 use super::forward::{FitParam, Forward, ParamSet};
-use super::residual::{ScaleMode, CHUNK};
 use crate::lm::{Block, BlockSystem, Linearized, ParameterCovariance, System};
 
 /// Model values below this are floored before taking logarithms (as in the residual pass).

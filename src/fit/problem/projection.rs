@@ -12,9 +12,9 @@
 
 use rayon::prelude::*;
 
+use super::evaluation::{Evaluation, ScaleMode, CHUNK};
 use super::evaluator::{Evaluator, Space};
 use super::forward::Forward;
-use super::residual::{Evaluation, ScaleMode, CHUNK};
 
 impl<F: Forward> Evaluator<'_, F> {
     /// Variable projection: optimal scale per channel and its derivative w.r.t. the columns of `dq`.
