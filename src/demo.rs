@@ -112,7 +112,8 @@ pub fn chiang_demo_truth() -> crate::chiang::ChiangParams<f64> {
 pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
     // A bad --fix is an error about the option, before anything touches the output directory.
     if opts.family == ModelFamily::Marschner {
-        crate::fit::parse_fixes(&opts.fix, demo_truth().sigma_a.len())?;
+        crate::fit::family::family_fit(opts.family)
+            .check_fixes(&opts.fix, demo_truth().sigma_a.len())?;
     }
     crate::report::publish::publish_fit(out, "hairfit demo", force, &[], |staging| {
         demo_into(opts, out, staging)
@@ -161,15 +162,15 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
         config: &config,
         chiang,
     };
-    let (dataset, truth_record) = crate::synth::synthesize_model(
-        &source,
-        &demo_directions(),
-        "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
-        &noise,
-        &DEMO_SCALE,
-        opts.measurement,
-        opts.seed,
-    )?;
+    let how = crate::synth::Acquisition {
+        directions: &demo_directions(),
+        label: "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
+        noise: &noise,
+        scale: &DEMO_SCALE,
+        measurement: opts.measurement,
+        seed: opts.seed,
+    };
+    let (dataset, truth_record) = crate::synth::synthesize_model(&source, &how)?;
     // Files go to the staging directory; the fit records where they will be.
     let data_path = out.join("data.csv");
     crate::data::write_csv(&dataset, &staging.join("data.csv"))?;

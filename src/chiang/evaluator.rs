@@ -80,6 +80,21 @@ pub fn scattering_batch<T: DualNum<f64>>(
     angles: &[Angles],
     out: &mut [T],
 ) {
+    for_each_with_table(params, model, angles, out, |a, table, row| {
+        scattering_from_table(params, &model.effects, table, a.theta_i, a.theta_r, row)
+    });
+}
+
+/// Call `each(sample, table, row)` for every sample and its `row` of `out` (one value per
+/// channel), with the azimuthal table of the sample's (θ_r, |φ|): one width integral per
+/// distinct exit direction, bit-exact keys. What every batch evaluation of the family shares.
+pub fn for_each_with_table<T: DualNum<f64>>(
+    params: &ChiangParams<T>,
+    model: &ChiangModel,
+    angles: &[Angles],
+    out: &mut [T],
+    mut each: impl FnMut(&Angles, &AzimuthalTable<T>, &mut [T]),
+) {
     let n = params.sigma_a.len();
     assert_eq!(
         out.len(),
@@ -97,14 +112,7 @@ pub fn scattering_batch<T: DualNum<f64>>(
             tables.push(table);
             tables.len() - 1
         });
-        scattering_from_table(
-            params,
-            &model.effects,
-            &tables[slot],
-            a.theta_i,
-            a.theta_r,
-            row,
-        );
+        each(a, &tables[slot], row);
     }
 }
 

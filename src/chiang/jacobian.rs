@@ -41,6 +41,11 @@ pub fn batch_jacobian(
     });
     let mut out = vec![DualDVec64::from_re(0.0); angles.len() * params.sigma_a.len()];
     scattering_batch(&dual, model, angles, &mut out);
+    split_duals(out, k)
+}
+
+/// Values and derivative rows of `k`-variable heap duals.
+pub fn split_duals(out: Vec<DualDVec64>, k: usize) -> (Vec<f64>, Vec<Vec<f64>>) {
     let values = out.iter().map(|d| d.re).collect();
     let jac = out
         .into_iter()

@@ -162,12 +162,8 @@ pub struct ParamFact {
     pub name: &'static str,
     pub meaning: &'static str,
     pub unit: &'static str,
-    /// Open/closed bounds in file units: `lower < x` (or `≤` if `lower_inclusive`), `x ≤ upper`
-    /// (or `<` if not `upper_inclusive`).
-    pub lower: f64,
-    pub lower_inclusive: bool,
-    pub upper: f64,
-    pub upper_inclusive: bool,
+    /// Where the model is defined, in file units.
+    pub domain: Domain,
     pub default: Option<f64>,
     /// Fit bounds `[fit_lo, fit_hi]`, file units, inside the domain.
     pub fit_lo: f64,
@@ -181,7 +177,62 @@ pub struct ParamFact {
 }
 
 impl ParamFact {
-    fn contains(&self, x: f64) -> bool {
+    /// Check a file-unit value against the domain; `Err` names it.
+    pub fn check(&self, x: f64) -> std::result::Result<(), String> {
+        if self.domain.contains(x) {
+            Ok(())
+        } else {
+            Err(format!(
+                "{} must be finite and in {} ({})",
+                self.meaning, self.domain, self.unit
+            ))
+        }
+    }
+}
+
+/// An interval with open or closed ends: `lower < x` (or `≤` if `lower_inclusive`) and `x ≤ upper`
+/// (or `<` if not `upper_inclusive`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    pub lower: f64,
+    pub lower_inclusive: bool,
+    pub upper: f64,
+    pub upper_inclusive: bool,
+}
+
+impl Domain {
+    /// `(lower, upper]`.
+    pub const fn open_closed(lower: f64, upper: f64) -> Domain {
+        Domain {
+            lower,
+            lower_inclusive: false,
+            upper,
+            upper_inclusive: true,
+        }
+    }
+
+    /// `(lower, upper)`.
+    pub const fn open(lower: f64, upper: f64) -> Domain {
+        Domain {
+            lower,
+            lower_inclusive: false,
+            upper,
+            upper_inclusive: false,
+        }
+    }
+
+    /// `[lower, upper)`.
+    pub const fn closed_open(lower: f64, upper: f64) -> Domain {
+        Domain {
+            lower,
+            lower_inclusive: true,
+            upper,
+            upper_inclusive: false,
+        }
+    }
+
+    /// True when `x` is finite and inside.
+    pub fn contains(&self, x: f64) -> bool {
         let lo = if self.lower_inclusive {
             x >= self.lower
         } else {
@@ -194,35 +245,24 @@ impl ParamFact {
         };
         x.is_finite() && lo && hi
     }
+}
 
-    /// Check a file-unit value against the domain; `Err` names it.
-    pub fn check(&self, x: f64) -> std::result::Result<(), String> {
-        if self.contains(x) {
-            Ok(())
-        } else {
-            Err(format!(
-                "{} must be finite and in {} ({})",
-                self.meaning,
-                self.domain(),
-                self.unit
-            ))
-        }
-    }
-
-    /// The domain as text, e.g. `(0, 1]`.
-    pub fn domain(&self) -> String {
-        let fmt = |v: f64| {
+impl fmt::Display for Domain {
+    /// E.g. `(0, 1]`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let end = |v: f64| {
             if v.is_infinite() {
                 "inf".to_string()
             } else {
                 format!("{v}")
             }
         };
-        format!(
+        write!(
+            f,
             "{}{}, {}{}",
             if self.lower_inclusive { '[' } else { '(' },
-            fmt(self.lower),
-            fmt(self.upper),
+            end(self.lower),
+            end(self.upper),
             if self.upper_inclusive { ']' } else { ')' }
         )
     }
@@ -237,10 +277,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         unit: "1",
         // CHIANG.md says > 1. Capped at 10 as in the Marschner table: no fibre comes near it
         // (diamond is 2.42), and η² overflows for η near 1e154, turning S into NaN.
-        lower: 1.0,
-        lower_inclusive: false,
-        upper: 10.0,
-        upper_inclusive: true,
+        domain: Domain::open_closed(1.0, 10.0),
         default: Some(1.55),
         fit_lo: 1.000001,
         fit_hi: 2.5,
@@ -252,10 +289,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "sigma_a",
         meaning: "absorption per unit fibre radius, one value per colour channel",
         unit: "1/radius",
-        lower: 0.0,
-        lower_inclusive: true,
-        upper: f64::INFINITY,
-        upper_inclusive: false,
+        domain: Domain::closed_open(0.0, f64::INFINITY),
         default: None,
         // σ_a = 50 per radius already removes all transmitted light.
         fit_lo: 0.0,
@@ -268,10 +302,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "beta_m",
         meaning: "longitudinal roughness",
         unit: "1",
-        lower: 0.0,
-        lower_inclusive: false,
-        upper: 1.0,
-        upper_inclusive: true,
+        domain: Domain::open_closed(0.0, 1.0),
         default: None,
         // pbrt-v4 clamps β to [0.01, 1].
         fit_lo: 0.01,
@@ -284,10 +315,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "beta_n",
         meaning: "azimuthal roughness",
         unit: "1",
-        lower: 0.0,
-        lower_inclusive: false,
-        upper: 1.0,
-        upper_inclusive: true,
+        domain: Domain::open_closed(0.0, 1.0),
         default: None,
         // Below 0.05 the logistic peaks get too narrow for the default 1024 width nodes.
         fit_lo: 0.05,
@@ -300,10 +328,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "alpha_deg",
         meaning: "cuticle-scale tilt; the R peak sits at theta_h = +alpha_deg",
         unit: "degree",
-        lower: -90.0,
-        lower_inclusive: false,
-        upper: 90.0,
-        upper_inclusive: false,
+        domain: Domain::open(-90.0, 90.0),
         default: None,
         // As the Marschner α_R: a tilt beyond ±30° is not hair (|α| ≤ 5° in practice).
         fit_lo: -30.0,

@@ -10,15 +10,13 @@
 //! - a constant factor on `f` (MaterialX's extra `1/π`) with a fitted grey gain (MaterialX's
 //!   `tint_R = tint_TT = tint_TRT`; the residual p ≥ 3 uses `tint_TRT`).
 
-use std::collections::HashMap;
-
-use nalgebra::{Const, Dyn, U1};
+use nalgebra::{Const, U1};
 use num_dual::{DualDVec64, DualNum, DualSVec64};
 
-use super::azimuthal::AzimuthalTable;
+use super::evaluator::for_each_with_table;
+use super::jacobian::split_duals;
 use super::longitudinal::{base_variance, lobe_variance, longitudinal, longitudinal_lobe};
 use super::{combine, ChiangModel, ChiangParams};
-use crate::model::angles::wrap;
 use crate::model::Angles;
 
 /// Tilt of the incidence per lobe in units of α for the θ_i-tilt renderers:
@@ -126,31 +124,14 @@ pub fn variant_scattering_batch<T: DualNum<f64>>(
     out: &mut [T],
 ) {
     let chiang = &params.chiang;
-    let n = chiang.sigma_a.len();
-    assert_eq!(
-        out.len(),
-        angles.len() * n,
-        "one output per sample and channel"
-    );
     let scale = params.gain.clone() * formulation.factor;
-    let mut index: HashMap<(u64, u64), usize> = HashMap::new();
-    let mut tables: Vec<AzimuthalTable<T>> = Vec::new();
-    for (a, row) in angles.iter().zip(out.chunks_mut(n.max(1))) {
-        let phi = wrap(a.phi_r - a.phi_i).abs();
-        let key = (a.theta_r.to_bits(), phi.to_bits());
-        let slot = *index.entry(key).or_insert_with(|| {
-            let mut table = AzimuthalTable::zeros(n);
-            table.fill(chiang, &model.effects, model.rule(), a.theta_r, phi);
-            tables.push(table);
-            tables.len() - 1
-        });
+    for_each_with_table(chiang, model, angles, out, |a, table, row| {
         let m = variant_longitudinal_terms(chiang, model, formulation.tilt, a.theta_i, a.theta_r);
         let cos_i = a.theta_i.cos();
-        let table = &tables[slot];
         for (c, o) in row.iter_mut().enumerate() {
             *o = combine(&m, &table.lobes[c], &table.residual[c], cos_i) * scale.clone();
         }
-    }
+    });
 }
 
 /// Values and Jacobian of the variant's `S` with respect to `x`, where `to_params` builds the
@@ -173,12 +154,7 @@ pub fn variant_jacobian(
     let n = params.chiang.sigma_a.len();
     let mut out = vec![DualDVec64::from_re(0.0); angles.len() * n];
     variant_scattering_batch(&params, formulation, model, angles, &mut out);
-    let values = out.iter().map(|d| d.re).collect();
-    let jac = out
-        .into_iter()
-        .map(|d| d.eps.unwrap_generic(Dyn(k), U1).iter().copied().collect())
-        .collect();
-    (values, jac)
+    split_duals(out, k)
 }
 
 /// The same with `N` free variables known at compile time (stack duals: no allocation per

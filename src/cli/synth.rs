@@ -9,7 +9,9 @@ use crate::error::{Error, Result};
 use crate::family::{ChiangRecord, FamilyModel, FamilyParams};
 use crate::params::SigmaA;
 use crate::synth::noise::{self, Noise};
-use crate::synth::{memory, random, record_truth, synthesize_model, truth_path, Rig, Source};
+use crate::synth::{
+    memory, random, record_truth, synthesize_model, truth_path, Acquisition, Rig, Source,
+};
 
 /// Options of `hairfit synth`.
 #[derive(Debug, Clone, clap::Args)]
@@ -134,15 +136,15 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
         chiang: record,
     };
     let directions = rig.angles(&mut random::generator(args.seed, random::Stream::Angles));
-    let (mut dataset, mut truth) = synthesize_model(
-        &source,
-        &directions,
-        &rig.to_string(),
-        &noise,
-        &scale,
-        args.measurement.measurement,
-        args.seed,
-    )?;
+    let how = Acquisition {
+        directions: &directions,
+        label: &rig.to_string(),
+        noise: &noise,
+        scale: &scale,
+        measurement: args.measurement.measurement,
+        seed: args.seed,
+    };
+    let (mut dataset, mut truth) = synthesize_model(&source, &how)?;
     truth.params = file;
     truth.notes = notes;
     truth.command_line = command_line;

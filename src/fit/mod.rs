@@ -35,7 +35,7 @@ use std::time::Instant;
 
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
-pub use family::marschner::{fit, parse_fixes};
+pub use family::marschner::fit;
 pub use loss::{Loss, LossScale};
 pub use problem::{
     Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
@@ -245,7 +245,12 @@ pub fn fit_family(
     load_report: LoadReport,
     opts: &FitOptions,
 ) -> Result<FitOutcome<FamilyParams>> {
-    family::family_fit(opts.family).fit(data, file, load_report, opts)
+    family::family_fit(opts.family).fit(family::FitInput {
+        data,
+        file,
+        load_report,
+        opts,
+    })
 }
 
 /// The number of channels of `data`, or an error when there is nothing to fit.
@@ -315,8 +320,7 @@ pub fn fit_with<F: Forward>(
     let mut starts = design::latin_hypercube(opts.starts.max(1), &ranges, opts.seed);
     let auto_scale = opts.loss != Loss::L2 && opts.loss_scale == LossScale::Auto;
     let runs_total = opts.starts.max(1) * if auto_scale { 2 } else { 1 } + opts.polish.max(1);
-    let bar = stages::progress_bar(opts, runs_total);
-    let mut log = stages::StageLog::default();
+    let mut log = stages::StageLog::new(stages::progress_bar(opts, runs_total));
     // The loss scale: given, or the tuning constant times the noise level of a least-squares
     // multi-start's residuals (MAD, so the outliers a robust loss is for barely move it).
     let loss_scale = match opts.loss_scale {
@@ -332,7 +336,7 @@ pub fn fit_with<F: Forward>(
                 &run.free,
             )?;
             let (runs, order) =
-                stages::multistart_as("loss-scale-l2", &ev_l2, &starts, opts, &bar, &mut log);
+                stages::multistart("loss-scale-l2", &ev_l2, &starts, opts, &mut log);
             let e = ev_l2.eval_internal(&runs[order[0]].u, false);
             // Its best point also starts the robust multi-start (outliers bias it, but it lies
             // in the right basin far more often than a design point).
@@ -342,7 +346,7 @@ pub fn fit_with<F: Forward>(
     };
     ev_full.loss_scale = loss_scale;
     ev_sub.loss_scale = loss_scale;
-    let (runs, order) = stages::multistart(&ev_sub, &starts, opts, &bar, &mut log);
+    let (runs, order) = stages::multistart("multistart", &ev_sub, &starts, opts, &mut log);
     let mut candidates = stages::distinct_candidates(&ev_sub, &runs, &order, &ranges, opts.polish);
     stages::global_stage(&ev_sub, &mut candidates, &ranges, opts, &mut log);
     // Large data: the candidates compete on a screening subsample and only the winner is
@@ -362,7 +366,7 @@ pub fn fit_with<F: Forward>(
         ev_screen.loss_scale = loss_scale;
         candidates = vec![stages::screen(&ev_screen, &candidates, opts, &mut log)];
     }
-    let mut best = stages::polish(&ev_full, &candidates, opts, &bar, &mut log);
+    let mut best = stages::polish(&ev_full, &candidates, opts, &mut log);
     if auto_scale {
         // Refine once from the robust fit's own residuals (outliers no longer bias the shape).
         best = stages::rescale_loss(&mut ev_full, best, opts, &mut log);

@@ -7,10 +7,11 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::bounds;
+use super::family::{marschner::Marschner, Family};
 pub use super::fixes::FreeSet;
 use super::problem::{self, Evaluator, FitData, FitParam, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
-use super::{choose_effects, free_parameters, parse_fixes, EffectsChoice, FitOptions, Global};
+use super::{choose_effects, free_parameters, EffectsChoice, FitOptions, Global};
 use crate::error::Result;
 use crate::files::{
     EffectsSource, FitStatus, Floored, OptionsRecord, ScaleMethod, StageTiming, TraceStage,
@@ -60,7 +61,7 @@ pub fn free_set(
     warnings: &mut Vec<String>,
 ) -> Result<FreeSet<ParamName>> {
     Ok(FreeSet::new(
-        parse_fixes(&opts.fix, nc)?,
+        Marschner::parse_fixes(&opts.fix, nc)?,
         bounds::reference_params(nc),
         free_parameters(effects, nc, opts.free_eta),
         free_parameters(&Effects::default(), nc, opts.free_eta),
@@ -87,14 +88,24 @@ pub fn warn_floored(data: &FitData, floored: &Floored, warnings: &mut Vec<String
     }
 }
 
-/// The solver stages run so far: fit.json's `trace` and timing.json's wall times.
-#[derive(Default)]
+/// The solver stages run so far: fit.json's `trace` and timing.json's wall times, and the
+/// progress bar the runs tick.
 pub struct StageLog {
     pub trace: Vec<TraceStage>,
     pub times: Vec<StageTiming>,
+    pub bar: indicatif::ProgressBar,
 }
 
 impl StageLog {
+    /// An empty log ticking `bar`.
+    pub fn new(bar: indicatif::ProgressBar) -> StageLog {
+        StageLog {
+            trace: Vec::new(),
+            times: Vec::new(),
+            bar,
+        }
+    }
+
     /// Record a finished stage.
     pub fn record(
         &mut self,
@@ -128,28 +139,17 @@ fn to_internal<F: Forward>(ev: &Evaluator<'_, F>, x: &[f64]) -> Vec<f64> {
     u
 }
 
-/// Short LM runs from every start on the subsample (parallel); returns the runs and their
-/// order by cost.
+/// Short LM runs from every start on the subsample (parallel), recorded as stage `stage`;
+/// returns the runs and their order by cost.
 pub fn multistart<F: Forward>(
-    ev_sub: &Evaluator<'_, F>,
-    starts: &[Vec<f64>],
-    opts: &FitOptions,
-    bar: &indicatif::ProgressBar,
-    log: &mut StageLog,
-) -> (Vec<LocalRun>, Vec<usize>) {
-    multistart_as("multistart", ev_sub, starts, opts, bar, log)
-}
-
-/// [`multistart`] recorded as stage `stage`.
-pub fn multistart_as<F: Forward>(
     stage: &str,
     ev_sub: &Evaluator<'_, F>,
     starts: &[Vec<f64>],
     opts: &FitOptions,
-    bar: &indicatif::ProgressBar,
     log: &mut StageLog,
 ) -> (Vec<LocalRun>, Vec<usize>) {
     let ts = Instant::now();
+    let bar = &log.bar;
     let runs: Vec<LocalRun> = starts
         .par_iter()
         .map(|x0| {
@@ -302,9 +302,9 @@ pub fn polish<F: Forward>(
     ev_full: &Evaluator<'_, F>,
     candidates: &[Vec<f64>],
     opts: &FitOptions,
-    bar: &indicatif::ProgressBar,
     log: &mut StageLog,
 ) -> LocalRun {
+    let bar = &log.bar;
     let tp = Instant::now();
     let mut best: Option<LocalRun> = None;
     let mut iterations = 0;

@@ -97,7 +97,15 @@ pub fn synthesize_directions(
         config,
         chiang: None,
     };
-    synthesize_model(&source, directions, label, noise, scale, measurement, seed)
+    let how = Acquisition {
+        directions,
+        label,
+        noise,
+        scale,
+        measurement,
+        seed,
+    };
+    synthesize_model(&source, &how)
 }
 
 /// What a synthetic dataset is made from: a family's model, its parameter file and
@@ -110,20 +118,25 @@ pub struct Source<'a> {
     pub chiang: Option<ChiangRecord>,
 }
 
+/// How a synthetic dataset's samples are taken: at which directions `[θ_i, φ_i, θ_r, φ_r]`
+/// (degrees; `label` names the geometry in the truth), with what noise, per-channel scale and
+/// measured quantity, from which seed.
+#[derive(Debug, Clone, Copy)]
+pub struct Acquisition<'a> {
+    pub directions: &'a [[f64; 4]],
+    pub label: &'a str,
+    pub noise: &'a Noise,
+    pub scale: &'a [f64],
+    pub measurement: Measurement,
+    pub seed: u64,
+}
+
 /// [`synthesize_directions`] for either model family; `source.file` must be valid.
-pub fn synthesize_model(
-    source: &Source<'_>,
-    directions: &[[f64; 4]],
-    label: &str,
-    noise: &Noise,
-    scale: &[f64],
-    measurement: Measurement,
-    seed: u64,
-) -> Result<(Dataset, Truth)> {
-    if let Some((i, a)) = directions
-        .iter()
-        .enumerate()
-        .find(|(_, a)| !(a.iter().all(|x| x.is_finite()) && a[0].abs() < 90.0 && a[2].abs() < 90.0))
+pub fn synthesize_model(source: &Source<'_>, how: &Acquisition<'_>) -> Result<(Dataset, Truth)> {
+    if let Some((i, a)) =
+        how.directions.iter().enumerate().find(|(_, a)| {
+            !(a.iter().all(|x| x.is_finite()) && a[0].abs() < 90.0 && a[2].abs() < 90.0)
+        })
     {
         return Err(Error::Other(format!(
             "direction {i} = {a:?} (degrees): angles must be finite and |theta| < 90"
@@ -131,13 +144,13 @@ pub fn synthesize_model(
     }
     source.file.validate()?;
     let nc = source.model.n_channels();
-    if scale.len() != nc {
+    if how.scale.len() != nc {
         return Err(Error::Other(format!(
             "--scale: {} values for {nc} channels; give one per channel (or one for all)",
-            scale.len()
+            how.scale.len()
         )));
     }
-    if let Some(bad) = scale.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+    if let Some(bad) = how.scale.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
         return Err(Error::Other(format!(
             "--scale: {bad} is not a positive finite number"
         )));
@@ -145,13 +158,14 @@ pub fn synthesize_model(
     // Evaluate at the radians the loader will make of the degree text the writer will write.
     // `round_trip_degrees` guarantees that is `d.to_radians()` itself; going through it anyway
     // keeps the bit-exact round trip from resting on that proof.
-    let radians: Vec<[f64; 4]> = directions
+    let radians: Vec<[f64; 4]> = how
+        .directions
         .iter()
         .map(|a| a.map(|d| round_trip_degrees(d.to_radians()).to_radians()))
         .collect();
-    let clean = clean_values(source, &radians, scale, measurement)?;
-    let noisy = noise.apply(&clean, nc, seed);
-    noise.check_finite(&noisy)?;
+    let clean = clean_values(source, &radians, how.scale, how.measurement)?;
+    let noisy = how.noise.apply(&clean, nc, how.seed);
+    how.noise.check_finite(&noisy)?;
 
     let channels = channel_names(nc);
     let column = |k: usize| radians.iter().map(|a| a[k]).collect();
@@ -174,19 +188,19 @@ pub fn synthesize_model(
         params: source.file.clone(),
         scale: channels
             .iter()
-            .zip(scale)
+            .zip(how.scale)
             .map(|(c, &v)| ScaleEntry {
                 channel: c.clone(),
                 value: Some(v),
                 std_error: None,
             })
             .collect(),
-        measurement,
+        measurement: how.measurement,
         channels,
-        rig: label.to_string(),
-        noise: noise.to_string(),
+        rig: how.label.to_string(),
+        noise: how.noise.to_string(),
         sigma_written: dataset.sigma.is_some(),
-        seed,
+        seed: how.seed,
         rng: RNG_DESCRIPTION.into(),
         model: *source.config,
         chiang: source.chiang,

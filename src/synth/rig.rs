@@ -39,13 +39,17 @@ pub enum Rig {
     /// θ_r = camera + β, φ_r = 0. `lights` point lights sit at inclination `light_theta` from the
     /// unbent fiber's normal plane and azimuths −180 + 360·(k+1)/lights about it; their fiber-frame
     /// (θ_i, φ_i) change along the strip as the fiber bends.
-    Photo {
-        lights: usize,
-        views: usize,
-        span: f64,
-        light_theta: f64,
-        camera: f64,
-    },
+    Photo(PhotoRig),
+}
+
+/// The photograph rig's geometry ([`Rig::Photo`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhotoRig {
+    pub lights: usize,
+    pub views: usize,
+    pub span: f64,
+    pub light_theta: f64,
+    pub camera: f64,
 }
 
 /// Largest |θ| a rig may produce, in degrees: MODEL.md rejects |θ| = 90° and the model is
@@ -114,15 +118,15 @@ impl Rig {
                 max: opts.limit("max", 85.0)?,
             },
             _ => {
-                let rig = Rig::Photo {
+                let photo = PhotoRig {
                     lights: opts.count("lights", 6, 1)?,
                     views: opts.count("views", 50, 1)?,
                     span: opts.number("span", 60.0)?,
                     light_theta: opts.number("light_theta", -20.0)?,
                     camera: opts.number("camera", 0.0)?,
                 };
-                rig.check_photo(spec)?;
-                rig
+                photo.check(spec)?;
+                Rig::Photo(photo)
             }
         };
         if rig.sample_count().is_none() {
@@ -132,38 +136,6 @@ impl Rig {
             ));
         }
         Ok(rig)
-    }
-
-    /// The photo rig's inclinations stay within ±MAX_THETA_DEG: bending by β moves the fiber
-    /// axis by |β|, so |θ_i| ≤ |light_theta| + span/2 and |θ_r| ≤ |camera| + span/2.
-    fn check_photo(&self, spec: &str) -> Result<()> {
-        if let Rig::Photo {
-            span,
-            light_theta,
-            camera,
-            ..
-        } = *self
-        {
-            if !(0.0..=180.0).contains(&span) {
-                return Err(rig_error(
-                    spec,
-                    format!("span={span}: use 0 to 180 degrees"),
-                ));
-            }
-            for (name, value) in [("light_theta", light_theta), ("camera", camera)] {
-                if value.abs() + span / 2.0 > MAX_THETA_DEG {
-                    return Err(rig_error(
-                        spec,
-                        format!(
-                            "|{name}| + span/2 = {} exceeds {MAX_THETA_DEG}°: the bent fiber \
-                             would be seen too close to its axis; reduce {name} or span",
-                            value.abs() + span / 2.0
-                        ),
-                    ));
-                }
-            }
-        }
-        Ok(())
     }
 
     /// Number of samples this rig produces (`None` on overflow).
@@ -177,7 +149,7 @@ impl Rig {
                 ..
             } => incidences.len().checked_mul(phi.len())?.checked_mul(*steps),
             Rig::Sphere { n, .. } => Some(*n),
-            Rig::Photo { lights, views, .. } => lights.checked_mul(*views),
+            Rig::Photo(p) => p.lights.checked_mul(p.views),
         }
     }
 
@@ -187,7 +159,7 @@ impl Rig {
             Rig::Azimuthal { .. } => "azimuthal",
             Rig::Longitudinal { .. } => "longitudinal",
             Rig::Sphere { .. } => "sphere",
-            Rig::Photo { .. } => "photo",
+            Rig::Photo(_) => "photo",
         }
     }
 
@@ -224,26 +196,7 @@ impl Rig {
                     out.push([ti, pi, tr, pr]);
                 }
             }
-            Rig::Photo {
-                lights,
-                views,
-                span,
-                light_theta,
-                camera,
-            } => {
-                for k in 0..*lights {
-                    let light_phi = -180.0 + 360.0 * (k + 1) as f64 / *lights as f64;
-                    let light = unit_vector(*light_theta, light_phi);
-                    for j in 0..*views {
-                        let bend = photo_bend(j, *views, *span);
-                        let (ti, pi) = fiber_frame_direction(light, bend);
-                        // |θ_i − light_theta| ≤ |β| exactly; clamp away asin's rounding so the
-                        // documented bound (checked at parse time) holds to the last bit.
-                        let bound = light_theta.abs() + bend.abs();
-                        out.push([ti.clamp(-bound, bound), pi, camera + bend, 0.0]);
-                    }
-                }
-            }
+            Rig::Photo(p) => p.push_angles(&mut out),
         }
         out
     }
@@ -258,7 +211,7 @@ impl Rig {
             Rig::Azimuthal { .. } => "incidences or steps",
             Rig::Longitudinal { .. } => "incidences, phi or steps",
             Rig::Sphere { .. } => "n",
-            Rig::Photo { .. } => "lights or views",
+            Rig::Photo(_) => "lights or views",
         };
         super::memory::check(samples, n_channels, limit, |why| {
             rig_error(
@@ -476,16 +429,71 @@ impl fmt::Display for Rig {
                 list(phi)
             ),
             Rig::Sphere { n, max } => write!(f, "sphere:n={n}:max={max}"),
-            Rig::Photo {
-                lights,
-                views,
-                span,
-                light_theta,
-                camera,
-            } => write!(
-                f,
-                "photo:lights={lights}:views={views}:span={span}:light_theta={light_theta}:camera={camera}"
-            ),
+            Rig::Photo(p) => write!(f, "{p}"),
         }
+    }
+}
+
+impl PhotoRig {
+    /// The photo rig's inclinations stay within ±MAX_THETA_DEG: bending by β moves the fiber
+    /// axis by |β|, so |θ_i| ≤ |light_theta| + span/2 and |θ_r| ≤ |camera| + span/2.
+    fn check(&self, spec: &str) -> Result<()> {
+        let PhotoRig {
+            span,
+            light_theta,
+            camera,
+            ..
+        } = *self;
+        if !(0.0..=180.0).contains(&span) {
+            return Err(rig_error(
+                spec,
+                format!("span={span}: use 0 to 180 degrees"),
+            ));
+        }
+        for (name, value) in [("light_theta", light_theta), ("camera", camera)] {
+            if value.abs() + span / 2.0 > MAX_THETA_DEG {
+                return Err(rig_error(
+                    spec,
+                    format!(
+                        "|{name}| + span/2 = {} exceeds {MAX_THETA_DEG}°: the bent fiber \
+                         would be seen too close to its axis; reduce {name} or span",
+                        value.abs() + span / 2.0
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Append the directions: for each light, the `views` pixels along the strip.
+    fn push_angles(&self, out: &mut Vec<[f64; 4]>) {
+        for k in 0..self.lights {
+            let light_phi = -180.0 + 360.0 * (k + 1) as f64 / self.lights as f64;
+            let light = unit_vector(self.light_theta, light_phi);
+            for j in 0..self.views {
+                let bend = photo_bend(j, self.views, self.span);
+                let (ti, pi) = fiber_frame_direction(light, bend);
+                // |θ_i − light_theta| ≤ |β| exactly; clamp away asin's rounding so the
+                // documented bound (checked at parse time) holds to the last bit.
+                let bound = self.light_theta.abs() + bend.abs();
+                out.push([ti.clamp(-bound, bound), pi, self.camera + bend, 0.0]);
+            }
+        }
+    }
+}
+
+impl fmt::Display for PhotoRig {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let PhotoRig {
+            lights,
+            views,
+            span,
+            light_theta,
+            camera,
+        } = self;
+        write!(
+            f,
+            "photo:lights={lights}:views={views}:span={span}:light_theta={light_theta}:camera={camera}"
+        )
     }
 }

@@ -4,13 +4,13 @@
 
 use std::time::Instant;
 
-use super::FamilyFit;
+use super::{Family, FitInput};
 use crate::error::Result;
 use crate::family::FamilyParams;
 use crate::files::LoadReport;
 use crate::fit::{
-    all_parameters, diagnostics, fit_with, fixes, require_samples, stages, FitData, FitOptions,
-    FitOutcome, FitParam, FitRun, ModelForward,
+    all_parameters, diagnostics, fit_with, require_samples, stages, FitData, FitOptions,
+    FitOutcome, FitRun, ModelForward,
 };
 use crate::model::{ParamName, Params};
 use crate::params::ParamFile;
@@ -18,38 +18,19 @@ use crate::params::ParamFile;
 /// The Marschner 2003 family (MODEL.md).
 pub struct Marschner;
 
-impl FamilyFit for Marschner {
-    fn fit(
-        &self,
-        data: &FitData,
-        file: &str,
-        load_report: LoadReport,
-        opts: &FitOptions,
-    ) -> Result<crate::fit::FitOutcome<FamilyParams>> {
-        let out = fit(data, file, load_report, opts)?;
+impl Family for Marschner {
+    type Param = ParamName;
+    const PARAMETER_WORD: &'static str = "parameter";
+    const FIX_EXAMPLE: &'static str = "eccentricity=1 or --fix alpha_r_deg=-7";
+
+    fn parameters(nc: usize) -> Vec<ParamName> {
+        all_parameters(nc)
+    }
+
+    fn fit(i: FitInput<'_>) -> Result<FitOutcome<FamilyParams>> {
+        let out = fit(i.data, i.file, i.load_report, i.opts)?;
         Ok(out.map_params(|p| FamilyParams::Marschner(ParamFile::from_params(p))))
     }
-
-    fn parameter_names(&self, nc: usize) -> Vec<String> {
-        all_parameters(nc)
-            .into_iter()
-            .map(|p| p.json_name())
-            .collect()
-    }
-
-    fn check_fixes(&self, fix: &[String], nc: usize) -> Result<()> {
-        parse_fixes(fix, nc).map(drop)
-    }
-}
-
-/// Parse `--fix NAME=VALUE` items into natural-unit values (`sigma_a=v` fixes every channel).
-pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ParamName, f64)>> {
-    fixes::parse_fixes(
-        items,
-        &all_parameters(nc),
-        "parameter",
-        "eccentricity=1 or --fix alpha_r_deg=-7",
-    )
 }
 
 /// Fit `data` (from file `file`, loader report `load_report`) with `opts`, the Marschner model

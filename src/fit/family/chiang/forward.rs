@@ -4,13 +4,9 @@
 //! direction: with η fixed (the default) the plain-f64 [`fixed_eta`] path, with `--free eta`
 //! stack duals for every realistic parameter count.
 
-use nalgebra::{Dyn, U1};
-use num_dual::DualDVec64;
-
 use crate::chiang::evaluator::scattering_by_lobe;
 use crate::chiang::{
-    batch_jacobian_static, fixed_eta, scattering_batch, seeded, ChiangModel, ChiangParamName,
-    ChiangParams,
+    batch_jacobian, batch_jacobian_static, fixed_eta, ChiangModel, ChiangParamName, ChiangParams,
 };
 use crate::fit::bounds::Bound;
 use crate::fit::problem::{FitParam, Forward};
@@ -107,7 +103,14 @@ impl Forward for ChiangForward {
                             row.copy_from_slice(j);
                         }
                     })*
-                    _ => self.gradients_dynamic(p, free, angles, out, grad),
+                    // Heap duals for parameter lists longer than the static dispatch covers.
+                    _ => {
+                        let (values, jac) = batch_jacobian(p, &self.model, angles, free);
+                        out.copy_from_slice(&values);
+                        for (row, j) in grad.chunks_mut(free.len()).zip(&jac) {
+                            row.copy_from_slice(j);
+                        }
+                    }
                 }
             };
         }
@@ -131,27 +134,56 @@ impl ChiangForward {
             .apply(angles, &mut out[..angles.len() * nc]);
         self.measurement.apply(angles, grad);
     }
+}
 
-    /// Heap duals for parameter lists longer than the static dispatch covers.
-    fn gradients_dynamic(
-        &self,
-        p: &ChiangParams<f64>,
-        free: &[ChiangParamName],
-        angles: &[Angles],
-        out: &mut [f64],
-        grad: &mut [f64],
-    ) {
-        let k = free.len();
-        let dual = seeded(p, free, |v, j| match j {
-            Some(j) => DualDVec64::from_re(v).derivative(k, j),
-            None => DualDVec64::from_re(v),
-        });
-        let mut o = vec![DualDVec64::from_re(0.0); out.len()];
-        scattering_batch(&dual, &self.model, angles, &mut o);
-        for ((d, v), row) in o.into_iter().zip(out.iter_mut()).zip(grad.chunks_mut(k)) {
-            *v = d.re;
-            let e = d.eps.unwrap_generic(Dyn(k), U1);
-            row.copy_from_slice(e.as_slice());
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::chiang::{all_parameters, reference_params, ChiangEffects};
+
+    /// Eight channels with η free is 12 parameters, past the stack-dual dispatch: the heap-dual
+    /// branch must give the same derivatives as one-parameter stack duals column by column.
+    /// Both are exact forward-mode AD of the same arithmetic, so they agree to rounding: 1e-12
+    /// relative leaves room for a different summation order and nothing more.
+    #[test]
+    fn heap_duals_past_the_dispatch_match_stack_duals() {
+        let nc = 8;
+        let forward = ChiangForward {
+            model: ChiangModel::new(ChiangEffects::default(), 64).unwrap(),
+            measurement: Measurement::default(),
+        };
+        let p = reference_params(nc);
+        let free = all_parameters(nc);
+        assert!(free.len() > 10 && free.contains(&ChiangParamName::Eta));
+        let angles: Vec<Angles> = (0..5)
+            .map(|k| Angles {
+                theta_i: 0.3 - 0.1 * k as f64,
+                phi_i: 0.0,
+                theta_r: -0.2 + 0.05 * k as f64,
+                phi_r: 0.4 + 0.6 * k as f64,
+            })
+            .collect();
+        let m = angles.len() * nc;
+        let (mut out, mut grad) = (vec![0.0; m], vec![0.0; m * free.len()]);
+        forward.gradients(&p, &free, &angles, &mut out, &mut grad);
+        for (j, &param) in free.iter().enumerate() {
+            // η free keeps the dual path; `param` first, so its column is column 0.
+            let pair: Vec<ChiangParamName> = if param == ChiangParamName::Eta {
+                vec![param]
+            } else {
+                vec![param, ChiangParamName::Eta]
+            };
+            let (mut o1, mut g2) = (vec![0.0; m], vec![0.0; m * pair.len()]);
+            forward.gradients(&p, &pair, &angles, &mut o1, &mut g2);
+            let g1: Vec<f64> = g2.chunks(pair.len()).map(|r| r[0]).collect();
+            for i in 0..m {
+                let (a, b) = (grad[i * free.len() + j], g1[i]);
+                assert!(
+                    (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1e-300),
+                    "{param:?} row {i}: heap {a} vs stack {b}"
+                );
+                assert_eq!(out[i].to_bits(), o1[i].to_bits(), "value row {i}");
+            }
         }
     }
 }

@@ -7,7 +7,7 @@ pub mod forward;
 
 use std::time::Instant;
 
-use super::FamilyFit;
+use super::{Family, FitInput};
 use crate::chiang::{
     all_parameters, lobes_config, reference_params, ChiangEffects, ChiangModel, ChiangParamFile,
     ChiangParamName, ChiangParams,
@@ -24,24 +24,18 @@ pub use forward::ChiangForward;
 /// The Chiang 2016 family (CHIANG.md).
 pub struct Chiang;
 
-impl FamilyFit for Chiang {
-    fn fit(
-        &self,
-        data: &FitData,
-        file: &str,
-        load_report: LoadReport,
-        opts: &FitOptions,
-    ) -> Result<FitOutcome<FamilyParams>> {
-        let out = fit_chiang(data, file, load_report, opts)?;
+impl Family for Chiang {
+    type Param = ChiangParamName;
+    const PARAMETER_WORD: &'static str = "Chiang parameter";
+    const FIX_EXAMPLE: &'static str = "beta_n=0.3 or --fix alpha_deg=-2";
+
+    fn parameters(nc: usize) -> Vec<ChiangParamName> {
+        all_parameters(nc)
+    }
+
+    fn fit(i: FitInput<'_>) -> Result<FitOutcome<FamilyParams>> {
+        let out = fit_chiang(i.data, i.file, i.load_report, i.opts)?;
         Ok(out.map_params(|p| FamilyParams::Chiang(ChiangParamFile::from_params(p))))
-    }
-
-    fn parameter_names(&self, nc: usize) -> Vec<String> {
-        all_parameters(nc).iter().map(|p| p.json_name()).collect()
-    }
-
-    fn check_fixes(&self, fix: &[String], nc: usize) -> Result<()> {
-        parse_fixes(fix, nc).map(drop)
     }
 }
 
@@ -49,17 +43,6 @@ impl FamilyFit for Chiang {
 /// at the narrowest azimuthal lobes (β_n = 0.05) and to rounding at β_n ≥ 0.3 (docs/chiang.md),
 /// enough to find the basin, a quarter of the default rule's cost.
 pub const SCREENING_WIDTH_NODES: usize = 256;
-
-/// Parse `--fix NAME=VALUE` with CHIANG.md's names (file units; `sigma_a=v` fixes every
-/// channel) into natural-unit values inside the fit bounds.
-pub fn parse_fixes(items: &[String], nc: usize) -> Result<Vec<(ChiangParamName, f64)>> {
-    crate::fit::fixes::parse_fixes(
-        items,
-        &all_parameters(nc),
-        "Chiang parameter",
-        "beta_n=0.3 or --fix alpha_deg=-2",
-    )
-}
 
 /// Why the data cannot determine `p`: the geometry that shows it, then its partners.
 fn why_undetermined(
@@ -121,7 +104,7 @@ pub fn fit_chiang(
     let wanted = |p: &ChiangParamName| !p.fact().on_request || opts.free_eta;
     let wanted_of = |e: &ChiangEffects| e.parameters(nc).into_iter().filter(wanted).collect();
     let set = FreeSet::new(
-        parse_fixes(&opts.fix, nc)?,
+        Chiang::parse_fixes(&opts.fix, nc)?,
         reference_params(nc),
         wanted_of(&effects),
         wanted_of(&ChiangEffects::default()),
