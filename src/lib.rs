@@ -1,30 +1,50 @@
 //! hairfit: fit the Marschner 2003 hair scattering model to measured or synthetic
 //! fiber-scattering data.
 //!
-//! The crate is a library with a thin CLI (`src/main.rs`). Module map:
+//! The crate is a library with a thin CLI (`src/main.rs`). Its modules form layers, lowest
+//! first; a module imports only its own layer and those below (`tests/layering.rs` checks it,
+//! docs/architecture.md describes it).
+//!
+//! Foundations:
+//! - [`error`]: the error type shared by the library; [`atomic`]: atomic file output.
+//! - [`json_file`]: JSON files read and written one way (errors at line and column).
+//! - [`outdir`]: output directories locked, staged and published as one set.
+//! - [`rng`]: the seeded, platform-independent random-number generator.
+//! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`, and the covariance of its solution.
+//! - [`plot`]: the plotting kit (chart set-up, scales, SVG + PNG rendering) of report and cost.
+//!
+//! Model families:
 //! - [`model`]: the forward model of `MODEL.md` (one pure function per equation), generic over
 //!   the number type so that forward-mode AD gives exact Jacobians.
 //! - [`chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a whole-fibre S),
 //!   generic over the number type like [`model`].
-//! - [`family`]: the model families (`--model marschner|chiang`), a parameter file of either.
-//! - [`compare`]: `hairfit compare`, both families fitted to the same data, side by side.
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
+//! - [`family`]: the model families (`--model marschner|chiang`), a parameter file of either.
+//!
+//! Files and samples:
+//! - [`files`]: every result format (fit.json, curves.csv, truth.json, timing.json, the load
+//!   report), one Serialize + Deserialize type each.
+//! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
+//! - [`slices`]: scan slices of a dataset and the summary curves a report draws.
+//!
+//! Fit and synthesis:
+//! - [`fit`]: least squares with exact Jacobians and uncertainties; a model family is one type
+//!   behind `fit::family::Family`.
+//! - [`synth`]: synthetic datasets with known truth.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`export`]: `hairfit export`, renderer files (pbrt-v4, Blender, MaterialX) fitted to a fit's S.
-//! - [`data`]: loading measured or synthetic samples, with a report of every rejected row.
-//! - [`fit`]: least squares with exact Jacobians and uncertainties (`hairfit fit`, `demo`).
-//! - [`cli`]: the command line's option groups, flag-worded checks and the fit summary.
-//! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`, and the covariance of its solution.
-//! - [`synth`]: `hairfit synth`, synthetic datasets with known truth.
-//! - [`plot`]: the plotting kit (chart set-up, scales, SVG + PNG rendering) of report and cost.
-//! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html).
-//! - [`rng`]: the seeded, platform-independent random-number generator.
-//! - [`batch`]: `hairfit batch`, many fits from a manifest, sharded for a cluster's scheduler.
-//! - [`outdir`]: output directories locked, staged and published as one set.
+//!
+//! Results:
+//! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html), and
+//!   publishing a fit with its report.
+//! - [`compare`]: `hairfit compare`, both families fitted to the same data, side by side.
+//! - [`demo`]: `hairfit demo`, a synthesized dataset fitted and reported.
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
-//! - [`files`]: every on-disk format (fit.json, curves.csv, truth.json, timing.json, the load
-//!   report), one Serialize + Deserialize type each.
-//! - [`error`]: the error type shared by the library.
+//!
+//! Commands:
+//! - [`cli`]: the command line's option groups, flag-worded checks, the fit summary, and what
+//!   `hairfit fit` and `hairfit synth` run.
+//! - [`batch`]: `hairfit batch`, many fits from a manifest, sharded for a cluster's scheduler.
 
 pub mod atomic;
 pub mod batch;

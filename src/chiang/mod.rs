@@ -23,6 +23,7 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::model::parameters::Interval;
 use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub mod azimuthal;
@@ -163,7 +164,7 @@ pub struct ParamFact {
     pub meaning: &'static str,
     pub unit: &'static str,
     /// Where the model is defined, in file units.
-    pub domain: Domain,
+    pub domain: Interval,
     pub default: Option<f64>,
     /// Fit bounds `[fit_lo, fit_hi]`, file units, inside the domain.
     pub fit_lo: f64,
@@ -184,87 +185,11 @@ impl ParamFact {
         } else {
             Err(format!(
                 "{} must be finite and in {} ({})",
-                self.meaning, self.domain, self.unit
+                self.meaning,
+                self.domain.text(),
+                self.unit
             ))
         }
-    }
-}
-
-/// An interval with open or closed ends: `lower < x` (or `≤` if `lower_inclusive`) and `x ≤ upper`
-/// (or `<` if not `upper_inclusive`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Domain {
-    pub lower: f64,
-    pub lower_inclusive: bool,
-    pub upper: f64,
-    pub upper_inclusive: bool,
-}
-
-impl Domain {
-    /// `(lower, upper]`.
-    pub const fn open_closed(lower: f64, upper: f64) -> Domain {
-        Domain {
-            lower,
-            lower_inclusive: false,
-            upper,
-            upper_inclusive: true,
-        }
-    }
-
-    /// `(lower, upper)`.
-    pub const fn open(lower: f64, upper: f64) -> Domain {
-        Domain {
-            lower,
-            lower_inclusive: false,
-            upper,
-            upper_inclusive: false,
-        }
-    }
-
-    /// `[lower, upper)`.
-    pub const fn closed_open(lower: f64, upper: f64) -> Domain {
-        Domain {
-            lower,
-            lower_inclusive: true,
-            upper,
-            upper_inclusive: false,
-        }
-    }
-
-    /// True when `x` is finite and inside.
-    pub fn contains(&self, x: f64) -> bool {
-        let lo = if self.lower_inclusive {
-            x >= self.lower
-        } else {
-            x > self.lower
-        };
-        let hi = if self.upper_inclusive {
-            x <= self.upper
-        } else {
-            x < self.upper
-        };
-        x.is_finite() && lo && hi
-    }
-}
-
-impl fmt::Display for Domain {
-    /// E.g. `(0, 1]`.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let end = |v: f64| {
-            if v.is_infinite() {
-                "inf".to_string()
-            } else {
-                format!("{v}")
-            }
-        };
-        write!(
-            f,
-            "{}{}, {}{}",
-            if self.lower_inclusive { '[' } else { '(' },
-            end(self.lower),
-            end(self.upper),
-            if self.upper_inclusive { ']' } else { ')' }
-        )
     }
 }
 
@@ -277,7 +202,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         unit: "1",
         // CHIANG.md says > 1. Capped at 10 as in the Marschner table: no fibre comes near it
         // (diamond is 2.42), and η² overflows for η near 1e154, turning S into NaN.
-        domain: Domain::open_closed(1.0, 10.0),
+        domain: Interval::open_closed(1.0, 10.0),
         default: Some(1.55),
         fit_lo: 1.000001,
         fit_hi: 2.5,
@@ -289,7 +214,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "sigma_a",
         meaning: "absorption per unit fibre radius, one value per colour channel",
         unit: "1/radius",
-        domain: Domain::closed_open(0.0, f64::INFINITY),
+        domain: Interval::closed_open(0.0, f64::INFINITY),
         default: None,
         // σ_a = 50 per radius already removes all transmitted light.
         fit_lo: 0.0,
@@ -302,7 +227,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "beta_m",
         meaning: "longitudinal roughness",
         unit: "1",
-        domain: Domain::open_closed(0.0, 1.0),
+        domain: Interval::open_closed(0.0, 1.0),
         default: None,
         // pbrt-v4 clamps β to [0.01, 1].
         fit_lo: 0.01,
@@ -315,7 +240,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "beta_n",
         meaning: "azimuthal roughness",
         unit: "1",
-        domain: Domain::open_closed(0.0, 1.0),
+        domain: Interval::open_closed(0.0, 1.0),
         default: None,
         // Below 0.05 the logistic peaks get too narrow for the default 1024 width nodes.
         fit_lo: 0.05,
@@ -328,7 +253,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
         name: "alpha_deg",
         meaning: "cuticle-scale tilt; the R peak sits at theta_h = +alpha_deg",
         unit: "degree",
-        domain: Domain::open(-90.0, 90.0),
+        domain: Interval::open(-90.0, 90.0),
         default: None,
         // As the Marschner α_R: a tilt beyond ±30° is not hair (|α| ≤ 5° in practice).
         fit_lo: -30.0,

@@ -6,17 +6,14 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::bounds;
-use super::family::{marschner::Marschner, Family};
 pub use super::fixes::FreeSet;
 use super::problem::{self, Evaluator, FitData, FitParam, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
-use super::{choose_effects, free_parameters, EffectsChoice, FitOptions, Global};
-use crate::error::Result;
+use super::{choose_effects, EffectsChoice, FitOptions, Global};
 use crate::files::{
     EffectsSource, FitStatus, Floored, OptionsRecord, ScaleMethod, StageTiming, TraceStage,
 };
-use crate::model::{Effects, ModelConfig, ParamName};
+use crate::model::{Effects, ModelConfig};
 
 /// The model the fit uses and why.
 pub struct ModelChoice {
@@ -51,23 +48,6 @@ pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
         effects_choice,
         reasons,
     }
-}
-
-/// Free parameters and the base (fixed) values; warns about parameters the effects ignore.
-pub fn free_set(
-    effects: &Effects,
-    nc: usize,
-    opts: &FitOptions,
-    warnings: &mut Vec<String>,
-) -> Result<FreeSet<ParamName>> {
-    Ok(FreeSet::new(
-        Marschner::parse_fixes(&opts.fix, nc)?,
-        bounds::reference_params(nc),
-        free_parameters(effects, nc, opts.free_eta),
-        free_parameters(&Effects::default(), nc, opts.free_eta),
-        "the effects in play do not depend on it; see options.effects_reasons",
-        warnings,
-    ))
 }
 
 /// Warn about values a log-space fit takes as linear residuals.

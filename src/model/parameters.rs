@@ -83,6 +83,36 @@ impl Interval {
         }
     }
 
+    /// `(lo, hi]`.
+    pub const fn open_closed(lo: f64, hi: f64) -> Interval {
+        Interval {
+            lo,
+            lo_open: true,
+            hi,
+            hi_open: false,
+        }
+    }
+
+    /// `[lo, hi)`.
+    pub const fn closed_open(lo: f64, hi: f64) -> Interval {
+        Interval {
+            lo,
+            lo_open: false,
+            hi,
+            hi_open: true,
+        }
+    }
+
+    /// `(lo, hi)`.
+    pub const fn open(lo: f64, hi: f64) -> Interval {
+        Interval {
+            lo,
+            lo_open: true,
+            hi,
+            hi_open: true,
+        }
+    }
+
     /// True for a finite `x` inside the interval.
     pub fn contains(&self, x: f64) -> bool {
         x.is_finite()

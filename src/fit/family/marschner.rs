@@ -8,11 +8,13 @@ use super::{Family, FitInput};
 use crate::error::Result;
 use crate::family::FamilyParams;
 use crate::files::LoadReport;
+use crate::fit::bounds;
+use crate::fit::fixes::FreeSet;
 use crate::fit::{
-    all_parameters, diagnostics, fit_with, require_samples, stages, FitData, FitOptions,
-    FitOutcome, FitRun, ModelForward,
+    all_parameters, diagnostics, fit_with, free_parameters, require_samples, stages, FitData,
+    FitOptions, FitOutcome, FitRun, ModelForward,
 };
-use crate::model::{ParamName, Params};
+use crate::model::{Effects, ParamName, Params};
 use crate::params::ParamFile;
 
 /// The Marschner 2003 family (MODEL.md).
@@ -49,7 +51,7 @@ pub fn fit(
         config: choice.config,
         measurement: opts.measurement,
     };
-    let set = stages::free_set(&choice.config.effects, nc, opts, &mut warnings)?;
+    let set = free_set(&choice.config.effects, nc, opts, &mut warnings)?;
     let options = |sub: usize, explicit: bool, floored| {
         stages::options_record(opts, &choice, &set, sub, explicit, floored)
     };
@@ -76,4 +78,21 @@ pub fn fit(
         },
         warnings,
     )
+}
+
+/// Free parameters and the base (fixed) values; warns about parameters the effects ignore.
+fn free_set(
+    effects: &Effects,
+    nc: usize,
+    opts: &FitOptions,
+    warnings: &mut Vec<String>,
+) -> Result<FreeSet<ParamName>> {
+    Ok(FreeSet::new(
+        Marschner::parse_fixes(&opts.fix, nc)?,
+        bounds::reference_params(nc),
+        free_parameters(effects, nc, opts.free_eta),
+        free_parameters(&Effects::default(), nc, opts.free_eta),
+        "the effects in play do not depend on it; see options.effects_reasons",
+        warnings,
+    ))
 }
