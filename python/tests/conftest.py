@@ -13,18 +13,21 @@ DATA = ROOT / "data"
 
 @pytest.fixture(scope="session")
 def cli() -> Path:
-    """target/release/hairfit (HAIRFIT_BIN overrides), brought up to date with `cargo build
-    --release` (a no-op after CI's `cargo test --release`)."""
+    """The release binary the package is compared with: HAIRFIT_BIN, else
+    target/release/hairfit (CI's `cargo test --release` builds it), built with `cargo build
+    --release` when missing or older than a source file (a plain build resolves features
+    without the dev-dependencies, so right after `cargo test --release` it would recompile the
+    library: skipped when the binary is current)."""
     given = os.environ.get("HAIRFIT_BIN")
     if given:
         return Path(given)
-    subprocess.run(
-        ["cargo", "build", "--release", "--bin", "hairfit"],
-        cwd=ROOT,
-        check=True,
-    )
     target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
-    return target / "release" / "hairfit"
+    binary = target / "release" / "hairfit"
+    sources = [ROOT / "Cargo.toml", ROOT / "Cargo.lock", *(ROOT / "src").rglob("*.rs")]
+    newest = max(p.stat().st_mtime for p in sources)
+    if not binary.exists() or binary.stat().st_mtime < newest:
+        subprocess.run(["cargo", "build", "--release", "--bin", "hairfit"], cwd=ROOT, check=True)
+    return binary
 
 
 def run_cli(cli: Path, *args, check: bool = True, cwd=None) -> subprocess.CompletedProcess:
