@@ -74,7 +74,7 @@ def cli_eval(binary: Path, rows: int, runs: int, channels: int, threads: str | N
                              rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows)])
         with open(angles, "w") as f:
             f.write("theta_i,phi_i,theta_r,phi_r\n")
-            for r in a:
+            for r in a.tolist():  # Python floats: repr is the shortest round-trip text
                 f.write(f"{r[0]!r},{r[1]!r},{r[2]!r},{r[3]!r}\n")
     p = work / f"params{channels}.json"
     p.write_text(json.dumps(params(channels)))

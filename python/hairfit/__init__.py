@@ -32,6 +32,10 @@ from . import _native
 from ._native import HairfitError
 
 __version__: str = _native.__version__
+try:  # tracebacks say hairfit.HairfitError, where users catch it
+    HairfitError.__module__ = "hairfit"
+except (AttributeError, TypeError):
+    pass
 
 __all__ = [
     "HairfitError",
