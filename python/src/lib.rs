@@ -204,7 +204,7 @@ fn eval_rows(model: &FamilyModel, angles: &[Angles], out: &mut [f64]) {
             .zip(angles.par_chunks(EVAL_BATCH))
             .for_each(|(o, a)| model.eval_batch_fast(a, o));
     };
-    if chunk_rows % EVAL_BATCH == 0 {
+    if chunk_rows.is_multiple_of(EVAL_BATCH) {
         // The chunks split at batch boundaries: one parallel pass has the same batches.
         batches(out, angles);
     } else {
@@ -245,8 +245,8 @@ fn angles_from(arrays: [&[f64]; 4], unit: AngleUnit) -> std::result::Result<Vec<
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
         let mut v = [0.0; 4];
-        for k in 0..4 {
-            let value = arrays[k][i];
+        for (k, (slot, array)) in v.iter_mut().zip(arrays).enumerate() {
+            let value = array[i];
             let name = NAMES[k];
             if !value.is_finite() {
                 return Err(format!("{name}[{i}] = {value} is not finite"));
@@ -263,7 +263,7 @@ fn angles_from(arrays: [&[f64]; 4], unit: AngleUnit) -> std::result::Result<Vec<
                     unit_name(unit)
                 ));
             }
-            v[k] = value;
+            *slot = value;
         }
         out.push(match unit {
             AngleUnit::Deg => Angles::from_degrees(v[0], v[1], v[2], v[3]),
