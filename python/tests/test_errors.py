@@ -62,3 +62,20 @@ def test_fit_option_errors(cli, tmp_path):
 def test_unknown_option_value_is_a_hairfit_error():
     with pytest.raises(hairfit.HairfitError, match="unknown loss `bogus`"):
         hairfit.fit(str(DATA / "azimuthal_rgb.csv"), loss="bogus")
+
+
+def test_fit_json_given_as_parameters(cli, tmp_path):
+    out = tmp_path / "fit"
+    hairfit.fit(str(DATA / "azimuthal_rgb.csv"), intervals="linear").save(out)
+    expected = cli_error(cli, "eval", "--params", out / "fit.json", "--input",
+                         DATA / "example_angles.csv")
+    with pytest.raises(hairfit.HairfitError) as e:
+        hairfit.eval(out / "fit.json", [10], [0], [5], [30])
+    assert str(e.value) == expected and "params.json" in expected
+
+
+def test_array_errors_name_the_array():
+    with pytest.raises(hairfit.HairfitError, match=r"radiance\[1, 0\] = NaN is not finite"):
+        hairfit.data([10, 10], [0, 0], [5, 6], [0, 0], [1.0, float("nan")])
+    with pytest.raises(hairfit.HairfitError, match=r"sigma\[0, 0\] = -1 must be a finite number > 0"):
+        hairfit.data([10], [0], [5], [0], [1.0], sigma=-1.0)

@@ -75,3 +75,14 @@ def test_fitted_params_evaluate():
     scale = np.array([result.scale[c][0] for c in d.channels])
     rel = np.abs(s * scale - d.radiance) / d.radiance
     assert rel.max() < 1e-9  # the shipped azimuthal data are noise-free
+
+
+def test_chiang_fit_equals_the_cli(cli, tmp_path):
+    data = DATA / "azimuthal_rgb.csv"
+    flags = ["--model", "chiang", "--width-nodes", "64", "--starts", "2", "--polish", "1",
+             "--intervals", "linear"]
+    out = cli_fit(cli, tmp_path, data, *flags)
+    result = hairfit.fit(str(data), model="chiang", width_nodes=64, starts=2, polish=1,
+                         intervals="linear")
+    assert result.to_dict() == json.loads((out / "fit.json").read_text())
+    assert result.params["model"] == "chiang"
