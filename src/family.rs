@@ -176,6 +176,12 @@ impl FamilyParams {
     /// `"model": "marschner"`, which is checked and dropped.
     pub fn load(path: &Path, family: ModelFamily) -> Result<FamilyParams> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_json_text(text, path, family)
+    }
+
+    /// [`FamilyParams::load`] of JSON text already read (the Python package's parameter dicts);
+    /// `path` only names the source in error messages.
+    pub fn from_json_text(text: String, path: &Path, family: ModelFamily) -> Result<FamilyParams> {
         let value = serde_json::from_str::<serde_json::Value>(&text).ok();
         if let Some(value) = &value {
             refuse_result_file(value, path)?;

@@ -1,0 +1,32 @@
+"""hairfit.compare and hairfit.export write and print what the CLI does."""
+
+import json
+
+import hairfit
+from conftest import DATA, run_cli
+
+# Cheap settings: the comparison's machinery, not its accuracy.
+CHEAP = ["--starts", "2", "--polish", "1", "--intervals", "linear", "--width-nodes", "64"]
+
+
+def test_compare_equals_the_cli(cli, tmp_path):
+    data = DATA / "azimuthal_rgb.csv"
+    printed = run_cli(cli, "compare", data, "--out", tmp_path / "cli", "--no-progress", *CHEAP).stdout
+    result = hairfit.compare(data, tmp_path / "py", starts=2, polish=1, intervals="linear",
+                             width_nodes=64)
+    expected = json.loads((tmp_path / "cli" / "compare.json").read_text())
+    summary = result.pop("summary_text")
+    assert summary == printed.replace(str(tmp_path / "cli"), str(tmp_path / "py"))
+    for family in ("marschner", "chiang"):
+        mine = json.loads((tmp_path / "py" / family / "fit.json").read_text())
+        theirs = json.loads((tmp_path / "cli" / family / "fit.json").read_text())
+        assert mine == theirs, family
+    assert result.keys() == expected.keys()
+
+
+def test_export_equals_the_cli(cli, tmp_path):
+    fit_dir = tmp_path / "fit"
+    hairfit.fit(str(DATA / "azimuthal_rgb.csv"), intervals="linear").save(fit_dir)
+    text = hairfit.export(fit_dir, to="pbrt")
+    assert text == run_cli(cli, "export", fit_dir, "--to", "pbrt").stdout
+    assert "MakeNamedMaterial" in text

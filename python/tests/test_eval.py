@@ -1,0 +1,98 @@
+"""hairfit.eval gives bit for bit what `hairfit eval` writes for the same angles."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import hairfit
+from conftest import DATA, run_cli
+
+PARAMS = DATA / "example_params.json"
+
+CHIANG = {"model": "chiang", "eta": 1.55, "sigma_a": [0.2, 0.5, 1.1], "beta_m": 0.3,
+          "beta_n": 0.4, "alpha_deg": 2.0}
+
+
+def random_angles(n, seed=7):
+    rng = np.random.default_rng(seed)
+    return (
+        rng.uniform(-85, 85, n),
+        rng.uniform(-180, 180, n),
+        rng.uniform(-85, 85, n),
+        rng.uniform(-360, 360, n),
+    )
+
+
+def cli_eval(cli, tmp_path, angles, *options, params=PARAMS, unit="deg"):
+    """`hairfit eval` on the angles written as shortest round-trip text (which the CLI parses
+    back to the same doubles); the appended columns as an array."""
+    src = tmp_path / "angles.csv"
+    with open(src, "w", newline="") as f:
+        if unit == "rad":
+            f.write("# angles: rad\n")
+        f.write("theta_i,phi_i,theta_r,phi_r\n")
+        for row in zip(*angles):
+            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    out = tmp_path / "out.csv"
+    run_cli(cli, "eval", "--params", params, "--input", src, "--output", out, *options)
+    with open(out) as f:
+        rows = [r for r in csv.reader(l for l in f if not l.startswith("#"))]
+    header, body = rows[0], rows[1:]
+    return np.array([[float(v) for v in r[4:]] for r in body]), header[4:]
+
+
+def assert_bits(a, b):
+    assert a.shape == b.shape
+    assert a.dtype == np.float64 and b.dtype == np.float64
+    same = a.view(np.uint64) == b.view(np.uint64)
+    assert same.all(), f"{(~same).sum()} values differ, first at {np.argwhere(~same)[0]}"
+
+
+def test_marschner_cubic_bit_identical_across_chunks(cli, tmp_path):
+    # Past one 16384-row chunk, not a multiple of the 256-row batch.
+    angles = random_angles(16384 + 3 * 256 + 37)
+    expected, columns = cli_eval(cli, tmp_path, angles)
+    got = hairfit.eval(PARAMS, *angles)
+    assert_bits(got, expected)
+    assert columns == hairfit.eval_columns(PARAMS) == ["s_0", "s_1", "s_2"]
+
+
+def test_params_dict_path_and_fit_dir_agree(tmp_path):
+    angles = random_angles(500, seed=3)
+    from_path = hairfit.eval(PARAMS, *angles)
+    params = json.loads(PARAMS.read_text())
+    assert_bits(hairfit.eval(params, *angles), from_path)
+    fit_dir = tmp_path / "fit"
+    fit_dir.mkdir()
+    (fit_dir / "params.json").write_text(PARAMS.read_text())
+    assert_bits(hairfit.eval(fit_dir, *angles), from_path)
+
+
+def test_marschner_options_and_radians(cli, tmp_path):
+    angles = random_angles(700, seed=11)
+    opts = ("--mode", "exact", "--lobes", "R,TRT", "--no-glints")
+    expected, _ = cli_eval(cli, tmp_path, angles, *opts)
+    got = hairfit.eval(PARAMS, *angles, mode="exact", lobes="R,TRT", no_glints=True)
+    assert_bits(got, expected)
+    rad = [np.deg2rad(a) for a in angles]
+    expected, _ = cli_eval(cli, tmp_path, rad, unit="rad")
+    assert_bits(hairfit.eval(PARAMS, *rad, angles="rad"), expected)
+
+
+def test_chiang_bit_identical(cli, tmp_path):
+    angles = random_angles(300, seed=5)
+    params = tmp_path / "chiang.json"
+    params.write_text(json.dumps(CHIANG))
+    expected, _ = cli_eval(cli, tmp_path, angles, "--model", "chiang", "--width-nodes", "64",
+                           params=params)
+    got = hairfit.eval(CHIANG, *angles, model="chiang", width_nodes=64)
+    assert_bits(got, expected)
+
+
+def test_bad_angles_name_the_array_and_index():
+    with pytest.raises(hairfit.HairfitError, match=r"theta_r\[1\] = 90 degrees lies on the fiber axis"):
+        hairfit.eval(PARAMS, [10, 10], [0, 0], [5, 90], [0, 0])
+    with pytest.raises(hairfit.HairfitError, match="the same length"):
+        hairfit.eval(PARAMS, [10, 10], [0], [5, 9], [0, 0])
