@@ -103,7 +103,7 @@ struct FitCli {
 #[command(name = "hairfit")]
 struct SynthCli {
     #[command(flatten)]
-    synth: hairfit::synth::SynthArgs,
+    synth: hairfit::cli::synth::SynthArgs,
 }
 
 #[derive(Parser)]
@@ -723,10 +723,10 @@ fn synth(
     let argv = std::iter::once("hairfit".to_string())
         .chain(std::iter::once("synth".to_string()))
         .chain(args.iter().cloned());
-    let command_line = hairfit::synth::command_line_string(argv);
+    let command_line = hairfit::cli::synth::command_line_string(argv);
     let cli: SynthCli = parse(args)?;
     let s = py
-        .allow_threads(|| hairfit::synth::run(&cli.synth, Some(command_line)))
+        .allow_threads(|| hairfit::cli::synth::run(&cli.synth, Some(command_line)))
         .map_err(hf)?;
     Ok((
         s.csv.display().to_string(),
