@@ -13,7 +13,8 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
-use super::vector::{register_operators, Lane};
+use super::register::{register_lane_items, register_operators};
+use super::vector::Lane;
 
 /// Eight f64 lanes in an AVX-512 register (see the module's safety note).
 #[derive(Clone, Copy)]
@@ -25,8 +26,12 @@ pub(super) fn available() -> bool {
         && std::arch::is_x86_feature_detected!("avx512dq")
 }
 
-/// `f64`'s sign bit.
-const SIGN: f64 = -0.0;
+register_operators!(F64x8 {
+    arithmetic Add::add = _mm512_add_pd, Sub::sub = _mm512_sub_pd, Mul::mul = _mm512_mul_pd,
+        Div::div = _mm512_div_pd;
+    bits BitAnd::bitand = _mm512_and_pd, BitOr::bitor = _mm512_or_pd,
+        BitXor::bitxor = _mm512_xor_pd;
+});
 
 impl F64x8 {
     /// The lanes set in `k` all ones, the others zero.
@@ -44,50 +49,7 @@ impl F64x8 {
     }
 }
 
-register_operators!(F64x8 {
-    arithmetic Add::add = _mm512_add_pd;
-    arithmetic Sub::sub = _mm512_sub_pd;
-    arithmetic Mul::mul = _mm512_mul_pd;
-    arithmetic Div::div = _mm512_div_pd;
-    bits BitAnd::bitand = _mm512_and_pd;
-    bits BitOr::bitor = _mm512_or_pd;
-    bits BitXor::bitxor = _mm512_xor_pd;
-});
-
-macro_rules! compare {
-    ($method:ident, $predicate:ident) => {
-        #[inline(always)]
-        fn $method(self, o: Self) -> Self {
-            // SAFETY: as in `splat`.
-            Self::from_mask(unsafe { _mm512_cmp_pd_mask::<$predicate>(self.0, o.0) })
-        }
-    };
-}
-
 impl Lane for F64x8 {
-    const LANES: usize = 8;
-    type Array = [f64; 8];
-    // SAFETY (both): [f64; 8] and __m512d have the same size, and every bit pattern is valid.
-    const ZERO: Self = F64x8(unsafe { std::mem::transmute::<[f64; 8], __m512d>([0.0; 8]) });
-    const ONE: Self = F64x8(unsafe { std::mem::transmute::<[f64; 8], __m512d>([1.0; 8]) });
-
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        // SAFETY: values of this type exist only on CPUs with AVX-512F and DQ (module note).
-        F64x8(unsafe { _mm512_set1_pd(x) })
-    }
-    #[inline(always)]
-    fn new(lanes: [f64; 8]) -> Self {
-        // SAFETY: as in `splat`; the array holds eight f64.
-        F64x8(unsafe { _mm512_loadu_pd(lanes.as_ptr()) })
-    }
-    #[inline(always)]
-    fn to_array(self) -> [f64; 8] {
-        let mut lanes = [0.0; 8];
-        // SAFETY: as in `splat`; the array holds eight f64.
-        unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), self.0) };
-        lanes
-    }
     #[inline(always)]
     fn move_mask(self) -> i32 {
         i32::from(self.to_mask())
@@ -97,43 +59,6 @@ impl Lane for F64x8 {
         // SAFETY: as in `splat`.
         F64x8(unsafe { _mm512_mask_blend_pd(self.to_mask(), f.0, t.0) })
     }
-    compare!(cmp_eq, _CMP_EQ_OQ);
-    compare!(cmp_ne, _CMP_NEQ_UQ);
-    compare!(cmp_lt, _CMP_LT_OQ);
-    compare!(cmp_le, _CMP_LE_OQ);
-    compare!(cmp_gt, _CMP_GT_OQ);
-    compare!(cmp_ge, _CMP_GE_OQ);
-    #[inline(always)]
-    fn abs(self) -> Self {
-        // SAFETY: as in `splat`.
-        F64x8(unsafe { _mm512_andnot_pd(Self::splat(SIGN).0, self.0) })
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        // SAFETY: as in `splat`.
-        F64x8(unsafe { _mm512_sqrt_pd(self.0) })
-    }
-    /// `vrndscalepd` with scale 0 rounds as `vroundpd` does: to nearest, ties to even.
-    #[inline(always)]
-    fn round(self) -> Self {
-        // SAFETY: as in `splat`.
-        F64x8(unsafe {
-            _mm512_roundscale_pd::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(self.0)
-        })
-    }
-    /// `o` where either is NaN, as the AVX2 kernel's `vminpd`.
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        // SAFETY: as in `splat`.
-        F64x8(unsafe { _mm512_min_pd(self.0, o.0) })
-    }
-    /// As `min`.
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        // SAFETY: as in `splat`.
-        F64x8(unsafe { _mm512_max_pd(self.0, o.0) })
-    }
-
     #[inline(always)]
     fn shl_bits<const N: i32>(self) -> Self {
         // SAFETY: as in `splat`. The count is a constant: the compiler emits the immediate form.
@@ -141,5 +66,13 @@ impl Lane for F64x8 {
             let count = _mm512_set1_epi64(i64::from(N));
             _mm512_castsi512_pd(_mm512_sllv_epi64(_mm512_castpd_si512(self.0), count))
         })
+    }
+    // `vrndscalepd` with scale 0 rounds as `vroundpd` does; `min`/`max` give `o` where either is
+    // NaN, as the AVX2 kernel's `vminpd`.
+    register_lane_items! {
+        F64x8(__m512d; 8), compare: Self::from_mask = _mm512_cmp_pd_mask,
+        splat: _mm512_set1_pd, load: _mm512_loadu_pd, store: _mm512_storeu_pd,
+        abs: _mm512_andnot_pd, sqrt: _mm512_sqrt_pd, round: _mm512_roundscale_pd,
+        min: _mm512_min_pd, max: _mm512_max_pd
     }
 }

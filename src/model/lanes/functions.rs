@@ -191,6 +191,33 @@ pub(super) fn acos<V: Lane>(x: V) -> V {
     big.blend(negative.blend(from_pi, p * 2.0), small)
 }
 
+/// The functions above as methods of every [`Lane`] (`x.exp()`, `x.sin_cos()`, …), as the
+/// kernel's formulas write them.
+pub(super) trait LaneFunctions: Lane {
+    #[inline(always)]
+    fn exp(self) -> Self {
+        exp(self)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        sin_cos(self)
+    }
+    #[inline(always)]
+    fn cos(self) -> Self {
+        sin_cos(self).1
+    }
+    #[inline(always)]
+    fn asin(self) -> Self {
+        asin(self)
+    }
+    #[inline(always)]
+    fn acos(self) -> Self {
+        acos(self)
+    }
+}
+
+impl<V: Lane> LaneFunctions for V {}
+
 #[cfg(test)]
 mod tests {
     use super::*;

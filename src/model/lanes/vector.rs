@@ -1,16 +1,15 @@
 //! What the lanes need of an f64 vector, as one trait: the arithmetic, comparisons that return
-//! all-ones masks, `blend`, a bit shift, and (provided, from [`super::functions`]) exp, sin/cos,
-//! asin and acos. It is implemented by `wide::f64x4` (any x86-64; the default target builds it
-//! as two SSE2 halves), on CPUs with AVX2 by [`super::avx2::F64x4`], one 256-bit register (run
-//! as a [`Pair`] of them), and on CPUs with AVX-512 by [`super::avx512::F64x8`], eight lanes in
-//! one 512-bit register. All do the same IEEE operations lane by lane, so they give the same
-//! bits.
+//! all-ones masks, `blend` and a bit shift ([`super::functions`] builds exp, sin/cos, asin and
+//! acos on them, as the methods of its `LaneFunctions`). It is implemented by `wide::f64x4` (any
+//! x86-64; the default target builds it as two SSE2 halves), on CPUs with AVX2 by
+//! [`super::avx2::F64x4`], one 256-bit register (run as a [`Pair`] of them), and on CPUs with
+//! AVX-512 by [`super::avx512::F64x8`], eight lanes in one 512-bit register (their operators and
+//! one-intrinsic methods come from [`super::register`]'s macros). All do the same IEEE
+//! operations lane by lane, so they give the same bits.
 
 use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
 use wide::{f64x4, u64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt, CmpNe};
-
-use super::functions;
 
 /// The most lanes any [`Lane`] type has.
 pub(super) const MAX_LANES: usize = 8;
@@ -94,78 +93,7 @@ pub(super) trait Lane:
     fn mul_add(self, b: Self, c: Self) -> Self {
         self * b + c
     }
-    #[inline(always)]
-    fn exp(self) -> Self {
-        functions::exp(self)
-    }
-    #[inline(always)]
-    fn sin_cos(self) -> (Self, Self) {
-        functions::sin_cos(self)
-    }
-    #[inline(always)]
-    fn cos(self) -> Self {
-        functions::sin_cos(self).1
-    }
-    #[inline(always)]
-    fn asin(self) -> Self {
-        functions::asin(self)
-    }
-    #[inline(always)]
-    fn acos(self) -> Self {
-        functions::acos(self)
-    }
 }
-
-/// The operators of a one-register vector type `$t` (`avx2::F64x4`, `avx512::F64x8`), each by
-/// one intrinsic: `+ − × ÷` lane-wise, also with an `f64` on the right (splat to every lane),
-/// `& | ^` on the bits, and `−x`, `!x` by xor with the sign bit and with all ones. The caller
-/// imports [`Lane`] and `std::ops`' traits; the intrinsics are sound where the type's module
-/// says its values exist only on CPUs with their feature.
-#[cfg(target_arch = "x86_64")]
-macro_rules! register_operators {
-    ($t:ident {
-        $(arithmetic $trait:ident::$method:ident = $intrinsic:ident;)*
-        $(bits $btrait:ident::$bmethod:ident = $bintrinsic:ident;)*
-    }) => {
-        $(
-            register_operators!(@lanewise $t, $trait, $method, $intrinsic);
-            impl $trait<f64> for $t {
-                type Output = Self;
-                #[inline(always)]
-                fn $method(self, o: f64) -> Self {
-                    self.$method(Self::splat(o))
-                }
-            }
-        )*
-        $(register_operators!(@lanewise $t, $btrait, $bmethod, $bintrinsic);)*
-        impl Neg for $t {
-            type Output = Self;
-            #[inline(always)]
-            fn neg(self) -> Self {
-                self ^ Self::splat(-0.0)
-            }
-        }
-        impl Not for $t {
-            type Output = Self;
-            #[inline(always)]
-            fn not(self) -> Self {
-                self ^ Self::splat(f64::from_bits(u64::MAX))
-            }
-        }
-    };
-    (@lanewise $t:ident, $trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for $t {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                // SAFETY: values of the type exist only on CPUs with the intrinsic's feature.
-                $t(unsafe { $intrinsic(self.0, o.0) })
-            }
-        }
-    };
-}
-#[cfg(target_arch = "x86_64")]
-pub(super) use register_operators;
 
 /// `fn $name(self, …) -> $out` of [`Lane`] as wide's function of the same name.
 macro_rules! delegate {
