@@ -1,0 +1,97 @@
+//! Arrays ⇄ NumPy: angle units, the four angle arrays as checked model angles, value tables.
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1};
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+
+use hairfit::data::AngleUnit;
+use hairfit::model::Angles;
+
+use crate::errors::HairfitError;
+
+pub(crate) fn angle_unit(text: &str) -> PyResult<AngleUnit> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "deg" => Ok(AngleUnit::Deg),
+        "rad" => Ok(AngleUnit::Rad),
+        other => Err(HairfitError::new_err(format!(
+            "angles `{other}`: use deg or rad"
+        ))),
+    }
+}
+
+pub(crate) fn unit_name(unit: AngleUnit) -> &'static str {
+    match unit {
+        AngleUnit::Deg => "degrees",
+        AngleUnit::Rad => "radians",
+    }
+}
+
+/// The four angle arrays as model angles, each value checked as `hairfit eval` checks a row
+/// (finite, |θ| < 90°, |φ| ≤ 720°); errors name the array and index.
+pub(crate) fn angles_from(
+    arrays: [&[f64]; 4],
+    unit: AngleUnit,
+) -> std::result::Result<Vec<Angles>, String> {
+    const NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+    let n = arrays[0].len();
+    for (k, a) in arrays.iter().enumerate() {
+        if a.len() != n {
+            return Err(format!(
+                "{} has {} values but theta_i has {n}: give the four angle arrays the same length",
+                NAMES[k],
+                a.len()
+            ));
+        }
+    }
+    let (theta_limit, phi_limit) = (unit.theta_limit(), unit.phi_limit());
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut v = [0.0; 4];
+        for (k, (slot, array)) in v.iter_mut().zip(arrays).enumerate() {
+            let value = array[i];
+            let name = NAMES[k];
+            if !value.is_finite() {
+                return Err(format!("{name}[{i}] = {value} is not finite"));
+            }
+            if k % 2 == 0 && value.abs() >= theta_limit {
+                return Err(format!(
+                    "{name}[{i}] = {value} {} lies on the fiber axis or beyond; inclinations must satisfy |θ| < 90° (π/2)",
+                    unit_name(unit)
+                ));
+            }
+            if k % 2 == 1 && value.abs() > phi_limit {
+                return Err(format!(
+                    "{name}[{i}] = {value} {} is more than two turns; azimuths must satisfy |φ| ≤ 720° (4π), as the loader requires",
+                    unit_name(unit)
+                ));
+            }
+            *slot = value;
+        }
+        out.push(match unit {
+            AngleUnit::Deg => Angles::from_degrees(v[0], v[1], v[2], v[3]),
+            AngleUnit::Rad => Angles {
+                theta_i: v[0],
+                phi_i: v[1],
+                theta_r: v[2],
+                phi_r: v[3],
+            },
+        });
+    }
+    Ok(out)
+}
+
+pub(crate) fn vec_of(a: &PyReadonlyArray1<'_, f64>) -> Vec<f64> {
+    a.as_array().iter().copied().collect()
+}
+
+/// Row-major `values` as a NumPy array of `shape` (samples, channels).
+pub(crate) fn array2<'py>(
+    py: Python<'py>,
+    shape: (usize, usize),
+    values: Vec<f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    Array2::from_shape_vec(shape, values)
+        .map(|a| a.into_pyarray(py))
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}
