@@ -8,22 +8,14 @@ use std::collections::{HashMap, HashSet};
 use std::io::BufRead;
 use std::path::Path;
 
-use super::csv_rows::{read_rows, Input};
+use super::csv_rows::{read_rows, Columns, Input};
+use super::dataset::{Dataset, ANGLE_COLUMNS};
 use super::lines::{next_line, read_error};
-use super::rows::{Cell, Rows};
-use super::{Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
+use super::options::{LoadOptions, Role};
+use super::report::LoadReport;
+use super::rows::Rows;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-
-/// The columns of a CSV file, from its header.
-#[derive(Debug)]
-pub(super) struct Columns {
-    pub roles: Vec<Role>,
-    pub channels: Vec<String>,
-    pub has_sigma: bool,
-    pub has_weight: bool,
-    pub ignored: Vec<String>,
-}
 
 /// What comes before the data: the header fields and the number of lines consumed (comments,
 /// blanks and the header). The unit line is read by [`super::unit::file_directive`].
@@ -269,51 +261,11 @@ fn columns_from_header(header: &csv::StringRecord, path: &Path, line: u64) -> Re
     })
 }
 
-/// Parse one cell: `None` when empty or the missing token, else a number (NaN/inf/1e999 parse
-/// to non-finite values, which validation rejects). Anything else is an input error.
-pub(crate) fn parse_cell(
-    bytes: &[u8],
-    missing: &str,
-    path: &Path,
-    line: u64,
-    column: u64,
-    name: &str,
-) -> Result<Cell> {
-    let trimmed = bytes.trim_ascii();
-    if trimmed.is_empty() || trimmed == missing.as_bytes() {
-        return Ok(None);
-    }
-    // The fast parser reads exactly what `str::parse` reads; the text is only decoded for the
-    // error message.
-    if let Some(value) = super::records::parse_f64(trimmed) {
-        return Ok(Some(value));
-    }
-    let text = std::str::from_utf8(trimmed).map_err(|_| {
-        Error::input(
-            path,
-            line,
-            column,
-            format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
-        )
-    })?;
-    Err(Error::input(
-        path,
-        line,
-        column,
-        format!(
-            "column `{name}`: `{}` is not a number (write `{missing}` or leave the cell \
-             empty for a value that was not measured){}",
-            text.chars().take(40).collect::<String>(),
-            super::records::decimal_comma_hint(text)
-        ),
-    ))
-}
-
 /// The channel names a CSV file's header declares, read from the header alone (the loader
 /// reads the same header the same way); `None` when the file or its header cannot be read
 /// (loading it then says why).
 pub(crate) fn header_channels(path: &Path, options: &LoadOptions) -> Option<Vec<String>> {
-    let mut reader = super::open(path).ok()?;
+    let mut reader = super::lines::open(path).ok()?;
     let delimiter = options.delimiter_for(path).ok()?;
     let pre = read_preamble(&mut reader, delimiter, path).ok()?;
     columns_from_header(&pre.header, path, pre.lines)
@@ -323,7 +275,7 @@ pub(crate) fn header_channels(path: &Path, options: &LoadOptions) -> Option<Vec<
 
 /// Load a header CSV file.
 pub(crate) fn load_csv(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
-    let mut reader = super::open(path)?;
+    let mut reader = super::lines::open(path)?;
     let delimiter = options.delimiter_for(path)?;
     let pre = read_preamble(&mut reader, delimiter, path)?;
     let directive = super::unit::file_directive(path, 1)?;

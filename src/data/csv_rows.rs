@@ -9,12 +9,61 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use super::csv::{parse_cell, Columns};
 use super::lines::{csv_error, quote_across_lines_error, read_error, LineCounter};
+use super::options::{LoadOptions, Role};
 use super::records::{count_lines, for_each_line, needs_csv_parser, split_at_lines, Blocks};
 use super::rows::{Cell, RowCells, Rows};
-use super::{LoadOptions, Role};
 use crate::error::{Error, Result};
+
+/// The columns of a CSV file, from its header.
+#[derive(Debug)]
+pub(super) struct Columns {
+    pub roles: Vec<Role>,
+    pub channels: Vec<String>,
+    pub has_sigma: bool,
+    pub has_weight: bool,
+    pub ignored: Vec<String>,
+}
+
+/// Parse one cell: `None` when empty or the missing token, else a number (NaN/inf/1e999 parse
+/// to non-finite values, which validation rejects). Anything else is an input error.
+pub(crate) fn parse_cell(
+    bytes: &[u8],
+    missing: &str,
+    path: &Path,
+    line: u64,
+    column: u64,
+    name: &str,
+) -> Result<Cell> {
+    let trimmed = bytes.trim_ascii();
+    if trimmed.is_empty() || trimmed == missing.as_bytes() {
+        return Ok(None);
+    }
+    // The fast parser reads exactly what `str::parse` reads; the text is only decoded for the
+    // error message.
+    if let Some(value) = super::records::parse_f64(trimmed) {
+        return Ok(Some(value));
+    }
+    let text = std::str::from_utf8(trimmed).map_err(|_| {
+        Error::input(
+            path,
+            line,
+            column,
+            format!("column `{name}` is not UTF-8 text (binary data in the file?)"),
+        )
+    })?;
+    Err(Error::input(
+        path,
+        line,
+        column,
+        format!(
+            "column `{name}`: `{}` is not a number (write `{missing}` or leave the cell \
+             empty for a value that was not measured){}",
+            text.chars().take(40).collect::<String>(),
+            super::records::decimal_comma_hint(text)
+        ),
+    ))
+}
 
 /// Where the data rows come from.
 pub(super) struct Input<'a> {

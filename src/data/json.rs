@@ -7,8 +7,10 @@ use std::path::Path;
 use serde::Deserialize;
 use serde_json::{Map, Value};
 
+use super::dataset::Dataset;
+use super::options::{AngleUnit, LoadOptions};
+use super::report::LoadReport;
 use super::rows::{Cell, Rows};
-use super::{AngleUnit, Dataset, LoadOptions, LoadReport};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 
@@ -245,7 +247,7 @@ fn channels_of(file: &FileJson, path: &Path, positions: &[(u64, u64)]) -> Result
 /// Load a JSON dataset (angles in degrees).
 pub(crate) fn load_json(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)> {
     let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut super::open(path)?, &mut bytes)
+    std::io::Read::read_to_end(&mut super::lines::open(path)?, &mut bytes)
         .map_err(|e| super::lines::read_error(path, e))?;
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
     let file: FileJson = serde_json::from_slice(bytes)

@@ -8,7 +8,7 @@ use std::io::Read;
 use std::path::Path;
 use std::rc::Rc;
 
-use crate::error::Error;
+use crate::error::{Error, Result};
 
 /// Offsets of the newlines a reader has passed, so a byte offset can be turned into a line.
 /// csv's own record positions point before skipped blank/comment lines (and drift with CRLF),
@@ -268,4 +268,19 @@ pub(crate) fn csv_error(path: &Path, err: csv::Error, line: u64) -> Error {
         csv::ErrorKind::Io(io) => read_error(path, io),
         _ => Error::input(path, line, column, message),
     }
+}
+
+/// Open `path` for buffered reading of text (see [`TextGuard`]).
+pub(crate) fn open(path: &Path) -> Result<std::io::BufReader<TextGuard<std::fs::File>>> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    if file.metadata().is_ok_and(|m| m.is_dir()) {
+        return Err(Error::Other(format!(
+            "{}: is a directory, not a data file",
+            path.display()
+        )));
+    }
+    Ok(std::io::BufReader::with_capacity(
+        1 << 16,
+        TextGuard::new(file),
+    ))
 }

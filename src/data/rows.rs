@@ -3,8 +3,9 @@
 
 use rayon::slice::ParallelSliceMut;
 
+use super::dataset::Dataset;
+use super::options::AngleUnit;
 use super::report::{LoadReport, RejectReason, FIRST_LINES};
-use super::{AngleUnit, Dataset};
 
 /// Accumulates validated rows of one file.
 pub(crate) struct Rows {
@@ -29,8 +30,8 @@ pub(crate) struct RowCells<'a> {
 
 impl RowCells<'_> {
     /// Put `cell` where its column's role says (an unsuffixed sigma/weight goes to every channel).
-    pub fn place(&mut self, role: super::Role, cell: Cell) {
-        use super::Role;
+    pub fn place(&mut self, role: super::options::Role, cell: Cell) {
+        use super::options::Role;
         match role {
             Role::Angle(a) => self.angles[a] = cell,
             Role::Radiance(c) => self.radiance[c] = cell,
@@ -41,6 +42,15 @@ impl RowCells<'_> {
             Role::Ignored => {}
         }
     }
+}
+
+/// One row's cells as [`Rows::row`] takes them, for its check and its store.
+#[derive(Clone, Copy)]
+struct RowValues<'a> {
+    angles: [Cell; 4],
+    radiance: &'a [Cell],
+    sigma: &'a [Cell],
+    weight: &'a [Cell],
 }
 
 impl Rows {
@@ -104,22 +114,28 @@ impl Rows {
         weight: &[Cell],
     ) {
         self.report.rows_read += 1;
-        match self.check(angles, radiance, sigma, weight) {
+        let cells = RowValues {
+            angles,
+            radiance,
+            sigma,
+            weight,
+        };
+        match self.check(&cells) {
             Some(reason) => self.report.reject(reason, line),
-            None => self.accept(line, angles, radiance, sigma, weight),
+            None => self.accept(line, &cells),
         }
     }
 
     /// The first reason to reject a row, in a fixed order (missing, non-finite, θ, negative,
     /// sigma, weight), or `None` to accept it.
-    fn check(
-        &self,
-        angles: [Cell; 4],
-        radiance: &[Cell],
-        sigma: &[Cell],
-        weight: &[Cell],
-    ) -> Option<RejectReason> {
-        let all = || angles.iter().chain(radiance).chain(sigma).chain(weight);
+    fn check(&self, cells: &RowValues<'_>) -> Option<RejectReason> {
+        let angles = cells.angles;
+        let all = || {
+            (angles.iter())
+                .chain(cells.radiance)
+                .chain(cells.sigma)
+                .chain(cells.weight)
+        };
         if all().any(Option::is_none) {
             return Some(RejectReason::MissingValue);
         }
@@ -141,28 +157,27 @@ impl Rows {
             return Some(RejectReason::PhiOutOfRange);
         }
         if let Some(tol) = self.negative_tolerance {
-            if radiance.iter().any(|r| r.unwrap_or(0.0) < -tol) {
+            if cells.radiance.iter().any(|r| r.unwrap_or(0.0) < -tol) {
                 return Some(RejectReason::NegativeRadiance);
             }
         }
-        if sigma.iter().any(|s| s.unwrap_or(1.0) <= 0.0) {
+        if cells.sigma.iter().any(|s| s.unwrap_or(1.0) <= 0.0) {
             return Some(RejectReason::NonPositiveSigma);
         }
-        if weight.iter().any(|w| w.unwrap_or(1.0) <= 0.0) {
+        if cells.weight.iter().any(|w| w.unwrap_or(1.0) <= 0.0) {
             return Some(RejectReason::NonPositiveWeight);
         }
         None
     }
 
     /// Store a row that passed [`Rows::check`] (all cells present and finite).
-    fn accept(
-        &mut self,
-        line: u64,
-        angles: [Cell; 4],
-        radiance: &[Cell],
-        sigma: &[Cell],
-        weight: &[Cell],
-    ) {
+    fn accept(&mut self, line: u64, cells: &RowValues<'_>) {
+        let RowValues {
+            angles,
+            radiance,
+            sigma,
+            weight,
+        } = *cells;
         let rad = |c: Cell| {
             let v = c.unwrap_or(0.0);
             match self.unit {

@@ -4,10 +4,12 @@
 
 use std::path::Path;
 
-use super::csv::parse_cell;
+use super::csv_rows::parse_cell;
+use super::dataset::{Dataset, ANGLE_COLUMNS};
 use super::expr::Linear;
+use super::options::{AngleUnit, LoadOptions, Role};
+use super::report::LoadReport;
 use super::rows::{Cell, RowCells, Rows};
-use super::{AngleUnit, Dataset, LoadOptions, LoadReport, Role, ANGLE_COLUMNS};
 use crate::error::{Error, Result};
 
 /// The scan layout resolved from `--columns`, `--fixed` and `--map`.
@@ -296,7 +298,7 @@ pub(crate) fn load_scan(path: &Path, options: &LoadOptions) -> Result<(Dataset, 
             rows.note(format!("column {name} mapped by x -> {m}"));
         }
     }
-    let mut reader = super::open(path)?;
+    let mut reader = super::lines::open(path)?;
     let nc = lay.channels.len();
     let mut buf = Vec::new();
     let mut radiance: Vec<Cell> = vec![None; nc];

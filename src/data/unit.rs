@@ -4,8 +4,9 @@
 
 use std::path::Path;
 
+use super::dataset::Dataset;
 use super::lines::next_line;
-use super::{AngleUnit, Dataset};
+use super::options::AngleUnit;
 use crate::error::{Error, Result};
 
 /// The unit line `# angles: deg|rad`: read by [`UnitLine::parse`], written by its `Display`
@@ -46,7 +47,7 @@ impl UnitLine {
 /// row (after `header_lines` non-comment lines: 1 for a header CSV, 0 for a scan). Two unit
 /// lines that disagree are an error naming both.
 pub(crate) fn file_directive(path: &Path, header_lines: u64) -> Result<Option<(AngleUnit, u64)>> {
-    directive_in(&mut super::open(path)?, path, header_lines, None)
+    directive_in(&mut super::lines::open(path)?, path, header_lines, None)
 }
 
 /// Bytes of comment and header lines a stream may hold before its first data row; a stream
