@@ -7,147 +7,15 @@
 use std::path::Path;
 
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
-use super::nan_if_missing;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-/// One row of `curves.csv`: one sample in one channel, angles in degrees; `fit*` include the
-/// fitted scale (and the measurement's factor); `residual` is normalised in the fit's space;
-/// `weight` the final robust weight. Non-finite numbers are empty cells.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CurveRow {
-    pub sample: u64,
-    /// Line of the sample in the data file.
-    pub line: u64,
-    pub channel: String,
-    #[serde(serialize_with = "shortest")]
-    pub theta_i: f64,
-    #[serde(serialize_with = "shortest")]
-    pub phi_i: f64,
-    #[serde(serialize_with = "shortest")]
-    pub theta_r: f64,
-    #[serde(serialize_with = "shortest")]
-    pub phi_r: f64,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub data: f64,
-    /// Empty when unknown.
-    #[serde(serialize_with = "exponent_opt")]
-    pub sigma: Option<f64>,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub fit: f64,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub fit_r: f64,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub fit_tt: f64,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub fit_trt: f64,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub residual: f64,
-    #[serde(deserialize_with = "nan_if_missing", serialize_with = "exponent")]
-    pub weight: f64,
-}
 
-impl CurveRow {
-    /// The robust loss really discounted this value (weight below [`DOWN_WEIGHT`]): the one
-    /// definition of an "outlier" that the fit counts and the report marks.
-    pub fn down_weighted(&self) -> bool {
-        self.weight < DOWN_WEIGHT
-    }
+mod parse;
+mod record;
 
-    /// The four angles in degrees, `[θ_i, φ_i, θ_r, φ_r]`.
-    pub fn angles_deg(&self) -> [f64; 4] {
-        [self.theta_i, self.phi_i, self.theta_r, self.phi_r]
-    }
-}
-
-/// A value whose robust-loss weight ρ′ is below this counts as down-weighted. Every robust loss
-/// gives weights just below 1 to ordinary residuals (Cauchy: 0.8 at one loss scale's fifth); below
-/// one half the loss has removed most of the value's pull (Cauchy: |r| > C, Huber: |r| > 2C).
-pub const DOWN_WEIGHT: f64 = 0.5;
-
-/// The header `curves.csv` has, in this order (the fields of [`CurveRow`]; a test checks).
-pub const CURVES_HEADER: [&str; 15] = [
-    "sample", "line", "channel", "theta_i", "phi_i", "theta_r", "phi_r", "data", "sigma", "fit",
-    "fit_r", "fit_tt", "fit_trt", "residual", "weight",
-];
-
-/// Angles: Rust's shortest round-trip decimal (`-170`, `-29.999999999999996`).
-fn shortest<S: serde::Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
-    if v.is_finite() {
-        s.serialize_str(&v.to_string())
-    } else {
-        s.serialize_str("")
-    }
-}
-
-/// Values: shortest round-trip digits in exponent form (`2.43e-7`, `1e0`); empty if not finite.
-fn exponent<S: serde::Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
-    if v.is_finite() {
-        s.serialize_str(&format!("{v:e}"))
-    } else {
-        s.serialize_str("")
-    }
-}
-
-fn exponent_opt<S: serde::Serializer>(
-    v: &Option<f64>,
-    s: S,
-) -> std::result::Result<S::Ok, S::Error> {
-    exponent(&v.unwrap_or(f64::NAN), s)
-}
-
-/// How much of the curves a fit writes (`--curves`, recorded in fit.json's options).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CurvesMode {
-    /// Every sample and channel.
-    #[default]
-    Full,
-    /// The samples the report draws, an even spread of the rest and every sample with a
-    /// down-weighted value (all of its channels), at most a few thousand samples plus those.
-    Summary,
-    /// No curves.csv at all.
-    None,
-}
-
-impl std::fmt::Display for CurvesMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            CurvesMode::Full => "full",
-            CurvesMode::Summary => "summary",
-            CurvesMode::None => "none",
-        })
-    }
-}
-
-impl std::str::FromStr for CurvesMode {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "full" => Ok(CurvesMode::Full),
-            "summary" => Ok(CurvesMode::Summary),
-            "none" => Ok(CurvesMode::None),
-            other => Err(Error::Other(format!(
-                "unknown curves mode `{other}`: use full, summary or none"
-            ))),
-        }
-    }
-}
-
-/// The numbers of one row of [`Curves`] (`sigma` NaN when unknown, an empty cell).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CurveValues {
-    pub data: f64,
-    pub sigma: f64,
-    pub fit: f64,
-    pub fit_r: f64,
-    pub fit_tt: f64,
-    pub fit_trt: f64,
-    pub residual: f64,
-    pub weight: f64,
-}
-
+use parse::{csv_error, csv_field, field_error, parse_record, ParsedRow};
+pub use record::{CurveRow, CurveValues, CurvesMode, CURVES_HEADER, DOWN_WEIGHT};
 /// `curves.csv` in memory: the samples (id, data line, angles in degrees) once each, and per
 /// row its sample, its channel (an index into `channels`) and its numbers. About 72 bytes a
 /// row plus 48 a sample, against ~180 for a [`CurveRow`] with its own channel `String`.
@@ -494,75 +362,6 @@ impl<'a> IntoIterator for &'a Curves {
     }
 }
 
-/// The numbers of one record of `curves.csv`.
-struct ParsedRow {
-    id: u64,
-    line: u64,
-    angles: [f64; 4],
-    values: CurveValues,
-}
-
-/// An input error at `record`'s line, column `col` (0-based) not being `what`.
-fn field_error(path: &Path, record: &csv::ByteRecord, col: usize, what: &str) -> Error {
-    Error::input(
-        path,
-        record.position().map_or(0, |p| p.line()),
-        col as u64 + 1,
-        format!(
-            "`{}` in column `{}` is not {what}; curves.csv is written by `hairfit fit` — re-run the fit",
-            String::from_utf8_lossy(record.get(col).unwrap_or_default()),
-            CURVES_HEADER[col]
-        ),
-    )
-}
-
-/// Parse the numbers of one record (angles required; empty value cells are NaN).
-fn parse_record(path: &Path, record: &csv::ByteRecord) -> Result<ParsedRow> {
-    let text = |col: usize| std::str::from_utf8(record.get(col).unwrap_or_default()).ok();
-    let int = |col: usize| {
-        text(col)
-            .and_then(|t| t.parse::<u64>().ok())
-            .ok_or_else(|| field_error(path, record, col, "an unsigned integer"))
-    };
-    let number = |col: usize| {
-        text(col)
-            .and_then(|t| t.parse::<f64>().ok())
-            .ok_or_else(|| field_error(path, record, col, "a number"))
-    };
-    // Empty cells are numbers the fit could not compute.
-    let optional = |col: usize| match record.get(col) {
-        Some(b"") | None => Ok(f64::NAN),
-        _ => number(col),
-    };
-    Ok(ParsedRow {
-        id: int(0)?,
-        line: int(1)?,
-        angles: [number(3)?, number(4)?, number(5)?, number(6)?],
-        values: CurveValues {
-            data: optional(7)?,
-            sigma: optional(8)?,
-            fit: optional(9)?,
-            fit_r: optional(10)?,
-            fit_tt: optional(11)?,
-            fit_trt: optional(12)?,
-            residual: optional(13)?,
-            weight: optional(14)?,
-        },
-    })
-}
-
-/// `text` as the csv writer writes it inside a record (quoted only when it must be).
-fn csv_field(text: &str) -> Vec<u8> {
-    let mut w = csv::WriterBuilder::new()
-        .has_headers(false)
-        .from_writer(Vec::new());
-    // A second field: a lone empty field would be quoted to tell it from an empty record.
-    w.write_record([text, "x"]).expect("writing to memory");
-    let mut bytes = w.into_inner().expect("writing to memory");
-    bytes.truncate(bytes.len() - ",x\n".len());
-    bytes
-}
-
 /// Read every row of `curves.csv`, checking the header; errors name line and column.
 pub fn read_curves_csv(path: &Path) -> Result<Vec<CurveRow>> {
     Ok(Curves::read_csv(path)?.to_rows())
@@ -572,26 +371,6 @@ pub fn read_curves_csv(path: &Path) -> Result<Vec<CurveRow>> {
 pub fn write_curves_csv(path: &Path, rows: &[CurveRow]) -> Result<()> {
     Curves::from_rows(rows).write_csv(path, None)
 }
-/// A csv error as an input error at its 1-based line and column (field).
-fn csv_error(path: &Path, e: csv::Error) -> Error {
-    let (line, column) = match e.kind() {
-        csv::ErrorKind::Deserialize { pos, err } => (
-            pos.as_ref().map_or(0, |p| p.line()),
-            err.field().map_or(0, |f| f + 1),
-        ),
-        _ => (e.position().map_or(0, |p| p.line()), 0),
-    };
-    match e.kind() {
-        csv::ErrorKind::Io(_) => Error::Other(format!("{}: {e}", path.display())),
-        _ => Error::input(
-            path,
-            line,
-            column,
-            format!("{e}; curves.csv is written by `hairfit fit` — re-run the fit"),
-        ),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
