@@ -2,8 +2,9 @@
 //! writer and its reader can never disagree: `fit.json` ([`FitJson`]), `curves.csv`
 //! ([`CurveRow`]), `timing.json` ([`Timing`]), `truth.json` ([`Truth`]), the loader's report
 //! ([`LoadReport`]); `params.json` is [`crate::params::ParamFile`]. Readers name file, line and
-//! column on bad input; writers write atomically. This module depends on `model` and `params`
-//! only, never on `fit` or `report` (both use it).
+//! column on bad input; writers write atomically. This module sits below `fit` and `report`
+//! (both use it) and above the model families whose parameters its records hold; the fit's
+//! settings and test statistics it records are defined here (`settings`, `statistics`).
 
 pub mod curves;
 pub mod decimal;

@@ -19,7 +19,7 @@ pub struct FitCommandLine {
 
 /// Fit options that are the whole run's, not an item's: a column naming one is an error
 /// that says how to give it instead.
-pub(super) const RUN_LEVEL: [(&str, &str); 2] = [
+const RUN_LEVEL: [(&str, &str); 2] = [
     (
         "strict",
         "pass `hairfit batch --strict`: it applies to every item of the run and to --merge",
@@ -34,8 +34,8 @@ pub(super) const RUN_LEVEL: [(&str, &str); 2] = [
 /// may be given more than once (`fix`, `free`: `;` separates the values in one cell).
 pub(super) struct FitOption {
     pub(super) long: String,
-    pub(super) takes_value: bool,
-    pub(super) repeatable: bool,
+    takes_value: bool,
+    repeatable: bool,
 }
 
 pub(super) fn fit_options() -> Vec<FitOption> {
@@ -145,7 +145,7 @@ pub(super) fn unknown_column(key: &str, options: &[FitOption], json: bool) -> St
 
 /// The name most like `typed`, when one is close enough to be the intended one: Jaro
 /// similarity above 0.8, as clap suggests a misspelt option (`lose` → `loss`, `sed` → `seed`).
-pub(super) fn closest_name<'a>(typed: &str, names: &[&'a str]) -> Option<&'a str> {
+fn closest_name<'a>(typed: &str, names: &[&'a str]) -> Option<&'a str> {
     names
         .iter()
         .map(|&name| (strsim::jaro(typed, name), name))
@@ -180,7 +180,7 @@ pub fn as_manifest_words(message: &str) -> String {
     )
 }
 
-pub(super) fn first_line(s: &str) -> String {
+fn first_line(s: &str) -> String {
     s.lines()
         .next()
         .unwrap_or("")

@@ -1,4 +1,4 @@
-//! The model families as the fit sees them: one type per family implementing [`FamilyFit`] —
+//! The model families as the fit sees them: one type per family implementing [`Family`] —
 //! its free parameters, `--fix` names, forward model and the records it writes, handed to the
 //! shared stages ([`super::fit_with`]) — and [`family_fit`], the one place where a `--model`
 //! name meets its type. The shared stages, verdicts, intervals and reports never name a family.

@@ -8,18 +8,18 @@ use super::system::BlockSystem;
 
 /// Where a solver column sits in a block system.
 #[derive(Debug, Clone, Copy)]
-pub(super) enum Place {
+enum Place {
     Shared(usize),
     Local(usize, usize),
 }
 
 /// One block's part of the covariance (column-scaled): `G = P⁺B` and `H = G C_ss`.
 #[derive(Debug, Clone)]
-pub(super) struct BlockPart {
+struct BlockPart {
     /// `P⁺P⁺ᵀ`, `L × L`.
-    pub(super) own: DMatrix<f64>,
-    pub(super) g: DMatrix<f64>,
-    pub(super) h: DMatrix<f64>,
+    own: DMatrix<f64>,
+    g: DMatrix<f64>,
+    h: DMatrix<f64>,
 }
 
 /// Parameter covariance of a block system, stored by blocks: the shared block and per block its
@@ -38,19 +38,19 @@ pub struct BlockCovariance {
     pub null_weights: Vec<f64>,
     /// Per column: at least 10% of its weight lies in dropped directions.
     pub undetermined: Vec<bool>,
-    pub(super) places: Vec<Place>,
+    places: Vec<Place>,
     /// Shared columns, and each block's own ones (solver indices).
-    pub(super) shared: Vec<usize>,
-    pub(super) locals: Vec<Vec<usize>>,
-    pub(super) norms: DVector<f64>,
+    shared: Vec<usize>,
+    locals: Vec<Vec<usize>>,
+    norms: DVector<f64>,
     /// Shared block `(R_sᵀR_s)⁺` (column-scaled).
-    pub(super) c_ss: DMatrix<f64>,
-    pub(super) parts: Vec<BlockPart>,
+    c_ss: DMatrix<f64>,
+    parts: Vec<BlockPart>,
 }
 
 /// Pseudo-inverse of a small square matrix with singular values below `cut` dropped, and the
 /// dropped right singular vectors (rows).
-pub(super) fn pinv(a: &DMatrix<f64>, cut: f64) -> (DMatrix<f64>, Vec<DVector<f64>>) {
+fn pinv(a: &DMatrix<f64>, cut: f64) -> (DMatrix<f64>, Vec<DVector<f64>>) {
     let n = a.ncols();
     if n == 0 {
         return (DMatrix::zeros(0, 0), Vec::new());
@@ -73,7 +73,7 @@ pub(super) fn pinv(a: &DMatrix<f64>, cut: f64) -> (DMatrix<f64>, Vec<DVector<f64
 }
 
 /// Largest and smallest singular value of a small square matrix.
-pub(super) fn sv_range(a: &DMatrix<f64>) -> (f64, f64) {
+fn sv_range(a: &DMatrix<f64>) -> (f64, f64) {
     if a.ncols() == 0 {
         return (0.0, f64::INFINITY);
     }

@@ -14,7 +14,7 @@ pub(super) struct Pivot {
     /// `L × shared`.
     pub(super) b: DMatrix<f64>,
     /// `L` transformed residuals.
-    pub(super) beta: DVector<f64>,
+    beta: DVector<f64>,
 }
 
 /// The triangle of `[M; √λ I]` with every block's own columns ordered first:
@@ -24,12 +24,12 @@ pub(super) struct Factor {
     pub(super) pivots: Vec<Pivot>,
     /// `shared × shared` upper triangle of the Schur complement.
     pub(super) rs: DMatrix<f64>,
-    pub(super) beta_s: DVector<f64>,
+    beta_s: DVector<f64>,
 }
 
 /// The R factor of `a` (Householder QR), padded with zero rows to at least `ncols - 1` rows (the
 /// last column is a right-hand side).
-pub(super) fn triangle(a: DMatrix<f64>, min_rows: usize) -> DMatrix<f64> {
+fn triangle(a: DMatrix<f64>, min_rows: usize) -> DMatrix<f64> {
     let w = a.ncols();
     let r = if a.nrows() == 0 { a } else { a.qr().r() };
     if r.nrows() >= min_rows {
@@ -41,7 +41,7 @@ pub(super) fn triangle(a: DMatrix<f64>, min_rows: usize) -> DMatrix<f64> {
 }
 
 /// Stack `parts` under `top` and reduce to a triangle.
-pub(super) fn stack(top: DMatrix<f64>, parts: &[DMatrix<f64>], min_rows: usize) -> DMatrix<f64> {
+fn stack(top: DMatrix<f64>, parts: &[DMatrix<f64>], min_rows: usize) -> DMatrix<f64> {
     let w = top.ncols();
     let n: usize = top.nrows() + parts.iter().map(|p| p.nrows()).sum::<usize>();
     let mut s = DMatrix::zeros(n, w);
@@ -141,7 +141,7 @@ impl Factor {
 }
 
 /// `x` with `R x = b` for upper-triangular `R`; components with a zero pivot are 0.
-pub(super) fn solve_upper(r: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+fn solve_upper(r: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     let n = r.nrows();
     let mut x = DVector::zeros(n);
     for i in (0..n).rev() {
@@ -155,7 +155,7 @@ pub(super) fn solve_upper(r: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
 }
 
 /// `x` with `Rᵀ x = b` for upper-triangular `R`; components with a zero pivot are 0.
-pub(super) fn solve_lower_transposed(r: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
+fn solve_lower_transposed(r: &DMatrix<f64>, b: &DVector<f64>) -> DVector<f64> {
     let n = r.nrows();
     let mut x = DVector::zeros(n);
     for i in 0..n {
