@@ -36,8 +36,60 @@ impl ModelFamily {
         }
     }
 
-    /// Both families, Marschner first (the order `compare` reports them in).
+    /// Every family, Marschner first (the order `compare --models all` reports them in).
     pub const ALL: [ModelFamily; 2] = [ModelFamily::Marschner, ModelFamily::Chiang];
+
+    /// The family's name in sentences and figure legends ("Marschner", "Chiang").
+    pub fn title(self) -> &'static str {
+        match self {
+            ModelFamily::Marschner => "Marschner",
+            ModelFamily::Chiang => "Chiang",
+        }
+    }
+
+    /// A `--model` spelling (case-insensitive), or an error listing every family.
+    pub fn parse(name: &str) -> Result<ModelFamily> {
+        let name = name.trim();
+        Self::ALL
+            .into_iter()
+            .find(|f| f.as_str().eq_ignore_ascii_case(name))
+            .ok_or_else(|| {
+                Error::Other(format!(
+                    "unknown model family `{name}`: use one of {}",
+                    Self::names()
+                ))
+            })
+    }
+
+    /// Every family's `--model` spelling, comma-separated.
+    pub fn names() -> String {
+        Self::ALL.map(ModelFamily::as_str).join(", ")
+    }
+
+    /// A comma-separated list of families (`marschner,chiang`), or `all`; at least one, none
+    /// twice, in the order given.
+    pub fn parse_list(list: &str) -> Result<Vec<ModelFamily>> {
+        if list.trim().eq_ignore_ascii_case("all") {
+            return Ok(Self::ALL.to_vec());
+        }
+        let mut out: Vec<ModelFamily> = Vec::new();
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let family = Self::parse(item)?;
+            if out.contains(&family) {
+                return Err(Error::Other(format!(
+                    "`{item}` is named twice in the model list `{list}`"
+                )));
+            }
+            out.push(family);
+        }
+        if out.is_empty() {
+            return Err(Error::Other(format!(
+                "the model list `{list}` is empty: name families from {} (or all)",
+                Self::names()
+            )));
+        }
+        Ok(out)
+    }
 }
 
 impl std::fmt::Display for ModelFamily {
