@@ -228,7 +228,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             }
             let request = EvalRequest {
                 output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
-                model: FamilyModel::new(&file, args.model.config()?, &args.model.chiang()?),
+                model: FamilyModel::new(&file, &args.model.setup()?),
                 params: file,
                 angles: args.angles,
             };

@@ -214,11 +214,11 @@ fn bins(
 }
 
 fn name(f: ModelFamily) -> &'static str {
-    match f {
-        ModelFamily::Marschner => "Marschner",
-        ModelFamily::Chiang => "Chiang",
-    }
+    f.title()
 }
+
+/// The two families compared.
+const COMPARED: [ModelFamily; 2] = [ModelFamily::Marschner, ModelFamily::Chiang];
 
 /// Which fits better overall (AIC) and where each is worse, in words.
 fn findings(models: &[ModelSummary], regions: &[Region], delta_aic: f64) -> (String, Vec<String>) {
@@ -245,7 +245,7 @@ fn findings(models: &[ModelSummary], regions: &[Region], delta_aic: f64) -> (Str
         ));
         win.family.as_str()
     };
-    for family in ModelFamily::ALL {
+    for family in COMPARED {
         let mut worst: Vec<&Region> = regions
             .iter()
             .filter(|r| r.worse() == Some(family))
@@ -255,7 +255,7 @@ fn findings(models: &[ModelSummary], regions: &[Region], delta_aic: f64) -> (Str
         for r in worst.iter().take(3) {
             let (own, other) = match family {
                 ModelFamily::Marschner => (r.rms_marschner, r.rms_chiang),
-                ModelFamily::Chiang => (r.rms_chiang, r.rms_marschner),
+                _ => (r.rms_chiang, r.rms_marschner),
             };
             out.push(format!(
                 "{} misses the data at {} (RMS normalised residual {:.3} vs {:.3}, {} residuals)",
@@ -400,7 +400,7 @@ pub fn check_fixes(fix: &[String], nc: Option<usize>) -> Result<()> {
         Some(nc) => nc,
         None => channels_named(fix)?,
     };
-    for family in ModelFamily::ALL {
+    for family in COMPARED {
         crate::fit::family::family_fit(family).check_fixes(fix, nc)?;
     }
     Ok(())
@@ -435,7 +435,7 @@ pub fn compare_command(
     let mut outcomes = Vec::new();
     let mut report_lines = Vec::new();
     let mut staged = Vec::new();
-    for family in ModelFamily::ALL {
+    for family in COMPARED {
         let opts = FitOptions {
             family,
             ..opts.clone()
