@@ -223,12 +223,14 @@ impl<'de> Visitor<'de> for FileSeed {
             }
         }
         let table = match (&tag, self.0) {
-            (Some(t), Some(table)) if t != table.name() => return Err(A::Error::custom(format!(
+            (Some(t), Some(table)) if t != table.name() => {
+                return Err(A::Error::custom(format!(
                 "the file says \"model\": \"{t}\" but it is read as a {} file: pass --model {t} \
                      (or write \"model\": \"{}\")",
                 table.name(),
                 table.name()
-            ))),
+            )))
+            }
             (_, Some(table)) => table,
             (Some(t), None) => by_name(t).ok_or_else(|| {
                 let names: Vec<&str> = ALL.iter().map(|t| t.name()).collect();
