@@ -134,8 +134,8 @@ pub fn demo_truth_file(family: ModelFamily) -> FamilyParams {
     }
 }
 
-/// The demo's data, truth and fit, written into `staging` (published later as `out`).
-fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome<FamilyParams>> {
+/// The demo's dataset and its truth for `opts` (family, terms, measurement, seed), in memory.
+pub fn demo_synthesis(opts: &FitOptions) -> Result<(crate::data::Dataset, crate::files::Truth)> {
     let setup = ModelSetup {
         config: ModelConfig {
             mode: opts.mode,
@@ -146,7 +146,6 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
     };
     let file = demo_truth_file(opts.family);
     let model = FamilyModel::new(&file, &setup);
-    let noise = crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}"))?;
     let source = crate::synth::Source {
         model: &model,
         file: &file,
@@ -155,12 +154,26 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
     let how = crate::synth::Acquisition {
         directions: &demo_directions(),
         label: "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
-        noise: &noise,
+        noise: &demo_noise(),
         scale: &DEMO_SCALE,
         measurement: opts.measurement,
         seed: opts.seed,
     };
-    let (dataset, truth_record) = crate::synth::synthesize_model(&source, &how)?;
+    crate::synth::synthesize_model(&source, &how)
+}
+
+/// The demo's data as the fit sees them ([`demo_synthesis`]).
+pub fn demo_data(opts: &FitOptions) -> Result<FitData> {
+    Ok(crate::fit::fit_data(&demo_synthesis(opts)?.0))
+}
+
+fn demo_noise() -> crate::synth::Noise {
+    crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}")).expect("the demo noise parses")
+}
+
+/// The demo's data, truth and fit, written into `staging` (published later as `out`).
+fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome<FamilyParams>> {
+    let (dataset, truth_record) = demo_synthesis(opts)?;
     // Files go to the staging directory; the fit records where they will be.
     let data_path = out.join("data.csv");
     crate::data::write_csv(&dataset, &staging.join("data.csv"))?;
@@ -171,7 +184,8 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
         rows_read: dataset.len() as u64,
         accepted: dataset.len() as u64,
         notes: vec![format!(
-            "hairfit demo: crate::synth, noise {noise}, seed {}",
+            "hairfit demo: crate::synth, noise {}, seed {}",
+            demo_noise(),
             opts.seed
         )],
         ..LoadReport::default()

@@ -9,9 +9,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::chiang::{
-    self, scattering_batch, ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams,
-};
+use crate::chiang::{self, scattering_batch, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
 use crate::json_file::ParameterFile;
 use crate::model::{
@@ -20,6 +18,9 @@ use crate::model::{
 };
 use crate::params::ParamFile;
 use crate::table_family::{self, DynTable, TableParamFile, TableParams, TermSet};
+
+mod setup;
+pub use setup::{ChiangRecord, ModelRecords, ModelSetup};
 
 /// A model family: Marschner 2003 (MODEL.md), Chiang 2016 (CHIANG.md), or a table family
 /// ([`crate::table_family`]).
@@ -160,8 +161,8 @@ pub enum FamilyParams {
     Table(TableParamFile),
 }
 
-/// Read by the `"model"` tag (no tag: Marschner), so a table family whose keys happen to be
-/// another family's is still read as itself.
+/// Read by the `"model"` tag (no tag: Marschner, else an untagged Chiang file), so a table
+/// family whose keys happen to be another family's is still read as itself.
 impl<'de> Deserialize<'de> for FamilyParams {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
@@ -172,13 +173,19 @@ impl<'de> Deserialize<'de> for FamilyParams {
             .map(str::to_owned);
         let err = |e: serde_json::Error| D::Error::custom(e.to_string());
         match tag.as_deref() {
-            None => ParamFile::deserialize(value)
+            // Untagged: a Marschner file, else a Chiang file written without its tag.
+            None => ParamFile::deserialize(&value)
                 .map(FamilyParams::Marschner)
+                .or_else(|e| {
+                    ChiangParamFile::deserialize(&value)
+                        .map(FamilyParams::Chiang)
+                        .map_err(|_| e)
+                })
                 .map_err(err),
-            Some(chiang::file::MODEL_TAG) => ChiangParamFile::deserialize(value)
+            Some(chiang::file::MODEL_TAG) => ChiangParamFile::deserialize(&value)
                 .map(FamilyParams::Chiang)
                 .map_err(err),
-            Some(_) => TableParamFile::deserialize(value)
+            Some(_) => TableParamFile::deserialize(&value)
                 .map(FamilyParams::Table)
                 .map_err(err),
         }
@@ -282,9 +289,12 @@ impl FamilyParams {
     }
 
     /// Write every per-channel value given once as `n` values (`hairfit synth --channels n`);
-    /// `Err` names a per-channel value given for another number of channels. `Some(note)` when
-    /// a value was replicated.
-    pub fn replicate_channels(&mut self, n: usize) -> std::result::Result<Option<String>, String> {
+    /// `Err((name, count))` names a per-channel value given for another number of channels.
+    /// `Some(note)` when a value was replicated.
+    pub fn replicate_channels(
+        &mut self,
+        n: usize,
+    ) -> std::result::Result<Option<String>, (&'static str, usize)> {
         use crate::params::SigmaA;
         let sigma_a = match self {
             FamilyParams::Marschner(p) => &mut p.sigma_a,
@@ -296,7 +306,7 @@ impl FamilyParams {
                         continue;
                     }
                     if v.len() != 1 {
-                        return Err(format!("{} has {} values", f.name, v.len()));
+                        return Err((f.name, v.len()));
                     }
                     *v = vec![v[0]; n];
                     replicated.push(format!("{} = {}", f.name, v[0]));
@@ -309,7 +319,7 @@ impl FamilyParams {
                 *sigma_a = SigmaA::PerChannel(vec![s; n]);
                 Ok(Some(format!("sigma_a = {s}")))
             }
-            SigmaA::PerChannel(v) if v.len() != n => Err(format!("sigma_a has {} values", v.len())),
+            SigmaA::PerChannel(v) if v.len() != n => Err(("sigma_a", v.len())),
             _ => Ok(None),
         }
     }
@@ -431,87 +441,6 @@ impl FamilyParams {
     }
 }
 
-/// What the command line configures of each family's model (`--mode`, `--lobes`, … for
-/// Marschner; `--terms`, `--width-nodes` for Chiang; `--terms` for a table family): a command
-/// builds it once and each family reads its part.
-#[derive(Debug, Clone, Default)]
-pub struct ModelSetup {
-    pub config: ModelConfig,
-    pub chiang: ChiangModel,
-    /// A table family's terms (`None`: every term).
-    pub terms: Option<TermSet>,
-}
-
-impl ModelSetup {
-    /// What fit.json and truth.json record of `family`'s configuration: `model` (for Chiang and
-    /// the table families, the lobes they draw), Chiang's record, a table family's terms.
-    pub fn records(&self, family: ModelFamily) -> ModelRecords {
-        if let Some(table) = family.table() {
-            let on = self.table_terms(table);
-            return ModelRecords {
-                config: table_family::lobes_config(table.terms(), on),
-                chiang: None,
-                terms: Some(on.names(table.terms())),
-            };
-        }
-        match family {
-            ModelFamily::Chiang => ModelRecords {
-                config: crate::chiang::lobes_config(&self.chiang.effects),
-                chiang: Some(ChiangRecord {
-                    effects: self.chiang.effects,
-                    width_nodes: self.chiang.width_nodes(),
-                }),
-                terms: None,
-            },
-            _ => ModelRecords {
-                config: self.config,
-                chiang: None,
-                terms: None,
-            },
-        }
-    }
-
-    /// The terms of `table` that are on.
-    pub fn table_terms(&self, table: &dyn DynTable) -> TermSet {
-        self.terms.unwrap_or(TermSet::all(table.terms().len()))
-    }
-
-    /// The setup a result file records: `model`, Chiang's record, a table family's term names
-    /// (read against `family`'s terms; an unknown name is an error naming the file's family).
-    pub fn from_records(
-        family: ModelFamily,
-        config: ModelConfig,
-        chiang: Option<&ChiangRecord>,
-        terms: Option<&[String]>,
-    ) -> Result<ModelSetup> {
-        let chiang = match chiang {
-            Some(r) => r.model()?,
-            None => ChiangModel::default(),
-        };
-        let terms = match (family.table(), terms) {
-            (Some(table), Some(names)) => Some(TermSet::parse(
-                &names.join(","),
-                table.terms(),
-                family.as_str(),
-            )?),
-            _ => None,
-        };
-        Ok(ModelSetup {
-            config,
-            chiang,
-            terms,
-        })
-    }
-}
-
-/// A family's configuration as result files record it ([`ModelSetup::records`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModelRecords {
-    pub config: ModelConfig,
-    pub chiang: Option<ChiangRecord>,
-    pub terms: Option<Vec<String>>,
-}
-
 /// A family's model with its parameters, ready to evaluate `S` per channel.
 #[derive(Debug, Clone)]
 pub enum FamilyModel {
@@ -605,38 +534,5 @@ impl FamilyModel {
                 terms,
             } => table.by_lobe(params, *terms, angles, out),
         }
-    }
-}
-
-/// fit.json → `chiang`: a Chiang fit's model configuration (absent for Marschner fits, whose
-/// configuration is `model`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ChiangRecord {
-    /// The terms of `S` that were on.
-    pub effects: ChiangEffects,
-    /// Gauss–Legendre nodes of the width integral.
-    pub width_nodes: usize,
-}
-
-impl ChiangRecord {
-    /// `R+TT+TRT+residual`: the terms that were on.
-    pub fn effects_text(&self) -> String {
-        let e = &self.effects;
-        [
-            (e.r, "R"),
-            (e.tt, "TT"),
-            (e.trt, "TRT"),
-            (e.residual, "residual"),
-        ]
-        .iter()
-        .filter(|(on, _)| *on)
-        .map(|(_, n)| *n)
-        .collect::<Vec<_>>()
-        .join("+")
-    }
-
-    /// The model this record describes (an out-of-range node count is an error).
-    pub fn model(&self) -> Result<ChiangModel> {
-        ChiangModel::new(self.effects, self.width_nodes)
     }
 }

@@ -194,10 +194,10 @@ fn reconcile_channels(
                 path.display()
             )),
             Ok(None) => {}
-            Err(what) => {
+            Err((name, count)) => {
                 return Err(Error::Other(format!(
-                    "--channels {n}, but {what} in {}: give one value per channel, or a \
-                     single number to use in every channel",
+                    "--channels {n}, but {name} in {} has {count} values: give one {name} per \
+                     channel, or a single number to use in every channel",
                     path.display()
                 )))
             }

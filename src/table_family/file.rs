@@ -256,8 +256,16 @@ fn resolve(
         .iter()
         .find(|(k, _)| !facts.iter().any(|f| f.name == k))
     {
+        let closest = facts
+            .iter()
+            .map(|f| (strsim::jaro_winkler(key, f.name), f.name))
+            .filter(|(score, _)| *score > 0.8)
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map_or(String::new(), |(_, name)| {
+                format!(" (did you mean `{name}`?)")
+            });
         return Err(format!(
-            "unknown key `{key}` for the {} model: its keys are model, {}",
+            "unknown key `{key}`{closest} for the {} model: its keys are model, {}",
             table.name(),
             keys()
         ));

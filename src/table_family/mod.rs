@@ -216,6 +216,51 @@ pub fn demo_params(facts: &[Fact], nc: usize) -> TableParams<f64> {
     p
 }
 
+/// The parameter table as docs print it (a header and one Markdown row per line), so
+/// `tests/table_families.rs` can check each family's page holds exactly its table.
+pub fn markdown_table(facts: &[Fact]) -> Vec<String> {
+    let num = |x: f64| {
+        if x.is_infinite() {
+            return if x > 0.0 { "inf" } else { "-inf" }.to_string();
+        }
+        let rounded: f64 = format!("{x:.6e}").parse().unwrap_or(x);
+        format!("{rounded}")
+    };
+    let mut rows = vec![
+        "| key | symbol | meaning | unit | per channel | domain | fit bounds | typical | default | fitted | read by |".to_string(),
+        "|---|---|---|---|---|---|---|---|---|---|---|".to_string(),
+    ];
+    rows.extend(facts.iter().map(|f| {
+        let fitted = match f.fitted {
+            Fitted::Yes => "yes",
+            Fitted::OnRequest => "with `--free eta`",
+            Fitted::No => "no (held; `--fix` sets it)",
+        };
+        let read_by = if f.terms.is_empty() {
+            "every term".to_string()
+        } else {
+            f.terms.join(", ")
+        };
+        format!(
+            "| `{}` | {} | {} | {} | {} | {} | [{}, {}] | {} to {} | {} | {} | {} |",
+            f.name,
+            f.symbol,
+            f.meaning,
+            f.unit.describe(),
+            if f.per_channel { "yes" } else { "no" },
+            f.domain.text(),
+            num(f.fit.0),
+            num(f.fit.1),
+            num(f.typical.0),
+            num(f.typical.1),
+            num(f.default),
+            fitted,
+            read_by
+        )
+    }));
+    rows
+}
+
 /// `name` or `name[c]`.
 pub fn param_name(fact: &Fact, channel: Option<usize>) -> String {
     match channel {
