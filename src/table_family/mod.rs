@@ -412,7 +412,8 @@ pub fn by_name(name: &str) -> Option<&'static dyn DynTable> {
 }
 
 /// The parameters (table index, channel) a fit of `facts` under the terms `on` varies before
-/// `--fix`: those an on term reads, `Fitted::OnRequest` ones only when `free_on_request`.
+/// `--fix`: those an on term reads, an `OnRequest` `eta` only when `free_on_request`
+/// (`--free eta`).
 pub fn fitted(
     facts: &[Fact],
     terms: &[Term],
@@ -423,7 +424,8 @@ pub fn fitted(
     let wanted = |f: &Fact| {
         let asked = match f.fitted {
             Fitted::Yes => true,
-            Fitted::OnRequest => free_on_request,
+            // `--free` frees η only; the tables mark nothing else on request.
+            Fitted::OnRequest => free_on_request && f.name == "eta",
             Fitted::No => false,
         };
         asked && on.any_named(terms, f.terms)
