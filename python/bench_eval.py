@@ -3,16 +3,22 @@
 Times, on the same 1,000,000 random directions (|θ| ≤ 85°, all effects, cubic mode, 1 and 3
 channels):
 
+- the model alone (``cargo bench --bench eval_rate``: the same parameters, angles and 256-sample
+  batches, one thread, only the kernel timed, from radians into a buffer already allocated): the
+  rate ``hairfit.eval`` is compared with;
 - ``hairfit.eval`` from NumPy arrays, one thread (RAYON_NUM_THREADS=1) and all cores;
 - ``hairfit eval`` (the CLI, CSV text in and out: parsing and formatting included) on the same
   angles, one thread and all cores;
 - with ``--rust-bench``, ``cargo bench --bench model -- lanes/`` (the model alone, one thread,
-  criterion), as the README's eval section measures it.
+  criterion, on the bench's own parameters and 1024 directions), as the README's eval section
+  measures it.
 
-Each timing is the median of ``--runs`` runs (each in a fresh process for the thread setting).
+Each timing is the median of ``--runs`` runs (each in a fresh process for the thread setting);
+the model's and ``hairfit.eval``'s also as CPU time (the process's), steadier than wall-clock
+time on a machine shared with other work.
 
 Usage (repository root, with the package installed): python python/bench_eval.py [--runs 5]
-[--rows 1000000] [--rust-bench]
+[--rows 1000000] [--rust-bench] [--no-cli]
 """
 
 from __future__ import annotations
@@ -29,21 +35,31 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
+
+def angles(rows: int):
+    """The benchmark's directions (degrees): the same in every process."""
+    import numpy as np
+
+    rng = np.random.default_rng(1)
+    return [rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows),
+            rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows)]
+
+
 CHILD = r"""
 import json, sys, time
-import numpy as np
 import hairfit
+sys.path.insert(0, sys.argv[4])
+from bench_eval import angles
 rows, runs, params = int(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
-rng = np.random.default_rng(1)
-a = [rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows),
-     rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows)]
+a = angles(rows)
 hairfit.eval(params, *(x[:1000] for x in a))  # warm up
-times = []
+wall, cpu = [], []
 for _ in range(runs):
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     s = hairfit.eval(params, *a)
-    times.append(time.perf_counter() - t)
-print(json.dumps(times))
+    wall.append(time.perf_counter() - t)
+    cpu.append(time.process_time() - c)
+print(json.dumps({"wall": wall, "cpu": cpu}))
 """
 
 
@@ -53,12 +69,13 @@ def params(channels: int) -> dict:
             "w_c_deg": 15, "eccentricity": 0.9}
 
 
-def python_eval(rows: int, runs: int, channels: int, threads: str | None) -> list[float]:
+def python_eval(rows: int, runs: int, channels: int, threads: str | None) -> dict:
     env = dict(os.environ)
     if threads:
         env["RAYON_NUM_THREADS"] = threads
     out = subprocess.run([sys.executable, "-c", CHILD, str(rows), str(runs),
-                          json.dumps(params(channels))], env=env, check=True,
+                          json.dumps(params(channels)), str(Path(__file__).parent)], env=env,
+                         check=True,
                          capture_output=True, text=True).stdout
     return json.loads(out)
 
@@ -67,12 +84,10 @@ def cli_eval(binary: Path, rows: int, runs: int, channels: int, threads: str | N
              work: Path) -> list[float]:
     import numpy as np
 
-    angles = work / "angles.csv"
-    if not angles.exists():
-        rng = np.random.default_rng(1)
-        a = np.column_stack([rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows),
-                             rng.uniform(-85, 85, rows), rng.uniform(-180, 180, rows)])
-        with open(angles, "w") as f:
+    csv = work / "angles.csv"
+    if not csv.exists():
+        a = np.column_stack(angles(rows))
+        with open(csv, "w") as f:
             f.write("theta_i,phi_i,theta_r,phi_r\n")
             for r in a.tolist():  # Python floats: repr is the shortest round-trip text
                 f.write(f"{r[0]!r},{r[1]!r},{r[2]!r},{r[3]!r}\n")
@@ -84,11 +99,26 @@ def cli_eval(binary: Path, rows: int, runs: int, channels: int, threads: str | N
     times = []
     for _ in range(runs):
         t = time.perf_counter()
-        subprocess.run([str(binary), "eval", "--params", str(p), "--input", str(angles),
+        subprocess.run([str(binary), "eval", "--params", str(p), "--input", str(csv),
                         "--output", "/dev/null"], env=env, check=True,
                        stderr=subprocess.DEVNULL)
         times.append(time.perf_counter() - t)
     return times
+
+
+def model_rate(rows: int, runs: int, channels: int, work: Path) -> dict:
+    """The model alone on the same angles, one thread (benches/eval_rate.rs)."""
+    import numpy as np
+
+    raw = work / "angles.f64"
+    if not raw.exists():
+        np.stack(angles(rows)).astype("<f8").tofile(raw)
+    p = work / f"params{channels}.json"
+    p.write_text(json.dumps(params(channels)))
+    out = subprocess.run(["cargo", "bench", "--quiet", "--bench", "eval_rate", "--", str(raw),
+                          str(p), str(runs)], cwd=ROOT, capture_output=True, text=True,
+                         check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
 
 
 def rust_bench() -> str:
@@ -98,25 +128,41 @@ def rust_bench() -> str:
     return "\n".join(lines)
 
 
+def median(times: dict) -> tuple[float, float]:
+    """Median wall-clock and CPU time of the runs."""
+    return statistics.median(times["wall"]), statistics.median(times["cpu"])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--rows", type=int, default=1_000_000)
     ap.add_argument("--rust-bench", action="store_true")
+    ap.add_argument("--no-cli", action="store_true", help="skip the CLI's timings")
     args = ap.parse_args()
     binary = ROOT / "target" / "release" / "hairfit"
-    subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "hairfit"], cwd=ROOT,
-                   check=True)
-    print(f"{args.rows} samples, median of {args.runs} runs, {os.cpu_count()} cores")
+    if not args.no_cli:
+        subprocess.run(["cargo", "build", "--release", "--quiet", "--bin", "hairfit"], cwd=ROOT,
+                       check=True)
+    print(f"{args.rows} samples, median of {args.runs} runs, {os.cpu_count()} cores; "
+          "wall-clock time (CPU time)")
+    rate = lambda t: f"{args.rows / t / 1e6:.2f}"  # noqa: E731
     with tempfile.TemporaryDirectory() as tmp:
         for channels in (1, 3):
+            model, model_cpu = median(model_rate(args.rows, args.runs, channels, Path(tmp)))
+            print(f"{channels} ch, the model alone, 1 thread: {model:.3f} s ({model_cpu:.3f} s): "
+                  f"{rate(model)} ({rate(model_cpu)}) M samples/s")
             for threads, label in (("1", "1 thread"), (None, "all cores")):
-                py = statistics.median(python_eval(args.rows, args.runs, channels, threads))
-                cli = statistics.median(cli_eval(binary, args.rows, args.runs, channels,
-                                                 threads, Path(tmp)))
-                print(f"{channels} ch, {label:9}: hairfit.eval {py:.3f} s "
-                      f"({args.rows / py / 1e6:.2f} M samples/s); hairfit eval (CSV) "
-                      f"{cli:.3f} s ({args.rows / cli / 1e6:.2f} M rows/s)")
+                py, py_cpu = median(python_eval(args.rows, args.runs, channels, threads))
+                ratio = (f", {model / py:.0%} ({model_cpu / py_cpu:.0%}) of the model's rate"
+                         if threads == "1" else "")
+                print(f"{channels} ch, {label:9}: hairfit.eval {py:.3f} s ({py_cpu:.3f} s): "
+                      f"{rate(py)} ({rate(py_cpu)}) M samples/s{ratio}")
+                if not args.no_cli:
+                    cli = statistics.median(cli_eval(binary, args.rows, args.runs, channels,
+                                                     threads, Path(tmp)))
+                    print(f"{channels} ch, {label:9}: hairfit eval (CSV) {cli:.3f} s: "
+                          f"{rate(cli)} M rows/s")
     if args.rust_bench:
         print("cargo bench --bench model -- lanes/ (the model alone, one thread):")
         print(rust_bench())

@@ -1,5 +1,7 @@
 //! Arrays ⇄ NumPy: angle units, the four angle arrays as checked model angles, value tables.
 
+use std::borrow::Cow;
+
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1};
 use pyo3::exceptions::PyRuntimeError;
@@ -27,28 +29,30 @@ pub(crate) fn unit_name(unit: AngleUnit) -> &'static str {
     }
 }
 
-/// The four angle arrays as model angles, each value checked as `hairfit eval` checks a row
-/// (finite, |θ| < 90°, |φ| ≤ 720°); errors name the array and index.
-pub(crate) fn angles_from(
+const NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
+
+/// The common length of the four angle arrays, or the error naming the one that differs.
+pub(crate) fn common_length(arrays: [&[f64]; 4]) -> std::result::Result<usize, String> {
+    let n = arrays[0].len();
+    match arrays.iter().position(|a| a.len() != n) {
+        None => Ok(n),
+        Some(k) => Err(format!(
+            "{} has {} values but theta_i has {n}: give the four angle arrays the same length",
+            NAMES[k],
+            arrays[k].len()
+        )),
+    }
+}
+
+/// Check every value of the four angle arrays (of one length) as `hairfit eval` checks a row;
+/// the error names the first bad value by array and index.
+pub(crate) fn check_angles(
     arrays: [&[f64]; 4],
     unit: AngleUnit,
-) -> std::result::Result<Vec<Angles>, String> {
-    const NAMES: [&str; 4] = ["theta_i", "phi_i", "theta_r", "phi_r"];
-    let n = arrays[0].len();
-    for (k, a) in arrays.iter().enumerate() {
-        if a.len() != n {
-            return Err(format!(
-                "{} has {} values but theta_i has {n}: give the four angle arrays the same length",
-                NAMES[k],
-                a.len()
-            ));
-        }
-    }
+) -> std::result::Result<(), String> {
     let (theta_limit, phi_limit) = (unit.theta_limit(), unit.phi_limit());
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        let mut v = [0.0; 4];
-        for (k, (slot, array)) in v.iter_mut().zip(arrays).enumerate() {
+    for i in 0..arrays[0].len() {
+        for (k, array) in arrays.iter().enumerate() {
             let value = array[i];
             let name = NAMES[k];
             if !value.is_finite() {
@@ -66,23 +70,45 @@ pub(crate) fn angles_from(
                     unit_name(unit)
                 ));
             }
-            *slot = value;
         }
-        out.push(match unit {
-            AngleUnit::Deg => Angles::from_degrees(v[0], v[1], v[2], v[3]),
-            AngleUnit::Rad => Angles {
-                theta_i: v[0],
-                phi_i: v[1],
-                theta_r: v[2],
-                phi_r: v[3],
-            },
-        });
     }
-    Ok(out)
+    Ok(())
 }
 
-pub(crate) fn vec_of(a: &PyReadonlyArray1<'_, f64>) -> Vec<f64> {
-    a.as_array().iter().copied().collect()
+/// One sample's angles (in `unit`) as model angles, as `hairfit eval` converts a row.
+#[inline]
+pub(crate) fn to_angles(v: [f64; 4], unit: AngleUnit) -> Angles {
+    match unit {
+        AngleUnit::Deg => Angles::from_degrees(v[0], v[1], v[2], v[3]),
+        AngleUnit::Rad => Angles {
+            theta_i: v[0],
+            phi_i: v[1],
+            theta_r: v[2],
+            phi_r: v[3],
+        },
+    }
+}
+
+/// The four angle arrays as model angles, each value checked as `hairfit eval` checks a row
+/// (finite, |θ| < 90°, |φ| ≤ 720°); errors name the array and index.
+pub(crate) fn angles_from(
+    arrays: [&[f64]; 4],
+    unit: AngleUnit,
+) -> std::result::Result<Vec<Angles>, String> {
+    let n = common_length(arrays)?;
+    check_angles(arrays, unit)?;
+    Ok((0..n)
+        .map(|i| to_angles(arrays.map(|a| a[i]), unit))
+        .collect())
+}
+
+/// An array's values in place when it is contiguous (what `hairfit.eval` and `hairfit.data`
+/// pass: `np.ascontiguousarray`), else copied.
+pub(crate) fn values_of<'a>(a: &'a PyReadonlyArray1<'_, f64>) -> Cow<'a, [f64]> {
+    match a.as_slice() {
+        Ok(s) => Cow::Borrowed(s),
+        Err(_) => Cow::Owned(a.as_array().iter().copied().collect()),
+    }
 }
 
 /// Row-major `values` as a NumPy array of `shape` (samples, channels).

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use hairfit::data::{AngleUnit, Dataset, LoadOptions, LoadReport};
 
 use crate::args::{parse, LoadCli};
-use crate::arrays::{angle_unit, angles_from, array2, vec_of};
+use crate::arrays::{angle_unit, angles_from, array2, values_of};
 use crate::errors::{hf, HairfitError};
 
 /// Loaded samples (angles in radians inside) with the loader's report on every row.
@@ -138,10 +138,10 @@ pub(crate) fn data_from_arrays<'py>(
 ) -> PyResult<Data> {
     let unit = angle_unit(angles)?;
     let arrays = [
-        vec_of(&theta_i),
-        vec_of(&phi_i),
-        vec_of(&theta_r),
-        vec_of(&phi_r),
+        values_of(&theta_i),
+        values_of(&phi_i),
+        values_of(&theta_r),
+        values_of(&phi_r),
     ];
     let a = angles_from([&arrays[0], &arrays[1], &arrays[2], &arrays[3]], unit)
         .map_err(HairfitError::new_err)?;

@@ -96,3 +96,32 @@ def test_bad_angles_name_the_array_and_index():
         hairfit.eval(PARAMS, [10, 10], [0, 0], [5, 90], [0, 0])
     with pytest.raises(hairfit.HairfitError, match="the same length"):
         hairfit.eval(PARAMS, [10, 10], [0], [5, 9], [0, 0])
+
+
+def test_the_first_bad_angle_is_named_whatever_batch_it_is_in():
+    # Bad values in several 256-sample batches (evaluated in parallel): the error names the
+    # first one in sample order, as the sequential check did.
+    ti, pi, tr, pr = (np.array(a) for a in random_angles(5000, seed=13))
+    tr[4000] = 95.0
+    pi[1300] = np.nan
+    ti[2600] = -np.inf
+    with pytest.raises(hairfit.HairfitError, match=r"^phi_i\[1300\] = NaN is not finite$"):
+        hairfit.eval(PARAMS, ti, pi, tr, pr)
+    pi[1300] = 721.0
+    with pytest.raises(hairfit.HairfitError, match=r"^phi_i\[1300\] = 721 degrees is more than two turns"):
+        hairfit.eval(PARAMS, ti, pi, tr, pr)
+    pi[1300] = 720.0  # the bound itself is allowed
+    with pytest.raises(hairfit.HairfitError, match=r"^theta_i\[2600\] = -inf is not finite$"):
+        hairfit.eval(PARAMS, ti, pi, tr, pr)
+
+
+def test_strided_arrays_give_the_same_bits():
+    # hairfit.eval passes contiguous arrays (read in place); the native function copies others.
+    angles = random_angles(3000, seed=17)
+    flat = hairfit.eval(PARAMS, *angles)
+    wide = [np.repeat(a, 2) for a in angles]
+    strided = [w[::2] for w in wide]
+    assert not strided[0].flags.c_contiguous
+    got = hairfit._native.eval(None, str(PARAMS), *strided, ["--model", "marschner"], "deg")
+    assert_bits(got, flat)
+    assert_bits(hairfit.eval(PARAMS, *strided), flat)
