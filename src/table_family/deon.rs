@@ -153,9 +153,10 @@ impl<T: DualNum<f64>> WrappedGaussian<T> {
 }
 
 /// Adds the width integral `N_k = ½∫₋₁¹ A_k(h) D(φ − Φ_k(h)) dh` of every term `on` to
-/// `out[c][k]` for the light in direction `a`, integrated as `how` says. Per node: one Fresnel, one `asin`,
-/// one detector per order (all channel independent), then per channel one `exp` for `T`.
-/// The residual adds `Σ_{3≤p≤P} A_p D(φ − Φ_p)` and the orders above P as `Σ_{p>P} A_p/(2π)`.
+/// `out[c][k]` for the directions `a`, integrated as `how` says. Per node: one Fresnel, one
+/// `asin`, one detector per order (all channel independent), then per channel one `exp` for
+/// `T`. The residual adds `Σ_{3≤p≤P} A_p D(φ − Φ_p)` and the orders above P as
+/// `Σ_{p>P} A_p/(2π)`.
 pub fn add_azimuthal<T: DualNum<f64>>(
     p: &TableParams<T>,
     a: &Angles,
@@ -184,6 +185,7 @@ pub fn add_azimuthal<T: DualNum<f64>>(
         let sin_gamma_t = inv_eta_prime.clone() * node.h;
         let gamma_t = sin_gamma_t.clone().asin();
         for (order, d) in d.iter_mut().enumerate() {
+            // Orders 0–2 are terms of their own; every order from 3 up is the residual's.
             if on.has(order.min(RESIDUAL)) {
                 let exit = exit_azimuth(order, node.gamma, &gamma_t);
                 *d = detector.at(&(-exit + phi)) * node.weight;
