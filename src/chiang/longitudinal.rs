@@ -29,7 +29,14 @@ pub fn lobe_variance<T: DualNum<f64>>(p: usize, v0: &T) -> T {
 /// `(sin θ'_p, |cos θ'_p|)` with `θ'_p = θ_r + TILT[p]·α`.
 #[inline]
 pub fn tilted_exit<T: DualNum<f64>>(p: usize, theta_r: f64, alpha: &T) -> (T, T) {
-    let (s, c) = (alpha.clone() * TILT[p] + theta_r).sin_cos();
+    rotated_exit(theta_r, alpha, TILT[p])
+}
+
+/// `(sin θ', |cos θ'|)` with `θ' = θ_r + factor·α`: the exit inclination rotated by a multiple of
+/// the cuticle tilt (each family its own multiples; d'Eon's M takes the rotated angle as is).
+#[inline]
+pub fn rotated_exit<T: DualNum<f64>>(theta_r: f64, alpha: &T, factor: f64) -> (T, T) {
+    let (s, c) = (alpha.clone() * factor + theta_r).sin_cos();
     let c = if c.re() < 0.0 { -c } else { c };
     (s, c)
 }

@@ -9,6 +9,7 @@
 //! What a term switch turns off is not computed, and a parameter only the switched-off terms
 //! read is not fitted ([`Fact::terms`]).
 
+pub mod deon;
 pub mod file;
 pub mod kajiya_kay;
 
@@ -381,7 +382,10 @@ impl std::fmt::Debug for dyn DynTable {
 }
 
 /// Every table family, in `--model` order.
-pub const ALL: [&dyn DynTable; 1] = [&Table::<kajiya_kay::KajiyaKay>::NEW];
+pub const ALL: [&dyn DynTable; 2] = [
+    &Table::<kajiya_kay::KajiyaKay>::NEW,
+    &Table::<deon::DEon>::NEW,
+];
 
 /// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,
 /// what the report draws): no glints, no eccentricity.
