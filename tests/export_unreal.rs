@@ -95,7 +95,9 @@ fn a_karis_fit_off_the_engines_constants_is_refitted_with_a_warning() {
         "{:?}",
         out.warnings
     );
-    assert!(out.script.contains("# WARNING: the Karis fit's own parameters"));
+    assert!(out
+        .script
+        .contains("# WARNING: the Karis fit's own parameters"));
 }
 
 /// Scatter is one of the inputs: a fit with the scatter term gets it back, and the export says
@@ -105,18 +107,16 @@ fn scatter_is_exported_and_its_absence_on_strands_stated() {
     let root = tempfile::tempdir().unwrap();
     let mut params = brown();
     params["scatter"] = json!(0.3);
-    let dir = karis_fit_dir(
-        root.path(),
-        "ms",
-        params,
-        &["R", "TT", "TRT", "scatter"],
-    );
+    let dir = karis_fit_dir(root.path(), "ms", params, &["R", "TT", "TRT", "scatter"]);
     let out = unreal::export(&dir).unwrap();
     let m = &out.mapping;
     assert!((m.inputs.scatter - 0.3).abs() < 1e-9, "{:?}", m.inputs);
     let (without, _) = m.without_scatter.unwrap();
     assert!(without > 0.01, "{without}");
-    assert!(out.warnings.iter().any(|w| w.contains("hair strands ignore it")));
+    assert!(out
+        .warnings
+        .iter()
+        .any(|w| w.contains("hair strands ignore it")));
 }
 
 /// A Marschner fit: the engine's inputs are fitted to its S with one gain; the loss is finite,
@@ -145,7 +145,10 @@ fn a_marschner_fit_exports_with_a_stated_loss() {
     assert_eq!(json["mapping"]["rms_log"].as_f64(), Some(m.rms_log));
     assert_eq!(json["source"]["model"], "Marschner");
     let colour = json["parameters"]["BaseColor"].as_array().unwrap();
-    assert!(colour[0] == colour[1] && colour[1] == colour[2], "grey: {colour:?}");
+    assert!(
+        colour[0] == colour[1] && colour[1] == colour[2],
+        "grey: {colour:?}"
+    );
     assert!(out.summary.contains("from the Marschner fit"));
     assert!(out
         .summary
@@ -209,7 +212,10 @@ fn the_script_sets_the_jsons_values_on_an_instance_of_the_parent() {
 
     let json: Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
     let p = &json["parameters"];
-    let names = json!([["Roughness", "Specular", "Backlit", "Scatter"], ["BaseColor"]]);
+    let names = json!([
+        ["Roughness", "Specular", "Backlit", "Scatter"],
+        ["BaseColor"]
+    ]);
     let parents = json!({ DEFAULT_PARENT: names, "/Game/Other/M_Hair": names });
     let (ok, err, recorded) = run_script(&script, parents.clone(), &[]);
     assert!(ok, "{err}");
@@ -258,7 +264,10 @@ fn outputs_are_named_as_the_other_exports_name_theirs() {
     );
     let json_out = root.path().join("x.json");
     let out = hairfit(&["export", s(&dir), "--to", "pbrt", "--output", s(&json_out)]);
-    cli::assert_fails_with(&out, &[".json is the extension of an Unreal", "--to unreal"]);
+    cli::assert_fails_with(
+        &out,
+        &[".json is the extension of an Unreal", "--to unreal"],
+    );
     let own = dir.join("fit.json");
     let before = std::fs::read_to_string(&own).unwrap();
     let out = hairfit(&["export", s(&dir), "--to", "unreal", "--output", s(&own)]);

@@ -64,10 +64,7 @@ fn assert_recovered(fit: &Value, truth: &Value, tol: f64) {
             None => truth[key].as_f64().unwrap(),
         };
         let got = p["value"].as_f64().unwrap();
-        assert!(
-            ((got - want) / want).abs() < tol,
-            "{name}: {got} vs {want}"
-        );
+        assert!(((got - want) / want).abs() < tol, "{name}: {got} vs {want}");
     }
 }
 
@@ -144,8 +141,14 @@ fn the_demo_ends_good_within_its_standard_errors() {
             None => (name, None),
         };
         let want = c.map_or(&truth[key], |c| &truth[key][c]).as_f64().unwrap();
-        let (got, se) = (p["value"].as_f64().unwrap(), p["std_error"].as_f64().unwrap());
-        assert!((got - want).abs() < 3.0 * se, "{name}: {got} ± {se} vs {want}");
+        let (got, se) = (
+            p["value"].as_f64().unwrap(),
+            p["std_error"].as_f64().unwrap(),
+        );
+        assert!(
+            (got - want).abs() < 3.0 * se,
+            "{name}: {got} ± {se} vs {want}"
+        );
     }
     assert_eq!(free, 5, "base_color x3, roughness, specular");
 }
@@ -159,7 +162,11 @@ fn other_families_options_and_unknown_terms_are_refused() {
         "p.json",
         r#"{"model": "karis", "base_color": 0.4, "roughness": 0.5, "specular": 0.5, "scatter": 0}"#,
     );
-    let angles = write(dir.path(), "a.csv", "theta_i,phi_i,theta_r,phi_r\n20,0,-15,30\n");
+    let angles = write(
+        dir.path(),
+        "a.csv",
+        "theta_i,phi_i,theta_r,phi_r\n20,0,-15,30\n",
+    );
     let eval = |extra: &[&str]| {
         let mut args = vec![
             "eval",
@@ -174,7 +181,10 @@ fn other_families_options_and_unknown_terms_are_refused() {
         hairfit(&args)
     };
     cli::assert_fails_with(&eval(&["--lobes", "R,TT"]), &["--lobes", "marschner"]);
-    cli::assert_fails_with(&eval(&["--width-nodes", "64"]), &["--width-nodes", "chiang"]);
+    cli::assert_fails_with(
+        &eval(&["--width-nodes", "64"]),
+        &["--width-nodes", "chiang"],
+    );
     cli::assert_fails_with(
         &eval(&["--terms", "R,MS"]),
         &["unknown karis term `MS`", "R, TT, TRT, scatter"],

@@ -86,7 +86,11 @@ fn sub_scaled(a: V3, k: f64, b: V3) -> V3 {
 fn reference_s(theta_i: f64, theta_r: f64, phi: f64, i: &Inputs) -> [f64; 4] {
     let t: V3 = [1.0, 0.0, 0.0];
     let l: V3 = [theta_i.sin(), theta_i.cos(), 0.0];
-    let v: V3 = [theta_r.sin(), theta_r.cos() * phi.cos(), theta_r.cos() * phi.sin()];
+    let v: V3 = [
+        theta_r.sin(),
+        theta_r.cos() * phi.cos(),
+        theta_r.cos() * phi.sin(),
+    ];
     let sin_l = dot(t, l);
     let sin_v = dot(t, v);
     let cos_d = (0.5 * (sin_v.asin() - sin_l.asin()).abs()).cos();
@@ -200,9 +204,13 @@ fn every_term_matches_the_independent_transcription() {
         let got = s_terms(&inp, &angles(ti, tr, phi), every_term());
         let want = reference_s(ti, tr, phi, &inp);
         for k in 0..4 {
-            let tail = want[k] < 1e-30 && (got[k].ln() - want[k].ln()).abs() < 1e-9 * want[k].ln().abs();
+            let tail =
+                want[k] < 1e-30 && (got[k].ln() - want[k].ln()).abs() < 1e-9 * want[k].ln().abs();
             let close = rel(got[k], want[k]) < 1e-11 || tail || got[k] == want[k];
-            assert!(close, "term {k} at {ti} {tr} {phi} {inp:?}: {got:?} vs {want:?}");
+            assert!(
+                close,
+                "term {k} at {ti} {tr} {phi} {inp:?}: {got:?} vs {want:?}"
+            );
         }
     }
 }

@@ -151,7 +151,9 @@ impl Target {
     pub fn file_kind(&self) -> &'static str {
         match self {
             Target::Renderer(r) => r.file_kind(),
-            Target::Unreal => "an Unreal material-parameter file (JSON; its Python script goes beside it)",
+            Target::Unreal => {
+                "an Unreal material-parameter file (JSON; its Python script goes beside it)"
+            }
         }
     }
 

@@ -280,7 +280,8 @@ impl TableFamily for Karis {
         },
         Term {
             name: "scatter",
-            meaning: "Unreal's multiple-scattering approximation, weighted by Scatter (off by default)",
+            meaning:
+                "Unreal's multiple-scattering approximation, weighted by Scatter (off by default)",
             column: LobeColumn::TRT,
         },
     ];

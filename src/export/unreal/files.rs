@@ -25,7 +25,10 @@ fibre: separable R, legacy TT absorption (r.HairStrands.Components.TTModel 0, th
 with no N.L";
 
 fn error_pair(pair: Option<(f64, f64)>) -> Value {
-    pair.map_or(Value::Null, |(rms, max)| json!({"rms_log": rms, "max_log": max}))
+    pair.map_or(
+        Value::Null,
+        |(rms, max)| json!({"rms_log": rms, "max_log": max}),
+    )
 }
 
 /// The JSON file: parameters under the parent material's names, with everything a reader needs

@@ -20,8 +20,8 @@ use crate::export::source::{SourceFit, SourceModel};
 use crate::family::FamilyModel;
 use crate::model::Angles;
 use crate::table_family::karis::{
-    Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS,
-    SCATTER, SCATTER_TERM, SHIFT, SPECULAR,
+    Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS, SCATTER,
+    SCATTER_TERM, SHIFT, SPECULAR,
 };
 use crate::table_family::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
@@ -57,7 +57,10 @@ fn engine_params<T: DualNum<f64>>(base_color: Vec<T>, shared: [T; 4]) -> TablePa
     let n_channels = base_color.len();
     let mut values = vec![Vec::new(); Karis::PARAMETERS.len()];
     values[BASE_COLOR] = base_color;
-    for (k, v) in [ROUGHNESS, SPECULAR, BACKLIT, SCATTER].into_iter().zip(shared) {
+    for (k, v) in [ROUGHNESS, SPECULAR, BACKLIT, SCATTER]
+        .into_iter()
+        .zip(shared)
+    {
         values[k] = vec![v];
     }
     values[ETA] = vec![T::from(ENGINE_ETA)];
@@ -300,7 +303,11 @@ impl EngineProblem<'_> {
     fn residuals(&self, x: &[f64]) -> Vec<f64> {
         let s = engine_scattering(&inputs_of(x, self.n), engine_terms(), self.angles);
         let fitted = log_floored(&s, self.floor, self.n);
-        fitted.iter().zip(self.target_log).map(|(a, b)| a - b).collect()
+        fitted
+            .iter()
+            .zip(self.target_log)
+            .map(|(a, b)| a - b)
+            .collect()
     }
 
     /// ½‖r‖².
@@ -425,7 +432,11 @@ mod tests {
         let r = problem.residuals(x.as_slice());
         assert!(rms(&r) < 1e-6, "{} {got:?}", rms(&r));
         let close = |a: f64, b: f64| (a - b).abs() < 1e-4 * b.max(1.0);
-        assert!(got.base_color.iter().zip(&truth.base_color).all(|(a, b)| close(*a, *b)));
+        assert!(got
+            .base_color
+            .iter()
+            .zip(&truth.base_color)
+            .all(|(a, b)| close(*a, *b)));
         for (a, b) in [
             (got.roughness, truth.roughness),
             (got.specular, truth.specular),

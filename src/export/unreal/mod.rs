@@ -85,7 +85,10 @@ pub fn warnings(m: &EngineMapping) -> Vec<String> {
     }
     // A Scatter whose removal costs less than this much rms is not worth a warning.
     const NOTICEABLE: f64 = 1e-3;
-    if let Some((rms, max)) = m.without_scatter.filter(|(rms, _)| rms - m.rms_log >= NOTICEABLE) {
+    if let Some((rms, max)) = m
+        .without_scatter
+        .filter(|(rms, _)| rms - m.rms_log >= NOTICEABLE)
+    {
         out.push(format!(
             "Scatter {:.4} is applied to hair cards and meshes only: hair strands ignore it and \
              would miss the fit's S by rms |d ln S| {rms:.4} (max {max:.3})",
