@@ -6,6 +6,7 @@
 
 #[path = "support/cli.rs"]
 mod cli;
+mod export_support;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -124,19 +125,7 @@ fn scatter_is_exported_and_its_absence_on_strands_stated() {
 #[test]
 fn a_marschner_fit_exports_with_a_stated_loss() {
     let root = tempfile::tempdir().unwrap();
-    let dir = root.path().join("m");
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(
-        dir.join("params.json"),
-        r#"{"eta": 1.55, "sigma_a": 0.5, "alpha_r_deg": -5, "beta_r_deg": 7.5, "k_g": 2,
-            "w_c_deg": 15, "eccentricity": 0.9}"#,
-    )
-    .unwrap();
-    std::fs::write(
-        dir.join("fit.json"),
-        r#"{"hairfit_version": "test", "status": "converged", "data": {"channels": ["s"]}}"#,
-    )
-    .unwrap();
+    let dir = export_support::marschner_fit_dir(root.path(), "m");
     let out = unreal::export(&dir).unwrap();
     let m = &out.mapping;
     eprintln!("{}\n{:?}", m.quality_text(), m.inputs);

@@ -191,7 +191,7 @@ def create_instance(parent_path=PARENT_MATERIAL, package_path=PACKAGE_PATH, name
         colour = unreal.LinearColor(red, green, blue, 1.0)
         lib.set_material_instance_vector_parameter_value(instance, key, colour)
     lib.update_material_instance(instance)
-    # Some 5.x setters report failure when they succeed: read every value back instead.
+    # The setters' return values are reported unreliable in some 5.x versions: read back instead.
     for key, value in SCALARS.items():
         got = lib.get_material_instance_scalar_parameter_value(instance, key)
         if abs(got - value) > 1e-6 * max(1.0, abs(value)):

@@ -225,17 +225,13 @@ fn start_inputs(model: &SourceModel) -> Vec<EngineInputs> {
 
 /// Fit the engine's inputs to the source's `S`.
 pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
-    let MappingTarget {
-        angles,
-        target,
-        floor,
-        n_sphere,
-    } = MappingTarget::new(source)?;
+    let t = MappingTarget::new(source)?;
+    let (angles, target, floor) = (&t.angles, &t.target, &t.floor);
     let n = source.model.n_channels();
     let problem = EngineProblem {
-        angles: &angles,
-        target_log: &log_floored(&target, &floor, n),
-        floor: &floor,
+        angles,
+        target_log: &log_floored(target, floor, n),
+        floor,
         n,
     };
     let starts = start_inputs(&source.model);
@@ -253,7 +249,7 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     let (_, x) = best.expect("at least one start");
     let inputs = inputs_of(&x, n);
     let errors_of = |inputs: &EngineInputs, on: TermSet| {
-        let e = log_errors(&engine_scattering(inputs, on, &angles), &target, &floor, n);
+        let e = log_errors(&engine_scattering(inputs, on, angles), target, floor, n);
         (rms(&e), max(&e), e)
     };
     let (rms_log, max_log, errors) = errors_of(&inputs, engine_terms());
@@ -279,7 +275,7 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     Ok(EngineMapping {
         inputs,
         n_measured,
-        n_sphere,
+        n_sphere: t.n_sphere,
         rms_log,
         max_log,
         rms_log_measured: (n_measured > 0).then(|| rms(&errors[..n_measured * n])),
