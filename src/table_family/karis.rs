@@ -97,10 +97,12 @@ impl Geometry {
 }
 
 /// `G(y; B) = exp(−y²/2B²)/(√(2π) B)`: the normal density every longitudinal term uses, in
-/// the variable `sin θ_i + sin θ_r` (Karis 2016, "Longitudinal scattering").
+/// the variable `sin θ_i + sin θ_r` (Karis 2016, "Longitudinal scattering"). Divisions are
+/// products with reciprocals here and below: that is how dual numbers divide, so values and
+/// derivatives passes agree to the bit.
 pub fn gaussian<T: DualNum<f64>>(y: &T, width: &T) -> T {
-    let z = y.clone() / width.clone();
-    (z.clone() * z * -0.5).exp() / (width.clone() * (2.0 * PI).sqrt())
+    let z = y.clone() * width.recip();
+    (z.clone() * z * -0.5).exp() * (width.clone() * (2.0 * PI).sqrt()).recip()
 }
 
 /// The lobe widths `(B_R, B_TT, B_TRT) = (r², r²/2, 2r²)` from Roughness `r` (UE's `B[]`, with
@@ -112,7 +114,7 @@ pub fn lobe_widths<T: DualNum<f64>>(roughness: &T) -> [T; 3] {
 
 /// `F₀ = ((1 − η)/(1 + η))²`, Schlick's normal-incidence reflectance.
 pub fn normal_reflectance<T: DualNum<f64>>(eta: &T) -> T {
-    ((-eta.clone() + 1.0) / (eta.clone() + 1.0)).powi(2)
+    ((-eta.clone() + 1.0) * (eta.clone() + 1.0).recip()).powi(2)
 }
 
 /// Schlick's Fresnel `F₀ + (1 − F₀)(1 − c)⁵` at incidence cosine `c` (the engine's `Hair_F`).
@@ -139,8 +141,8 @@ pub fn r_lobe<T: DualNum<f64>>(y: &T, b_r: &T, cos_half_phi: f64) -> T {
     if cos_half_phi <= 0.0 {
         return T::zero();
     }
-    let z = y.clone() / (b_r.clone() * cos_half_phi);
-    (z.clone() * z * -0.25).exp() / (b_r.clone() * (8.0 * PI.sqrt()))
+    let z = y.clone() * (b_r.clone() * cos_half_phi).recip();
+    (z.clone() * z * -0.25).exp() * (b_r.clone() * (8.0 * PI.sqrt())).recip()
 }
 
 /// R's attenuation `F(√(½ + ½ ω_i·ω_r))`: Fresnel at the half angle between the directions.
