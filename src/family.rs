@@ -39,6 +39,9 @@ pub enum ModelFamily {
     #[serde(rename = "deon")]
     #[value(name = "deon")]
     DEon,
+    #[serde(rename = "karis")]
+    #[value(name = "karis")]
+    Karis,
 }
 
 impl ModelFamily {
@@ -52,11 +55,12 @@ impl ModelFamily {
     }
 
     /// Every family, Marschner first (the order `compare --models all` reports them in).
-    pub const ALL: [ModelFamily; 4] = [
+    pub const ALL: [ModelFamily; 5] = [
         ModelFamily::Marschner,
         ModelFamily::Chiang,
         ModelFamily::KajiyaKay,
         ModelFamily::DEon,
+        ModelFamily::Karis,
     ];
 
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
@@ -73,11 +77,12 @@ impl ModelFamily {
 
     /// The table family this is, or `None` for Marschner and Chiang.
     pub fn table(self) -> Option<&'static dyn DynTable> {
-        use table_family::{deon::DEon, kajiya_kay::KajiyaKay, Table};
+        use table_family::{deon::DEon, kajiya_kay::KajiyaKay, karis::Karis, Table};
         match self {
             ModelFamily::Marschner | ModelFamily::Chiang => None,
             ModelFamily::KajiyaKay => Some(&Table::<KajiyaKay>::NEW),
             ModelFamily::DEon => Some(&Table::<DEon>::NEW),
+            ModelFamily::Karis => Some(&Table::<Karis>::NEW),
         }
     }
 

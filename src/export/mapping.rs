@@ -101,18 +101,13 @@ pub fn dense_sphere() -> Vec<Angles> {
 /// Fit `formulation` to the source's S (or, for a Chiang fit exported to pbrt-v4, take it as is
 /// and check that it is).
 pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mapping> {
-    let sphere = dense_sphere();
-    let mut angles = source.measured.clone();
-    angles.extend_from_slice(&sphere);
+    let MappingTarget {
+        angles,
+        target,
+        floor,
+        n_sphere,
+    } = MappingTarget::new(source)?;
     let n = source.model.n_channels();
-    let target = source.model.scattering(&angles);
-    if target.iter().any(|s| !s.is_finite() || *s < 0.0) {
-        return Err(Error::Other(format!(
-            "{}: the fitted model's S is not finite and non-negative everywhere; refit",
-            source.dir.display()
-        )));
-    }
-    let floor = channel_floor(&target, n);
     let final_model = ChiangModel::default();
     let (params, exact, iterations, starts) = match (&source.model, formulation.tilt) {
         (SourceModel::Chiang { params: p, effects }, Tilt::Exit)
@@ -159,15 +154,9 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
     let errors_of = |p: &VariantParams<f64>| -> Vec<f64> {
         let mut fitted = vec![0.0; target.len()];
         variant_scattering_batch(p, &formulation, &final_model, &angles, &mut fitted);
-        log_floored(&fitted, &floor, n)
-            .iter()
-            .zip(log_floored(&target, &floor, n))
-            .map(|(a, b)| (a - b).abs())
-            .collect()
+        log_errors(&fitted, &target, &floor, n)
     };
     let errors = errors_of(&params);
-    let rms = |e: &[f64]| (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt();
-    let max = |e: &[f64]| e.iter().copied().fold(0.0, f64::max);
     let as_fitted = match &source.model {
         SourceModel::Chiang { effects, .. } if *effects != ChiangEffects::default() => {
             let start = &start_points(&source.model, &formulation)[0];
@@ -182,7 +171,7 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
         params,
         exact,
         n_measured,
-        n_sphere: sphere.len(),
+        n_sphere,
         rms_log: rms(&errors),
         max_log: max(&errors),
         rms_log_measured: (n_measured > 0).then(|| rms(&errors[..n_measured * n])),
@@ -196,6 +185,40 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
         ));
     }
     Ok(mapping)
+}
+
+/// What every mapping fits: the source's `S` at its measured directions followed by the dense
+/// sphere, with each channel's floor for the log residual.
+pub struct MappingTarget {
+    pub angles: Vec<Angles>,
+    /// `S` of the source, `target[k·n + c]`.
+    pub target: Vec<f64>,
+    /// Per channel: [`FLOOR_FRACTION`] × the channel's largest source value.
+    pub floor: Vec<f64>,
+    pub n_sphere: usize,
+}
+
+impl MappingTarget {
+    /// The target of `source`; an `S` that is not finite and non-negative everywhere is an error.
+    pub fn new(source: &SourceFit) -> Result<MappingTarget> {
+        let sphere = dense_sphere();
+        let mut angles = source.measured.clone();
+        angles.extend_from_slice(&sphere);
+        let n = source.model.n_channels();
+        let target = source.model.scattering(&angles);
+        if target.iter().any(|s| !s.is_finite() || *s < 0.0) {
+            return Err(Error::Other(format!(
+                "{}: the fitted model's S is not finite and non-negative everywhere; refit",
+                source.dir.display()
+            )));
+        }
+        Ok(MappingTarget {
+            floor: channel_floor(&target, n),
+            angles,
+            target,
+            n_sphere: sphere.len(),
+        })
+    }
 }
 
 fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
@@ -212,12 +235,52 @@ fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
         .collect()
 }
 
-fn log_floored(values: &[f64], floor: &[f64], n: usize) -> Vec<f64> {
+/// `ln(v + f_c)` of every value (channel c = index mod n).
+pub fn log_floored(values: &[f64], floor: &[f64], n: usize) -> Vec<f64> {
     values
         .iter()
         .enumerate()
         .map(|(k, s)| (s + floor[k % n]).ln())
         .collect()
+}
+
+/// `|ln(fitted + f_c) − ln(target + f_c)|` of every value.
+pub fn log_errors(fitted: &[f64], target: &[f64], floor: &[f64], n: usize) -> Vec<f64> {
+    log_floored(fitted, floor, n)
+        .iter()
+        .zip(log_floored(target, floor, n))
+        .map(|(a, b)| (a - b).abs())
+        .collect()
+}
+
+/// Root mean square.
+pub fn rms(e: &[f64]) -> f64 {
+    (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt()
+}
+
+/// Largest value (0 for none).
+pub fn max(e: &[f64]) -> f64 {
+    e.iter().copied().fold(0.0, f64::max)
+}
+
+/// Run the project's Levenberg–Marquardt on `problem` from `x0` for at most `max_iters` trial
+/// steps: the best point and the steps taken.
+pub fn least_squares<P>(problem: P, x0: &[f64], max_iters: u64) -> Result<(DVector<f64>, u64)>
+where
+    P: Operator<Param = DVector<f64>, Output = DVector<f64>>
+        + Jacobian<Param = DVector<f64>, Jacobian = DMatrix<f64>>,
+{
+    let res = Executor::new(problem, LevenbergMarquardt::new())
+        .configure(|s| s.param(DVector::from_column_slice(x0)).max_iters(max_iters))
+        .run()
+        .map_err(|e| Error::Other(format!("mapping fit failed: {e}")))?;
+    let state = res.state();
+    let x = state
+        .get_best_param()
+        .or(state.get_param())
+        .cloned()
+        .ok_or_else(|| Error::Other("mapping fit returned no parameters".into()))?;
+    Ok((x, state.get_iter()))
 }
 
 /// The renderer's parameters from the free variables `[η, σ_a…, β_m, β_n, α, (gain)]`.
@@ -323,22 +386,10 @@ impl MappingProblem<'_> {
 
     /// Run LM from `x0`: (cost ½‖r‖², solution, iterations).
     fn solve(&self, x0: &[f64]) -> Result<(f64, DVector<f64>, u64)> {
-        let res = Executor::new(ProblemRef(self), LevenbergMarquardt::new())
-            .configure(|s| {
-                s.param(DVector::from_column_slice(x0))
-                    .max_iters(MAX_ITERATIONS)
-            })
-            .run()
-            .map_err(|e| Error::Other(format!("mapping fit failed: {e}")))?;
-        let state = res.state();
-        let x = state
-            .get_best_param()
-            .or(state.get_param())
-            .cloned()
-            .ok_or_else(|| Error::Other("mapping fit returned no parameters".into()))?;
+        let (x, iterations) = least_squares(ProblemRef(self), x0, MAX_ITERATIONS)?;
         let r = self.residuals(x.as_slice());
         let cost = 0.5 * r.iter().map(|v| v * v).sum::<f64>();
-        Ok((cost, x, state.get_iter()))
+        Ok((cost, x, iterations))
     }
 }
 

@@ -5,10 +5,13 @@
 //!
 //! - [`source`]: what a fit directory holds (model, parameters, quality, measured directions);
 //! - [`mapping`]: the least-squares fit of a renderer's variant to the source `S`;
-//! - [`writers`]: the three file formats.
+//! - [`writers`]: the three file formats;
+//! - [`unreal`]: Unreal Engine 5's hair material inputs (the Karis family) fitted the same way,
+//!   written as a JSON file and a Python script beside it.
 
 pub mod mapping;
 pub mod source;
+pub mod unreal;
 pub mod writers;
 
 use std::fmt;
@@ -69,28 +72,9 @@ impl Renderer {
         }
     }
 
-    /// Refuse an output file named with another renderer's extension (`--to pbrt --output
-    /// hair.mtlx`): it would hold one format under another's name, which the tool opening it
-    /// by that name rejects or misreads. Any other name (the renderer's own extension, another
-    /// extension, none) is the user's choice.
+    /// Refuse an output file named with another export's extension ([`Target::check_output_name`]).
     pub fn check_output_name(&self, flag: &str, path: &Path) -> Result<()> {
-        let Some(ext) = path.extension().and_then(|e| e.to_str()) else {
-            return Ok(());
-        };
-        let Some(other) = Renderer::ALL
-            .into_iter()
-            .find(|r| r != self && ext.eq_ignore_ascii_case(r.extension()))
-        else {
-            return Ok(());
-        };
-        Err(Error::Other(format!(
-            "{flag} {}: .{ext} is the extension of {} (--to {other}), but --to {self} writes {}: \
-             name the file {}, or pass --to {other}",
-            path.display(),
-            other.file_kind(),
-            self.file_kind(),
-            path.with_extension(self.extension()).display()
-        )))
+        Target::Renderer(*self).check_output_name(flag, path)
     }
 
     /// The model a header names.
@@ -126,6 +110,101 @@ impl fmt::Display for Renderer {
             Renderer::Blender => "blender",
             Renderer::Materialx => "materialx",
         })
+    }
+}
+
+/// What `--to` names: a renderer of the Chiang model (one file), or a game engine whose own
+/// hair model is fitted (a JSON file of its material inputs and a script beside it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    Renderer(Renderer),
+    /// Unreal Engine 5's Hair shading model ([`unreal`]).
+    Unreal,
+}
+
+impl Target {
+    /// Every target, in `--to`'s order.
+    pub const ALL: [Target; 4] = [
+        Target::Renderer(Renderer::Pbrt),
+        Target::Renderer(Renderer::Blender),
+        Target::Renderer(Renderer::Materialx),
+        Target::Unreal,
+    ];
+
+    /// The extension of the (main) file written, without the dot.
+    pub fn extension(&self) -> &'static str {
+        match self {
+            Target::Renderer(r) => r.extension(),
+            Target::Unreal => "json",
+        }
+    }
+
+    /// A file name of the target's kind, for hints.
+    pub fn file_name(&self) -> &'static str {
+        match self {
+            Target::Renderer(r) => r.file_name(),
+            Target::Unreal => "hair.json",
+        }
+    }
+
+    /// What the written file is, for messages.
+    pub fn file_kind(&self) -> &'static str {
+        match self {
+            Target::Renderer(r) => r.file_kind(),
+            Target::Unreal => {
+                "an Unreal material-parameter file (JSON; its Python script goes beside it)"
+            }
+        }
+    }
+
+    /// Refuse an output file named with another target's extension (`--to pbrt --output
+    /// hair.mtlx`): it would hold one format under another's name, which the tool opening it
+    /// by that name rejects or misreads. Any other name (the target's own extension, another
+    /// extension, none) is the user's choice.
+    pub fn check_output_name(&self, flag: &str, path: &Path) -> Result<()> {
+        let Some(ext) = path.extension().and_then(|e| e.to_str()) else {
+            return Ok(());
+        };
+        if ext.eq_ignore_ascii_case(self.extension()) {
+            return Ok(());
+        }
+        let Some(other) = Target::ALL
+            .into_iter()
+            .find(|t| ext.eq_ignore_ascii_case(t.extension()))
+        else {
+            return Ok(());
+        };
+        Err(Error::Other(format!(
+            "{flag} {}: .{ext} is the extension of {} (--to {other}), but --to {self} writes {}: \
+             name the file {}, or pass --to {other}",
+            path.display(),
+            other.file_kind(),
+            self.file_kind(),
+            path.with_extension(self.extension()).display()
+        )))
+    }
+}
+
+impl FromStr for Target {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Target> {
+        match s.to_ascii_lowercase().as_str() {
+            "unreal" | "ue" | "ue5" => Ok(Target::Unreal),
+            other => other.parse().map(Target::Renderer).map_err(|_| {
+                Error::Other(format!(
+                    "unknown export target `{other}`: use --to pbrt, blender, materialx or unreal"
+                ))
+            }),
+        }
+    }
+}
+
+impl fmt::Display for Target {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Target::Renderer(r) => r.fmt(f),
+            Target::Unreal => f.write_str("unreal"),
+        }
     }
 }
 

@@ -265,7 +265,8 @@ fn held_parameters(fit: &Value) -> Vec<String> {
         .map(|w| {
             w.iter()
                 .filter_map(Value::as_str)
-                .filter(|t| t.contains("not fitted (the terms in play do not depend on it)"))
+                // "... do not depend on it" (Chiang), "... do not read it" (table families).
+                .filter(|t| t.contains("not fitted (the terms in play do not"))
                 .filter_map(|t| t.split(':').next())
                 .collect()
         })

@@ -52,7 +52,7 @@ impl ModelSetup {
 
     /// The terms of `table` that are on.
     pub fn table_terms(&self, table: &dyn DynTable) -> TermSet {
-        self.terms.unwrap_or(TermSet::all(table.terms().len()))
+        self.terms.unwrap_or(table.default_terms())
     }
 
     /// The setup a result file records: `model`, Chiang's record, a table family's term names

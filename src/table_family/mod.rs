@@ -12,6 +12,7 @@
 pub mod deon;
 pub mod file;
 pub mod kajiya_kay;
+pub mod karis;
 
 use std::marker::PhantomData;
 
@@ -281,6 +282,11 @@ pub trait TableFamily: Send + Sync + 'static {
     /// A `--fix` item for messages to show.
     const FIX_EXAMPLE: &'static str;
 
+    /// The terms on without `--terms` (every term unless the family says otherwise).
+    fn default_terms() -> TermSet {
+        TermSet::all(Self::TERMS.len())
+    }
+
     /// Each channel's `S` term by term (`out[c][k]` for [`TableFamily::TERMS`]`[k]`; they add
     /// up to `S`) at angles `a` with the terms `on`. `out` comes zeroed; a term that is off is
     /// not computed and stays zero.
@@ -336,6 +342,8 @@ pub trait DynTable: Sync {
     fn title(&self) -> &'static str;
     fn terms(&self) -> &'static [Term];
     fn facts(&self) -> &'static [Fact];
+    /// The terms on without `--terms`.
+    fn default_terms(&self) -> TermSet;
     /// `S` of a batch, `out[k·nc + c]`.
     fn eval_batch(&self, p: &TableParams<f64>, on: TermSet, angles: &[Angles], out: &mut [f64]);
     /// Per-column values `[R, TT, TRT]` per channel at one direction pair.
@@ -354,6 +362,9 @@ impl<F: TableFamily> DynTable for Table<F> {
     }
     fn facts(&self) -> &'static [Fact] {
         F::PARAMETERS
+    }
+    fn default_terms(&self) -> TermSet {
+        F::default_terms()
     }
     fn eval_batch(&self, p: &TableParams<f64>, on: TermSet, angles: &[Angles], out: &mut [f64]) {
         let nc = p.n_channels;
@@ -382,9 +393,10 @@ impl std::fmt::Debug for dyn DynTable {
 }
 
 /// Every table family, in `--model` order.
-pub const ALL: [&dyn DynTable; 2] = [
+pub const ALL: [&dyn DynTable; 3] = [
     &Table::<kajiya_kay::KajiyaKay>::NEW,
     &Table::<deon::DEon>::NEW,
+    &Table::<karis::Karis>::NEW,
 ];
 
 /// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,

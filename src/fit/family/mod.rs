@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::family::{FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 use crate::fit::{FitData, FitOptions, FitOutcome, FitParam};
-use crate::table_family::{deon::DEon, kajiya_kay::KajiyaKay, Table};
+use crate::table_family::{deon::DEon, kajiya_kay::KajiyaKay, karis::Karis, Table};
 
 /// What a fit is given: the samples, the file they came from (for messages and fit.json), the
 /// loader's report of that file, and the options.
@@ -89,5 +89,6 @@ pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
         ModelFamily::Chiang => &chiang::Chiang,
         ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
         ModelFamily::DEon => &Table::<DEon>::NEW,
+        ModelFamily::Karis => &Table::<Karis>::NEW,
     }
 }

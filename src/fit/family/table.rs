@@ -254,7 +254,7 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
     } = i;
     let started = Instant::now();
     let nc = require_samples(data, file)?;
-    let on = opts.terms.unwrap_or(TermSet::all(F::TERMS.len()));
+    let on = opts.terms.unwrap_or(F::default_terms());
     let forward = TableForward::<F>::new(on, opts.measurement);
     let mut warnings = Vec::new();
     let params_of = |on: TermSet| -> Vec<TableParam<F>> {
