@@ -36,6 +36,9 @@ pub enum ModelFamily {
     #[serde(rename = "kajiya-kay")]
     #[value(name = "kajiya-kay")]
     KajiyaKay,
+    #[serde(rename = "frostbite")]
+    #[value(name = "frostbite")]
+    Frostbite,
 }
 
 impl ModelFamily {
@@ -49,10 +52,11 @@ impl ModelFamily {
     }
 
     /// Every family, Marschner first (the order `compare --models all` reports them in).
-    pub const ALL: [ModelFamily; 3] = [
+    pub const ALL: [ModelFamily; 4] = [
         ModelFamily::Marschner,
         ModelFamily::Chiang,
         ModelFamily::KajiyaKay,
+        ModelFamily::Frostbite,
     ];
 
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
@@ -69,10 +73,11 @@ impl ModelFamily {
 
     /// The table family this is, or `None` for Marschner and Chiang.
     pub fn table(self) -> Option<&'static dyn DynTable> {
-        use table_family::{kajiya_kay::KajiyaKay, Table};
+        use table_family::{frostbite::Frostbite, kajiya_kay::KajiyaKay, Table};
         match self {
             ModelFamily::Marschner | ModelFamily::Chiang => None,
             ModelFamily::KajiyaKay => Some(&Table::<KajiyaKay>::NEW),
+            ModelFamily::Frostbite => Some(&Table::<Frostbite>::NEW),
         }
     }
 

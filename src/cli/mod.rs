@@ -32,11 +32,13 @@ pub fn tell(line: std::fmt::Arguments<'_>) {
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
     /// Model family: `marschner` (Marschner 2003), `chiang` (Chiang 2016, pbrt-v4's hair),
-    /// `kajiya-kay` (Kajiya-Kay 1989); docs/families.md lists each one's parameters and terms.
+    /// `kajiya-kay` (Kajiya-Kay 1989), `frostbite` (Tafuri 2019 as Unity HDRP's physical hair
+    /// evaluates it, docs/frostbite.md); docs/families.md lists each one's parameters and terms.
     #[arg(long = "model", value_enum, default_value_t = ModelFamily::Marschner)]
     pub family: ModelFamily,
     /// Terms of S, comma-separated [default: all]: Chiang's R, TT, TRT, residual; a table
-    /// family's own (kajiya-kay: diffuse, specular). Not for marschner (see --lobes).
+    /// family's own (kajiya-kay: diffuse, specular; frostbite: R, TT, TRT). Not for marschner
+    /// (see --lobes).
     #[arg(long)]
     pub terms: Option<String>,
     /// Chiang only: Gauss-Legendre nodes of the width integral [default: 1024].

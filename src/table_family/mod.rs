@@ -10,6 +10,7 @@
 //! read is not fitted ([`Fact::terms`]).
 
 pub mod file;
+pub mod frostbite;
 pub mod kajiya_kay;
 
 use std::marker::PhantomData;
@@ -381,7 +382,10 @@ impl std::fmt::Debug for dyn DynTable {
 }
 
 /// Every table family, in `--model` order.
-pub const ALL: [&dyn DynTable; 1] = [&Table::<kajiya_kay::KajiyaKay>::NEW];
+pub const ALL: [&dyn DynTable; 2] = [
+    &Table::<kajiya_kay::KajiyaKay>::NEW,
+    &Table::<frostbite::Frostbite>::NEW,
+];
 
 /// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,
 /// what the report draws): no glints, no eccentricity.
