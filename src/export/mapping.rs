@@ -198,7 +198,8 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
     Ok(mapping)
 }
 
-fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
+/// Each channel's floor `f_c`: [`FLOOR_FRACTION`] × its largest value (`values[k·n + c]`).
+pub fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
     (0..n)
         .map(|c| {
             let peak = values
@@ -212,7 +213,8 @@ fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
         .collect()
 }
 
-fn log_floored(values: &[f64], floor: &[f64], n: usize) -> Vec<f64> {
+/// `ln(value + f_c)` for every row.
+pub fn log_floored(values: &[f64], floor: &[f64], n: usize) -> Vec<f64> {
     values
         .iter()
         .enumerate()

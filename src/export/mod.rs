@@ -5,10 +5,15 @@
 //!
 //! - [`source`]: what a fit directory holds (model, parameters, quality, measured directions);
 //! - [`mapping`]: the least-squares fit of a renderer's variant to the source `S`;
-//! - [`writers`]: the three file formats.
+//! - [`writers`]: the three file formats;
+//! - [`unity`] (with [`log_fit`] and [`unity_script`]): Unity HDRP's hair inputs, fitted through
+//!   the frostbite family rather than a Chiang variant, as a JSON file and a C# editor script.
 
+pub mod log_fit;
 pub mod mapping;
 pub mod source;
+pub mod unity;
+pub mod unity_script;
 pub mod writers;
 
 use std::fmt;
@@ -27,15 +32,19 @@ pub enum Renderer {
     Pbrt,
     Blender,
     Materialx,
+    /// Unity HDRP's hair (Physical): not a Chiang variant, see [`unity`].
+    Unity,
 }
 
 impl Renderer {
-    /// How the renderer's `f` differs from pbrt-v4's (docs/chiang.md).
-    pub fn formulation(&self) -> Formulation {
+    /// How the renderer's `f` differs from pbrt-v4's (docs/chiang.md); `None` for an engine
+    /// that renders no Chiang variant.
+    pub fn formulation(&self) -> Option<Formulation> {
         match self {
-            Renderer::Pbrt => Formulation::PBRT_V4,
-            Renderer::Blender => Formulation::CYCLES,
-            Renderer::Materialx => Formulation::MATERIALX,
+            Renderer::Pbrt => Some(Formulation::PBRT_V4),
+            Renderer::Blender => Some(Formulation::CYCLES),
+            Renderer::Materialx => Some(Formulation::MATERIALX),
+            Renderer::Unity => None,
         }
     }
 
@@ -45,11 +54,17 @@ impl Renderer {
             Renderer::Pbrt => "hair.pbrt",
             Renderer::Blender => "hair.py",
             Renderer::Materialx => "hair.mtlx",
+            Renderer::Unity => "hair.json",
         }
     }
 
     /// Every renderer, in `--to`'s order.
-    pub const ALL: [Renderer; 3] = [Renderer::Pbrt, Renderer::Blender, Renderer::Materialx];
+    pub const ALL: [Renderer; 4] = [
+        Renderer::Pbrt,
+        Renderer::Blender,
+        Renderer::Materialx,
+        Renderer::Unity,
+    ];
 
     /// The extension of the file the renderer loads (without the dot).
     pub fn extension(&self) -> &'static str {
@@ -57,6 +72,7 @@ impl Renderer {
             Renderer::Pbrt => "pbrt",
             Renderer::Blender => "py",
             Renderer::Materialx => "mtlx",
+            Renderer::Unity => "json",
         }
     }
 
@@ -66,6 +82,7 @@ impl Renderer {
             Renderer::Pbrt => "a pbrt-v4 MakeNamedMaterial block",
             Renderer::Blender => "a Blender Python script",
             Renderer::Materialx => "a MaterialX document",
+            Renderer::Unity => "a Unity HDRP hair material (JSON, its C# editor script beside it)",
         }
     }
 
@@ -101,6 +118,7 @@ impl Renderer {
                 "Blender Cycles Principled Hair BSDF, model Chiang (tilt on theta_i)"
             }
             Renderer::Materialx => "MaterialX chiang_hair_bsdf (tilt on theta_i, f/pi, tints)",
+            Renderer::Unity => "Unity HDRP Hair, Material Type Physical (the frostbite family)",
         }
     }
 }
@@ -112,8 +130,9 @@ impl FromStr for Renderer {
             "pbrt" | "pbrt-v4" => Ok(Renderer::Pbrt),
             "blender" | "cycles" => Ok(Renderer::Blender),
             "materialx" | "mtlx" => Ok(Renderer::Materialx),
+            "unity" | "hdrp" => Ok(Renderer::Unity),
             other => Err(Error::Other(format!(
-                "unknown renderer `{other}`: use --to pbrt, blender or materialx"
+                "unknown renderer `{other}`: use --to pbrt, blender, materialx or unity"
             ))),
         }
     }
@@ -125,6 +144,7 @@ impl fmt::Display for Renderer {
             Renderer::Pbrt => "pbrt",
             Renderer::Blender => "blender",
             Renderer::Materialx => "materialx",
+            Renderer::Unity => "unity",
         })
     }
 }
@@ -141,11 +161,17 @@ pub struct Export {
     pub warnings: Vec<String>,
 }
 
-/// Export the fit in `dir` for `renderer`.
+/// Export the fit in `dir` for a `renderer` of the Chiang model (`--to unity` writes two files:
+/// [`unity::export_unity`]).
 pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
+    let Some(formulation) = renderer.formulation() else {
+        return Err(Error::Other(format!(
+            "--to {renderer} renders no Chiang variant: its export is unity::export_unity"
+        )));
+    };
     let source = SourceFit::load(dir)?;
     let rgb_channels = source.rgb_order()?;
-    let mapping = fit_mapping(&source, renderer.formulation())?;
+    let mapping = fit_mapping(&source, formulation)?;
     let warnings = unrepresentable(&source, renderer, &mapping);
     let header = writers::header_lines(&source, renderer, &mapping, &rgb_channels, &warnings);
     let name = writers::material_name(&source);
@@ -153,6 +179,7 @@ pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
         Renderer::Pbrt => writers::pbrt(&name, &header, &mapping),
         Renderer::Blender => writers::blender(&name, &header, &mapping),
         Renderer::Materialx => writers::materialx(&name, &header, &mapping),
+        Renderer::Unity => unreachable!("handled above: no Chiang formulation"),
     };
     let summary = format!(
         "export to {renderer}: {} from the {} fit in {}: {}",

@@ -62,6 +62,7 @@ pub fn header_lines(
              was fitted, and the grey tints carry the fitted gain (about pi); roughness pairs \
              come from chiang_hair_roughness (scale_TT 0.5, scale_TRT 2 as in pbrt)"
         }
+        Renderer::Unity => "HDRP's inputs (docs/export.md, Unity); Cuticle Angle in degrees",
     };
     lines.push(note.into());
     lines
