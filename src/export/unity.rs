@@ -28,7 +28,8 @@ use crate::table_family::{TableFamily, TableParams, TermSet};
 /// The HDRP behaviour the inputs are fitted to (docs/frostbite.md, "Which HDRP").
 pub const HDRP_CONVENTIONS: &str = "Unity HDRP Hair Master Stack, Material Type Physical, the \
      non-cinematic raster path of Runtime/Material/Hair/Hair.hlsl as on the Unity-Technologies/\
-     Graphics master branch of the HDRP 17 (Unity 6) line; IOR fixed at 1.55";
+     Graphics master branch (Unity 6 / HDRP 17 line or later; the release was not pinned); IOR \
+     fixed at 1.55";
 
 /// HDRP's IOR (not an input).
 pub const HDRP_IOR: f64 = 1.55;
