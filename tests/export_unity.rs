@@ -9,7 +9,9 @@ mod export_support;
 
 use std::path::{Path, PathBuf};
 
-use cli::{failed, hairfit, hairfit_ok, stderr};
+use std::process::Output;
+
+use cli::{failed, hairfit, stderr};
 use export_support::marschner_fit_dir;
 use hairfit::export::unity::fit_unity;
 use hairfit::export::SourceFit;
@@ -37,6 +39,16 @@ fn frostbite_fit_dir(root: &Path, name: &str, params: &str, terms: Option<&[&str
     dir
 }
 
+/// `hairfit export DIR --to unity --output JSON`, whatever its exit status.
+fn to_unity(dir: &Path, json: &Path) -> Output {
+    hairfit(&["export", p(dir), "--to", "unity", "--output", p(json)])
+}
+
+/// The stderr of a successful `--to unity` export.
+fn exported(dir: &Path, json: &Path) -> String {
+    stderr(&cli::succeeded(to_unity(dir, json), &["export --to unity"]))
+}
+
 const BROWN: &str = r#"{"model": "frostbite", "base_color": [0.3, 0.18, 0.08],
     "smoothness": 0.82, "radial_smoothness": 0.6, "cuticle_angle_deg": 2.5}"#;
 
@@ -47,7 +59,7 @@ fn a_frostbite_fit_exports_its_own_inputs() {
     let root = tempfile::tempdir().unwrap();
     let dir = frostbite_fit_dir(root.path(), "brown", BROWN, None);
     let m = fit_unity(&SourceFit::load(&dir).unwrap()).unwrap();
-    assert!(m.rms_log < 1e-12 && m.max_log < 1e-10, "{m:?}");
+    assert!(m.errors.rms < 1e-12 && m.errors.max < 1e-10, "{m:?}");
     let u = &m.inputs;
     for (got, want) in u.base_color.iter().zip([0.3, 0.18, 0.08]) {
         assert!((got - want).abs() < 1e-9, "{u:?}");
@@ -71,8 +83,7 @@ fn the_cli_writes_the_json_and_the_editor_script() {
     let dir = frostbite_fit_dir(root.path(), "brown", BROWN, None);
     let json = root.path().join("out").join("brown_unity.json");
     std::fs::create_dir_all(json.parent().unwrap()).unwrap();
-    let out = hairfit_ok(&["export", p(&dir), "--to", "unity", "--output", p(&json)]);
-    let err = stderr(&out);
+    let err = exported(&dir, &json);
     assert!(
         err.contains("rms |d ln S| 0.0000") && err.contains("brown_unity.cs"),
         "{err}"
@@ -124,7 +135,7 @@ fn a_marschner_fit_exports_with_a_finite_stated_loss() {
     let root = tempfile::tempdir().unwrap();
     let dir = marschner_fit_dir(root.path(), "m");
     let json = root.path().join("m.json");
-    let out = hairfit_ok(&["export", p(&dir), "--to", "unity", "--output", p(&json)]);
+    let err = exported(&dir, &json);
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rms = v["mapping"]["rms_abs_d_ln_s"].as_f64().unwrap();
@@ -132,7 +143,7 @@ fn a_marschner_fit_exports_with_a_finite_stated_loss() {
     println!("Marschner fit to Unity: rms {rms:.4}, max {max:.3}");
     assert!(rms.is_finite() && rms > 0.05 && rms < 1.0, "{rms}");
     assert!(max >= rms);
-    assert!(stderr(&out).contains(&format!("rms |d ln S| {rms:.4}")));
+    assert!(err.contains(&format!("rms |d ln S| {rms:.4}")));
     assert_eq!(v["source_fit"]["model"], "Marschner");
 }
 
@@ -143,16 +154,9 @@ fn what_hdrp_cannot_render_is_warned_about() {
     let root = tempfile::tempdir().unwrap();
     let dir = frostbite_fit_dir(root.path(), "r", BROWN, Some(&["R"]));
     let m = fit_unity(&SourceFit::load(&dir).unwrap()).unwrap();
-    assert!(m.rms_log > 1e-3, "{m:?}");
+    assert!(m.errors.rms > 1e-3, "{m:?}");
     let json = root.path().join("r.json");
-    let err = stderr(&hairfit_ok(&[
-        "export",
-        p(&dir),
-        "--to",
-        "unity",
-        "--output",
-        p(&json),
-    ]));
+    let err = exported(&dir, &json);
     assert!(
         err.contains("warning: the fit ran with terms R only"),
         "{err}"
@@ -164,14 +168,7 @@ fn what_hdrp_cannot_render_is_warned_about() {
     );
     let dir = frostbite_fit_dir(root.path(), "eta", &eta, None);
     let json = root.path().join("eta.json");
-    let err = stderr(&hairfit_ok(&[
-        "export",
-        p(&dir),
-        "--to",
-        "unity",
-        "--output",
-        p(&json),
-    ]));
+    let err = exported(&dir, &json);
     assert!(err.contains("freed eta (1.7000)"), "{err}");
 }
 
@@ -185,33 +182,12 @@ fn output_names_are_checked_as_for_the_other_renderers() {
     let e = failed(&hairfit(&["export", p(&dir), "--to", "unity"]));
     assert!(e.contains("--output NAME.json"), "{e}");
     let cs = root.path().join("hair.cs");
-    let e = failed(&hairfit(&[
-        "export",
-        p(&dir),
-        "--to",
-        "unity",
-        "--output",
-        p(&cs),
-    ]));
+    let e = failed(&to_unity(&dir, &cs));
     assert!(e.contains("hair.json") && e.contains(".cs"), "{e}");
     let mtlx = root.path().join("hair.mtlx");
-    let e = failed(&hairfit(&[
-        "export",
-        p(&dir),
-        "--to",
-        "unity",
-        "--output",
-        p(&mtlx),
-    ]));
+    let e = failed(&to_unity(&dir, &mtlx));
     assert!(e.contains("--to materialx"), "{e}");
-    let e = failed(&hairfit(&[
-        "export",
-        p(&dir),
-        "--to",
-        "unity",
-        "--output",
-        p(root.path()),
-    ]));
+    let e = failed(&to_unity(&dir, root.path()));
     assert!(e.contains("directory"), "{e}");
     let json = root.path().join("hair.json");
     let e = failed(&hairfit(&[
@@ -239,13 +215,6 @@ fn a_fit_that_is_not_rgb_is_refused() {
     std::fs::write(dir.join("params.json"), two).unwrap();
     std::fs::write(dir.join("fit.json"), "{}").unwrap();
     let json = root.path().join("two.json");
-    let e = failed(&hairfit(&[
-        "export",
-        p(&dir),
-        "--to",
-        "unity",
-        "--output",
-        p(&json),
-    ]));
+    let e = failed(&to_unity(&dir, &json));
     assert!(e.contains("2 channels") && e.contains("RGB"), "{e}");
 }

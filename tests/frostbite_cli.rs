@@ -20,6 +20,13 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     path
 }
 
+/// `hairfit CMD --model frostbite ARGS…`, which must succeed.
+fn frostbite(cmd: &str, args: &[&str]) -> std::process::Output {
+    let mut all = vec![cmd, "--model", "frostbite"];
+    all.extend_from_slice(args);
+    hairfit_ok(&all)
+}
+
 const TRUTH: &str = r#"{"model": "frostbite", "base_color": [0.15, 0.4, 0.75],
     "smoothness": 0.88, "radial_smoothness": 0.65, "cuticle_angle_deg": 2.5}"#;
 
@@ -36,35 +43,28 @@ fn synth_then_fit_recovers_noise_free_truth() {
     let dir = tempfile::tempdir().unwrap();
     let truth = write(dir.path(), "truth.json", TRUTH);
     let data = dir.path().join("d.csv");
-    hairfit_ok(&[
+    frostbite(
         "synth",
-        "--model",
-        "frostbite",
-        "--params",
-        p(&truth),
-        "--rig",
-        "sphere:n=1500:max=80",
-        "--scale",
-        "2,1.5,1",
-        "--seed",
-        "4",
-        "--output",
-        p(&data),
-    ]);
+        &[
+            "--params",
+            p(&truth),
+            "--rig",
+            "sphere:n=1500:max=80",
+            "--scale",
+            "2,1.5,1",
+            "--seed",
+            "4",
+            "--output",
+            p(&data),
+        ],
+    );
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
     assert_eq!(t.params.family(), hairfit::family::ModelFamily::Frostbite);
     let out = dir.path().join("fit");
-    let summary = stdout(&hairfit_ok(&[
+    let summary = stdout(&frostbite(
         "fit",
-        p(&data),
-        "--model",
-        "frostbite",
-        "--starts",
-        "4",
-        "--no-progress",
-        "--out",
-        p(&out),
-    ]));
+        &[p(&data), "--starts", "4", "--no-progress", "--out", p(&out)],
+    ));
     assert!(summary.contains("model: frostbite"), "{summary}");
     let fit = FitJson::load(&out.join("fit.json")).unwrap();
     for (name, want) in [
@@ -93,14 +93,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
 fn demo_recovers_the_truth_within_its_standard_errors() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("demo");
-    let text = stdout(&hairfit_ok(&[
-        "demo",
-        "--model",
-        "frostbite",
-        "--no-progress",
-        "--out",
-        p(&out),
-    ]));
+    let text = stdout(&frostbite("demo", &["--no-progress", "--out", p(&out)]));
     assert!(text.contains("verdict: good"), "{text}");
     let fit = FitJson::load(&out.join("fit.json")).unwrap();
     let truth: serde_json::Value =
@@ -131,33 +124,33 @@ fn terms_switch_lobes_and_the_parameters_fitted() {
     let dir = tempfile::tempdir().unwrap();
     let truth = write(dir.path(), "truth.json", TRUTH);
     let data = dir.path().join("r.csv");
-    hairfit_ok(&[
+    frostbite(
         "synth",
-        "--model",
-        "frostbite",
-        "--terms",
-        "R",
-        "--params",
-        p(&truth),
-        "--rig",
-        "sphere:n=600:max=80",
-        "--output",
-        p(&data),
-    ]);
+        &[
+            "--terms",
+            "R",
+            "--params",
+            p(&truth),
+            "--rig",
+            "sphere:n=600:max=80",
+            "--output",
+            p(&data),
+        ],
+    );
     let out = dir.path().join("fit");
-    hairfit_ok(&[
+    frostbite(
         "fit",
-        p(&data),
-        "--model",
-        "frostbite",
-        "--terms",
-        "R",
-        "--starts",
-        "2",
-        "--no-progress",
-        "--out",
-        p(&out),
-    ]);
+        &[
+            p(&data),
+            "--terms",
+            "R",
+            "--starts",
+            "2",
+            "--no-progress",
+            "--out",
+            p(&out),
+        ],
+    );
     let fit = FitJson::load(&out.join("fit.json")).unwrap();
     let base = fit
         .parameters

@@ -13,13 +13,13 @@ use hairfit::fit::{fit_family, FitOptions};
 use hairfit::model::{Angles, Measurement};
 use hairfit::synth::{Acquisition, Noise, Source};
 use hairfit::table_family::{
-    demo_params, every_parameter, kajiya_kay::KajiyaKay, DynTable, TableFamily, TableParamFile,
-    TableParams, TermSet, ALL,
+    demo_params, every_parameter, frostbite::Frostbite, kajiya_kay::KajiyaKay, DynTable,
+    TableFamily, TableParamFile, TableParams, TermSet, ALL,
 };
 
 /// The families this file runs its battery on; [`every_family_has_a_battery`] fails when a
 /// family joins `table_family::ALL` without one.
-const BATTERIES: &[&str] = &["kajiya-kay"];
+const BATTERIES: &[&str] = &["kajiya-kay", "frostbite"];
 
 #[test]
 fn every_family_has_a_battery() {
@@ -30,6 +30,11 @@ fn every_family_has_a_battery() {
 #[test]
 fn kajiya_kay() {
     battery::<KajiyaKay>();
+}
+
+#[test]
+fn frostbite() {
+    battery::<Frostbite>();
 }
 
 /// Each family's page, docs/NAME.md, holds its parameter table exactly as the code has it, and

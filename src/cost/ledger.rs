@@ -115,9 +115,9 @@ mod tests {
         let mut rows = vec![
             row("a", 1.0, 1.0),
             row("a", 2.0, 0.5),
-            row("a", 3.0, 0.6),   // dominated by (2, 0.5)
-            row("a", 2.0, 0.5),   // tie: neither strictly better, both stay
-            row("b", 10.0, 10.0), // alone in its section
+            row("a", 3.0, 0.6),      // dominated by (2, 0.5)
+            row("a", 2.0, 0.5),      // tie: neither strictly better, both stay
+            row("b", 10.0, 10.0),    // alone in its section
             row("c", 1.0, f64::NAN), // no error: on no front
         ];
         mark_pareto(&mut rows);

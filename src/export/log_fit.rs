@@ -63,6 +63,26 @@ pub fn largest(e: &[f64]) -> f64 {
     e.iter().copied().fold(0.0, f64::max)
 }
 
+/// How far an engine's S is from the source's: rms and max `|Δ ln S|` over every row, and the
+/// rms over the measured directions' rows (they come first), None without any.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogErrors {
+    pub rms: f64,
+    pub max: f64,
+    pub rms_measured: Option<f64>,
+}
+
+impl LogErrors {
+    /// The summary of `errors`, whose first `measured_rows` rows are the measured directions'.
+    pub fn of(errors: &[f64], measured_rows: usize) -> LogErrors {
+        LogErrors {
+            rms: rms(errors),
+            max: largest(errors),
+            rms_measured: (measured_rows > 0).then(|| rms(&errors[..measured_rows])),
+        }
+    }
+}
+
 /// The best of the LM runs: its variables, cost `½‖r‖²`, and the work done.
 #[derive(Debug, Clone)]
 pub struct LogFit {

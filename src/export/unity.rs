@@ -10,7 +10,7 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
-use super::log_fit::{fit_log, largest, rms, LogFit, LogModel, LogTarget};
+use super::log_fit::{fit_log, largest, LogErrors, LogFit, LogModel, LogTarget};
 use super::mapping::dense_sphere;
 use super::source::{SourceFit, SourceModel};
 use super::unity_script::{csharp_identifier, script};
@@ -262,20 +262,18 @@ fn starting_inputs(model: &SourceModel, n: usize) -> Vec<UnityInputs> {
 #[derive(Debug, Clone)]
 pub struct UnityMapping {
     pub inputs: UnityInputs,
-    pub n_measured: usize,
-    pub n_sphere: usize,
-    pub rms_log: f64,
-    pub max_log: f64,
-    pub rms_log_measured: Option<f64>,
-    pub iterations: u64,
-    pub starts: usize,
+    /// `gain · S` against the source.
+    pub errors: LogErrors,
+    /// What HDRP renders with its clamp, `gain · min(S, 1)`, against the source.
+    pub clamped: LogErrors,
+    /// Directions: measured (curves.csv), then the dense sphere.
+    pub directions: (usize, usize),
+    /// LM iterations, and starts.
+    pub work: (u64, usize),
     /// The largest S (without the gain) at the fitted inputs over every direction and channel,
     /// and how many direction-channel values exceed 1 (HDRP clamps S at 1).
     pub max_s: f64,
     pub above_one: usize,
-    /// rms and max `|Δ ln S|` of what HDRP renders with its clamp, `gain · min(S, 1)`.
-    pub rms_log_clamped: f64,
-    pub max_log_clamped: f64,
 }
 
 /// Fit HDRP's inputs and one gain to the source's S over its measured directions and the dense
@@ -305,22 +303,15 @@ pub fn fit_unity(source: &SourceFit) -> Result<UnityMapping> {
         ..
     } = fit_log(&model, &target, &starts)?;
     let values = model.values(&x);
-    let errors = target.errors(&values);
     let inputs = inputs_of(&x, n);
-    let n_measured = source.measured.len();
+    let measured_rows = source.measured.len() * n;
     let unscaled: Vec<f64> = values.iter().map(|v| v / inputs.gain).collect();
     let clamped: Vec<f64> = unscaled.iter().map(|v| v.min(1.0) * inputs.gain).collect();
-    let clamped_errors = target.errors(&clamped);
     Ok(UnityMapping {
-        rms_log_clamped: rms(&clamped_errors),
-        max_log_clamped: largest(&clamped_errors),
-        n_measured,
-        n_sphere: sphere.len(),
-        rms_log: rms(&errors),
-        max_log: largest(&errors),
-        rms_log_measured: (n_measured > 0).then(|| rms(&errors[..n_measured * n])),
-        iterations,
-        starts,
+        errors: LogErrors::of(&target.errors(&values), measured_rows),
+        clamped: LogErrors::of(&target.errors(&clamped), measured_rows),
+        directions: (source.measured.len(), sphere.len()),
+        work: (iterations, starts),
         max_s: largest(&unscaled),
         above_one: unscaled.iter().filter(|&&v| v > 1.0).count(),
         inputs,
@@ -359,11 +350,11 @@ fn warnings(source: &SourceFit, m: &UnityMapping) -> Vec<String> {
              HDRP clamps S at 1 per channel (saturate), which costs rms |d ln S| {:.4} (max \
              {:.3}) instead of {:.4}",
             m.above_one,
-            (m.n_measured + m.n_sphere) * m.inputs.base_color.len(),
+            (m.directions.0 + m.directions.1) * m.inputs.base_color.len(),
             m.max_s,
-            m.rms_log_clamped,
-            m.max_log_clamped,
-            m.rms_log
+            m.clamped.rms,
+            m.clamped.max,
+            m.errors.rms
         ));
     }
     let u = &m.inputs;
@@ -411,14 +402,15 @@ pub fn export_unity(dir: &Path, script_file: &str) -> Result<UnityExport> {
 
 /// One line: how well the inputs reproduce the source's S.
 pub fn quality_text(m: &UnityMapping) -> String {
-    let measured = m
-        .rms_log_measured
+    let e = &m.errors;
+    let measured = e
+        .rms_measured
         .map(|r| format!(", measured directions only {r:.4}"))
         .unwrap_or_default();
     format!(
         "fitted over {} measured + {} sphere directions: rms |d ln S| {:.4} (max {:.3}{measured}), \
          light gain {:.4}, {} LM iterations from {} starts",
-        m.n_measured, m.n_sphere, m.rms_log, m.max_log, m.inputs.gain, m.iterations, m.starts
+        m.directions.0, m.directions.1, e.rms, e.max, m.inputs.gain, m.work.0, m.work.1
     )
 }
 
@@ -464,17 +456,17 @@ fn json_text(
         "held": { "ior": HDRP_IOR },
         "light_gain": u.gain,
         "mapping": {
-            "rms_abs_d_ln_s": m.rms_log,
-            "max_abs_d_ln_s": m.max_log,
-            "rms_abs_d_ln_s_measured": m.rms_log_measured,
-            "measured_directions": m.n_measured,
-            "sphere_directions": m.n_sphere,
+            "rms_abs_d_ln_s": m.errors.rms,
+            "max_abs_d_ln_s": m.errors.max,
+            "rms_abs_d_ln_s_measured": m.errors.rms_measured,
+            "measured_directions": m.directions.0,
+            "sphere_directions": m.directions.1,
             "floor_fraction": super::mapping::FLOOR_FRACTION,
-            "lm_iterations": m.iterations,
-            "starts": m.starts,
+            "lm_iterations": m.work.0,
+            "starts": m.work.1,
             "max_s": m.max_s,
-            "rms_abs_d_ln_s_with_hdrp_clamp": m.rms_log_clamped,
-            "max_abs_d_ln_s_with_hdrp_clamp": m.max_log_clamped,
+            "rms_abs_d_ln_s_with_hdrp_clamp": m.clamped.rms,
+            "max_abs_d_ln_s_with_hdrp_clamp": m.clamped.max,
         },
         "source_fit": {
             "dir": source.dir.display().to_string(),
