@@ -42,6 +42,9 @@ pub enum ModelFamily {
     #[serde(rename = "karis")]
     #[value(name = "karis")]
     Karis,
+    #[serde(rename = "frostbite")]
+    #[value(name = "frostbite")]
+    Frostbite,
 }
 
 impl ModelFamily {
@@ -55,12 +58,13 @@ impl ModelFamily {
     }
 
     /// Every family, Marschner first (the order `compare --models all` reports them in).
-    pub const ALL: [ModelFamily; 5] = [
+    pub const ALL: [ModelFamily; 6] = [
         ModelFamily::Marschner,
         ModelFamily::Chiang,
         ModelFamily::KajiyaKay,
         ModelFamily::DEon,
         ModelFamily::Karis,
+        ModelFamily::Frostbite,
     ];
 
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
@@ -77,12 +81,15 @@ impl ModelFamily {
 
     /// The table family this is, or `None` for Marschner and Chiang.
     pub fn table(self) -> Option<&'static dyn DynTable> {
-        use table_family::{deon::DEon, kajiya_kay::KajiyaKay, karis::Karis, Table};
+        use table_family::{
+            deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis, Table,
+        };
         match self {
             ModelFamily::Marschner | ModelFamily::Chiang => None,
             ModelFamily::KajiyaKay => Some(&Table::<KajiyaKay>::NEW),
             ModelFamily::DEon => Some(&Table::<DEon>::NEW),
             ModelFamily::Karis => Some(&Table::<Karis>::NEW),
+            ModelFamily::Frostbite => Some(&Table::<Frostbite>::NEW),
         }
     }
 

@@ -263,6 +263,6 @@ fn outputs_are_named_as_the_other_exports_name_theirs() {
     cli::assert_fails_with(&out, &["would replace the fit", "fit.json"]);
     assert_eq!(std::fs::read_to_string(&own).unwrap(), before);
     let out = hairfit(&["export", s(&dir), "--to", "unity3"]);
-    assert!(stderr(&out).contains("pbrt, blender, materialx or unreal"));
+    assert!(stderr(&out).contains("pbrt, blender, materialx, unreal or unity"));
     assert!(!py.exists() && !json_out.exists());
 }

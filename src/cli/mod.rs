@@ -33,12 +33,14 @@ pub fn tell(line: std::fmt::Arguments<'_>) {
 pub struct ModelArgs {
     /// Model family: `marschner` (Marschner 2003), `chiang` (Chiang 2016, pbrt-v4's hair),
     /// `kajiya-kay` (Kajiya-Kay 1989), `deon` (d'Eon et al. 2011), `karis` (Karis 2016 as
-    /// Unreal Engine 5 renders it); docs/families.md lists each one's parameters and terms.
+    /// Unreal Engine 5 renders it), `frostbite` (Tafuri 2019 as Unity HDRP's physical hair
+    /// evaluates it); docs/families.md lists each one's parameters and terms.
     #[arg(long = "model", value_enum, default_value_t = ModelFamily::Marschner)]
     pub family: ModelFamily,
     /// Terms of S, comma-separated [default: all]: Chiang's R, TT, TRT, residual; a table
     /// family's own (kajiya-kay: diffuse, specular; deon: R, TT, TRT, residual; karis: R, TT,
-    /// TRT, scatter, default without scatter). Not for marschner (see --lobes).
+    /// TRT, scatter, default without scatter; frostbite: R, TT, TRT). Not for marschner (see
+    /// --lobes).
     #[arg(long)]
     pub terms: Option<String>,
     /// Chiang only: Gauss-Legendre nodes of the width integral [default: 1024].

@@ -221,7 +221,8 @@ impl MappingTarget {
     }
 }
 
-fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
+/// Each channel's floor `f_c`: [`FLOOR_FRACTION`] × its largest value (`values[k·n + c]`).
+pub fn channel_floor(values: &[f64], n: usize) -> Vec<f64> {
     (0..n)
         .map(|c| {
             let peak = values

@@ -7,10 +7,14 @@
 //! - [`mapping`]: the least-squares fit of a renderer's variant to the source `S`;
 //! - [`writers`]: the three file formats;
 //! - [`unreal`]: Unreal Engine 5's hair material inputs (the Karis family) fitted the same way,
-//!   written as a JSON file and a Python script beside it.
+//!   written as a JSON file and a Python script beside it;
+//! - [`unity`] (with [`log_fit`]): Unity HDRP's hair inputs, fitted through
+//!   the frostbite family, as a JSON file and a C# editor script beside it.
 
+pub mod log_fit;
 pub mod mapping;
 pub mod source;
+pub mod unity;
 pub mod unreal;
 pub mod writers;
 
@@ -120,22 +124,25 @@ pub enum Target {
     Renderer(Renderer),
     /// Unreal Engine 5's Hair shading model ([`unreal`]).
     Unreal,
+    /// Unity HDRP's hair, Material Type Physical ([`unity`]).
+    Unity,
 }
 
 impl Target {
     /// Every target, in `--to`'s order.
-    pub const ALL: [Target; 4] = [
+    pub const ALL: [Target; 5] = [
         Target::Renderer(Renderer::Pbrt),
         Target::Renderer(Renderer::Blender),
         Target::Renderer(Renderer::Materialx),
         Target::Unreal,
+        Target::Unity,
     ];
 
     /// The extension of the (main) file written, without the dot.
     pub fn extension(&self) -> &'static str {
         match self {
             Target::Renderer(r) => r.extension(),
-            Target::Unreal => "json",
+            Target::Unreal | Target::Unity => "json",
         }
     }
 
@@ -143,7 +150,7 @@ impl Target {
     pub fn file_name(&self) -> &'static str {
         match self {
             Target::Renderer(r) => r.file_name(),
-            Target::Unreal => "hair.json",
+            Target::Unreal | Target::Unity => "hair.json",
         }
     }
 
@@ -153,6 +160,9 @@ impl Target {
             Target::Renderer(r) => r.file_kind(),
             Target::Unreal => {
                 "an Unreal material-parameter file (JSON; its Python script goes beside it)"
+            }
+            Target::Unity => {
+                "a Unity HDRP hair material (JSON; its C# editor script goes beside it)"
             }
         }
     }
@@ -168,15 +178,17 @@ impl Target {
         if ext.eq_ignore_ascii_case(self.extension()) {
             return Ok(());
         }
-        let Some(other) = Target::ALL
-            .into_iter()
-            .find(|t| ext.eq_ignore_ascii_case(t.extension()))
-        else {
+        let others: Vec<Target> = (Target::ALL.into_iter())
+            .filter(|t| ext.eq_ignore_ascii_case(t.extension()))
+            .collect();
+        let Some(other) = others.first() else {
             return Ok(());
         };
+        let to: Vec<String> = others.iter().map(|t| format!("--to {t}")).collect();
+        let to = to.join(" or ");
         Err(Error::Other(format!(
-            "{flag} {}: .{ext} is the extension of {} (--to {other}), but --to {self} writes {}: \
-             name the file {}, or pass --to {other}",
+            "{flag} {}: .{ext} is the extension of {} ({to}), but --to {self} writes {}: \
+             name the file {}, or pass {to}",
             path.display(),
             other.file_kind(),
             self.file_kind(),
@@ -190,9 +202,10 @@ impl FromStr for Target {
     fn from_str(s: &str) -> Result<Target> {
         match s.to_ascii_lowercase().as_str() {
             "unreal" | "ue" | "ue5" => Ok(Target::Unreal),
+            "unity" | "hdrp" => Ok(Target::Unity),
             other => other.parse().map(Target::Renderer).map_err(|_| {
                 Error::Other(format!(
-                    "unknown export target `{other}`: use --to pbrt, blender, materialx or unreal"
+                    "unknown export target `{other}`: use --to pbrt, blender, materialx, unreal or unity"
                 ))
             }),
         }
@@ -204,6 +217,7 @@ impl fmt::Display for Target {
         match self {
             Target::Renderer(r) => r.fmt(f),
             Target::Unreal => f.write_str("unreal"),
+            Target::Unity => f.write_str("unity"),
         }
     }
 }

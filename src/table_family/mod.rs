@@ -11,6 +11,7 @@
 
 pub mod deon;
 pub mod file;
+pub mod frostbite;
 pub mod kajiya_kay;
 pub mod karis;
 
@@ -393,10 +394,11 @@ impl std::fmt::Debug for dyn DynTable {
 }
 
 /// Every table family, in `--model` order.
-pub const ALL: [&dyn DynTable; 3] = [
+pub const ALL: [&dyn DynTable; 4] = [
     &Table::<kajiya_kay::KajiyaKay>::NEW,
     &Table::<deon::DEon>::NEW,
     &Table::<karis::Karis>::NEW,
+    &Table::<frostbite::Frostbite>::NEW,
 ];
 
 /// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,

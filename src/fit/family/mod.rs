@@ -11,7 +11,9 @@ use crate::error::Result;
 use crate::family::{FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 use crate::fit::{FitData, FitOptions, FitOutcome, FitParam};
-use crate::table_family::{deon::DEon, kajiya_kay::KajiyaKay, karis::Karis, Table};
+use crate::table_family::{
+    deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis, Table,
+};
 
 /// What a fit is given: the samples, the file they came from (for messages and fit.json), the
 /// loader's report of that file, and the options.
@@ -90,5 +92,6 @@ pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
         ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
         ModelFamily::DEon => &Table::<DEon>::NEW,
         ModelFamily::Karis => &Table::<Karis>::NEW,
+        ModelFamily::Frostbite => &Table::<Frostbite>::NEW,
     }
 }
