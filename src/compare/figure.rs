@@ -1,10 +1,12 @@
 //! The comparison figure (compare.svg/png): per measurement slice, the normalised residual of
-//! each sample (RMS over channels) of the Marschner fit and of the Chiang fit, overlaid.
+//! each sample (RMS over channels) of every compared family's fit, overlaid, one colour per
+//! family, named in the legend by the family's title.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::Result;
+use crate::family::ModelFamily;
 use crate::files::CurveRow;
 use crate::plot::{cartesian, de, draw_key, header, line_glyph, range_of, Axes, Figure, Frame};
 use crate::slices::decimate::stride_indices;
@@ -12,25 +14,42 @@ use crate::slices::{collect_samples, find_slices, short};
 
 /// Most slices drawn (evenly spread over all of them).
 const MAX_PANELS: usize = 12;
-const MARSCHNER: RGBColor = RGBColor(31, 119, 180);
-const CHIANG: RGBColor = RGBColor(214, 39, 40);
 
-/// One slice: its title, x label, and (x, residual Marschner, residual Chiang) per sample.
+/// One colour per family, in the order compared (repeated past the last).
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(23, 190, 207),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+];
+
+/// The colour of the `i`-th family compared.
+pub fn colour(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// One slice: its title, x label, and per sample its x and each family's residual.
 pub struct OverlayPanel {
     pub title: String,
     pub x_label: String,
-    pub points: Vec<(f64, f64, f64)>,
+    pub points: Vec<(f64, Vec<f64>)>,
 }
 
-/// The residuals of both fits, overlaid per slice.
+/// The residuals of every family's fit, overlaid per slice.
 pub struct OverlayFigure {
+    pub families: Vec<ModelFamily>,
     pub panels: Vec<OverlayPanel>,
     pub subtitle: String,
 }
 
-/// The figure of two fits' curves of the same samples (same order).
-pub fn overlay(marschner: &[CurveRow], chiang: &[CurveRow]) -> OverlayFigure {
-    let samples = collect_samples(marschner);
+/// The figure of several fits' curves of the same samples (same order), one per family.
+pub fn overlay(fits: &[(ModelFamily, Vec<CurveRow>)]) -> OverlayFigure {
+    let families = fits.iter().map(|f| f.0).collect();
+    let samples = collect_samples(fits.first().map_or(&[][..], |f| &f.1));
     let (slices, _) = find_slices(&samples);
     let rms = |rows: &[CurveRow], idx: &[usize]| {
         let v: Vec<f64> = idx
@@ -55,8 +74,9 @@ pub fn overlay(marschner: &[CurveRow], chiang: &[CurveRow]) -> OverlayFigure {
                         let sample = &samples[k];
                         (
                             s.x_of(&sample.angles),
-                            rms(marschner, &sample.rows),
-                            rms(chiang, &sample.rows),
+                            fits.iter()
+                                .map(|(_, rows)| rms(rows, &sample.rows))
+                                .collect(),
                         )
                     })
                     .collect(),
@@ -64,6 +84,7 @@ pub fn overlay(marschner: &[CurveRow], chiang: &[CurveRow]) -> OverlayFigure {
         })
         .collect();
     OverlayFigure {
+        families,
         panels,
         subtitle: format!(
             "{} of {} slices; per sample the RMS over channels of the normalised residual (0 = exact)",
@@ -78,7 +99,11 @@ impl Figure for OverlayFigure {
         "compare"
     }
     fn title(&self) -> String {
-        "Residuals of the Marschner and Chiang fits, per slice".into()
+        let names: Vec<&str> = self.families.iter().map(|f| f.title()).collect();
+        format!(
+            "Residuals of the {} fits, per slice",
+            super::findings::and_list(&names)
+        )
     }
     fn size(&self) -> (u32, u32) {
         let rows = self.panels.len().div_ceil(3).max(1) as u32;
@@ -94,7 +119,7 @@ impl Figure for OverlayFigure {
         for (panel, area) in self.panels.iter().zip(&areas) {
             let (x0, x1) = range_of(panel.points.iter().map(|p| p.0), 0.03, (-90.0, 90.0));
             let (_, y1) = range_of(
-                panel.points.iter().flat_map(|p| [p.1, p.2]),
+                panel.points.iter().flat_map(|p| p.1.iter().copied()),
                 0.08,
                 (0.0, 1.0),
             );
@@ -110,23 +135,18 @@ impl Figure for OverlayFigure {
             Axes::new(panel.x_label.as_str(), "|residual|", &sfmt, &yfmt)
                 .ticks(7, 5)
                 .draw(&mut chart)?;
-            for (colour, name, pick) in
-                [(MARSCHNER, "Marschner", 1usize), (CHIANG, "Chiang", 2usize)]
-            {
-                let line: Vec<(f64, f64)> = panel
-                    .points
-                    .iter()
-                    .map(|p| (p.0, if pick == 1 { p.1 } else { p.2 }))
-                    .collect();
+            for (i, family) in self.families.iter().enumerate() {
+                let c = colour(i);
+                let line: Vec<(f64, f64)> = panel.points.iter().map(|p| (p.0, p.1[i])).collect();
                 chart
-                    .draw_series(LineSeries::new(line.clone(), colour.stroke_width(2)))
+                    .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
                     .map_err(de)?
-                    .label(name)
-                    .legend(line_glyph(colour.stroke_width(2)));
+                    .label(family.title())
+                    .legend(line_glyph(c.stroke_width(2)));
                 chart
                     .draw_series(
                         line.iter()
-                            .map(|&(x, y)| Circle::new((x, y), 2, colour.filled())),
+                            .map(|&(x, y)| Circle::new((x, y), 2, c.filled())),
                     )
                     .map_err(de)?;
             }
