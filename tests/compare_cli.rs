@@ -184,6 +184,25 @@ fn quick_compare<'a>(data: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'
     a
 }
 
+/// [`quick_compare`] of `families` (named in `extra`): its `--width-nodes` only when a listed
+/// family takes it (else it would be refused as an option of no listed family).
+fn quick_compare_of<'a>(
+    data: &'a Path,
+    out: &'a Path,
+    families: &[ModelFamily],
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut a = quick_compare(data, out, extra);
+    if !families
+        .iter()
+        .any(|f| f.own_options().contains(&"--width-nodes"))
+    {
+        let at = a.iter().position(|a| *a == "--width-nodes").unwrap();
+        a.drain(at..at + 2);
+    }
+    a
+}
+
 /// Every path under `dir` whose name marks a lock or a staging directory.
 fn bookkeeping_inside(dir: &Path) -> Vec<String> {
     let mut found = Vec::new();
@@ -370,7 +389,12 @@ fn compare_models_lists_every_family_it_fits() {
 
     // One family alone is a ranking of one.
     let out = dir.path().join("one");
-    hairfit_ok(&quick_compare(&data, &out, &["--models", list[0]]));
+    hairfit_ok(&quick_compare_of(
+        &data,
+        &out,
+        &reversed[..1],
+        &["--models", list[0]],
+    ));
     let one = Comparison::load(&out.join("compare.json")).unwrap();
     assert_complete(&one, &reversed[..1]);
     assert!(
@@ -434,13 +458,7 @@ fn a_family_option_no_listed_family_takes_is_refused() {
             "--width-nodes" => extra.push("64"),
             _ => {}
         }
-        let mut args = quick_compare(&data, &out, &extra);
-        // quick_compare's own --width-nodes is for the families that take it.
-        if !other.own_options().contains(&"--width-nodes") {
-            let at = args.iter().position(|a| *a == "--width-nodes").unwrap();
-            args.drain(at..at + 2);
-        }
-        let run = cli::hairfit(&args);
+        let run = cli::hairfit(&quick_compare_of(&data, &out, &[*other], &extra));
         cli::assert_fails_with(
             &run,
             &[

@@ -25,13 +25,13 @@ pub const DEFAULT_MODELS: &str = "marschner,chiang";
 #[derive(Debug, Clone, Args)]
 #[command(
     after_help = "--models lists the families to fit and rank (comma-separated, or all); each fit gets the \
-shared fit options, and a family-only option goes to the listed families that take it (--mode, --lobes, \
---no-glints, --no-eccentricity: marschner; --terms, --width-nodes: chiang). Such an option when no listed \
-family takes it is an error naming the families that do.
+shared fit options, and an option only some families take (--mode, --lobes, --no-glints, \
+--no-eccentricity, --terms, --width-nodes, ...) goes to the listed families that take it. Such an option \
+when no listed family takes it is an error naming the families that do (docs/compare.md).
 
 \
---fix applies to every fit, so it takes only parameters every listed family has (for marschner and chiang: \
-sigma_a (every channel), sigma_a[c] (one channel) and eta). A parameter some listed family lacks (k_g, \
+--fix applies to every fit, so it takes only parameters every listed family has (for the default \
+marschner,chiang: sigma_a (every channel), sigma_a[c] (one channel) and eta). A parameter some listed family lacks (k_g, \
 alpha_r_deg, beta_m, alpha_deg, ...) is refused before anything is fitted, naming the families that lack \
 it; to fix it, fit that family alone with `hairfit fit DATA --model FAMILY --fix NAME=VALUE`.
 
