@@ -119,7 +119,7 @@ pub struct Ranked {
 pub struct Region {
     /// `lobe` (where one lobe of S dominates: R, TT, TRT), `abs_phi` or `theta_h` (a 10° bin).
     pub axis: String,
-    /// `R`, `TT`, `TRT`, or the bin (`|φ| 170–180°`, `θh -10–0°`).
+    /// `R`, `TT`, `TRT`, or the bin (`|φ| 170° to 180°`, `θh −10° to 0°`).
     pub name: String,
     /// Which residuals the region holds, in words and bounds.
     pub definition: String,
@@ -148,8 +148,8 @@ impl Region {
     /// How findings name the region.
     pub fn place(&self) -> String {
         match (self.axis.as_str(), self.centre_deg) {
-            ("abs_phi", Some(c)) => format!("|φ| ≈ {c:.0}°"),
-            ("theta_h", Some(c)) => format!("θh ≈ {c:.0}°"),
+            ("abs_phi", Some(c)) => format!("|φ| ≈ {}", super::regions::degrees(c)),
+            ("theta_h", Some(c)) => format!("θh ≈ {}", super::regions::degrees(c)),
             // The definition's bounds, without the words after them.
             _ => format!(
                 "the {} region ({})",

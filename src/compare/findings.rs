@@ -4,6 +4,7 @@
 
 use super::comparison::{ModelSummary, Ranked, Region, AIC_TIE, BIN_RATIO, SCALE_NOTE};
 use crate::family::ModelFamily;
+use crate::plot::fmt_num;
 
 /// Bins (of |φ| or θh) named per family in the findings; lobe regions are always named.
 const BINS_NAMED: usize = 3;
@@ -123,7 +124,7 @@ pub fn findings(models: &[ModelSummary], ranking: &[Ranked], regions: &[Region])
         let t = r.family.title();
         let ratio = r
             .chi2_ratio
-            .map_or(String::new(), |x| format!(", {x:.3}× {b}'s"));
+            .map_or(String::new(), |x| format!(", {}× {b}'s", fmt_num(x)));
         out.push(format!(
             "{t} {} {b}: ΔAIC {:.1}{}, ΔBIC {:.1}, chi2 {:.4e} vs {:.4e}{ratio}, with {} vs {} parameters",
             if r.tied_with_best { "ties with" } else { "loses against" },
@@ -218,7 +219,7 @@ mod tests {
             f[1].starts_with("Chiang loses against Marschner: ΔAIC 296.0"),
             "{f:?}"
         );
-        assert!(f[1].contains("4.000× Marschner's"), "{f:?}");
+        assert!(f[1].contains(", 4× Marschner's"), "{f:?}");
         assert!(
             f[2].starts_with("Chiang misses the data most at the TT region (|φ| > 135°): RMS 3.000 vs 1.000 (30 residuals)"),
             "{f:?}"

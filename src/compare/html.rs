@@ -42,7 +42,7 @@ fn ranking(h: &mut String, c: &Comparison) {
             escape(m.family.title()),
             escape(&m.status),
             fmt_num(m.chi2),
-            r.chi2_ratio.map_or("—".into(), |x| format!("{x:.3}")),
+            r.chi2_ratio.map_or("—".into(), fmt_num),
             m.n_params,
             r.aic,
             r.delta_aic,
