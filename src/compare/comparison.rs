@@ -27,6 +27,16 @@ pub const BIN_RATIO: f64 = 1.5;
 /// Smallest RMS difference (normalised residual units) worth calling out.
 pub const MIN_RMS_GAP: f64 = 0.05;
 
+/// `-25` → `−25°` (a minus sign, not a hyphen), rounded to whole degrees.
+pub fn degrees(x: f64) -> String {
+    let x = x.round();
+    if x < 0.0 {
+        format!("−{}°", -x)
+    } else {
+        format!("{}°", x.abs())
+    }
+}
+
 /// One value per family, in the order of compare.json's `models`; written as a JSON object
 /// keyed by the family's `--model` name (`{"marschner": 1.02, "chiang": 3.4}`).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -148,8 +158,8 @@ impl Region {
     /// How findings name the region.
     pub fn place(&self) -> String {
         match (self.axis.as_str(), self.centre_deg) {
-            ("abs_phi", Some(c)) => format!("|φ| ≈ {}", super::regions::degrees(c)),
-            ("theta_h", Some(c)) => format!("θh ≈ {}", super::regions::degrees(c)),
+            ("abs_phi", Some(c)) => format!("|φ| ≈ {}", degrees(c)),
+            ("theta_h", Some(c)) => format!("θh ≈ {}", degrees(c)),
             // The definition's bounds, without the words after them.
             _ => format!(
                 "the {} region ({})",

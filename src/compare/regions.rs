@@ -15,7 +15,7 @@
 //!
 //! The lobes overlap, so a region is where its lobe dominates, not where only it is present.
 
-use super::comparison::{PerFamily, Region};
+use super::comparison::{degrees, PerFamily, Region};
 use crate::family::ModelFamily;
 use crate::files::CurveRow;
 use crate::model::angles::wrap_deg;
@@ -57,16 +57,6 @@ pub const LOBE_REGIONS: [LobeRegion; 3] = [
         },
     },
 ];
-
-/// `-25` → `−25°` (a minus sign, not a hyphen), rounded to whole degrees.
-pub fn degrees(x: f64) -> String {
-    let x = x.round();
-    if x < 0.0 {
-        format!("−{}°", -x)
-    } else {
-        format!("{}°", x.abs())
-    }
-}
 
 /// `(|φ|, θh)` of a row, degrees.
 pub fn geometry(row: &CurveRow) -> (f64, f64) {
