@@ -102,7 +102,7 @@ fn bench_eval(c: &mut Criterion) {
     let file = FamilyParams::load(&params_path, ModelFamily::Marschner).unwrap();
     let request = EvalRequest {
         output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
-        model: FamilyModel::new(&file, Default::default(), &Default::default()),
+        model: FamilyModel::new(&file, &Default::default()),
         params: file,
         angles: None,
     };

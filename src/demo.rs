@@ -5,12 +5,13 @@
 use std::path::Path;
 
 use crate::error::Result;
-use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily};
+use crate::family::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::LoadReport;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_family, FitOptions, FitOutcome};
 use crate::model::{Angles, ModelConfig, Params};
 use crate::report::publish::PublishedFit;
+use crate::table_family::TableParamFile;
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
 pub fn demo_truth() -> Params<f64> {
@@ -111,66 +112,68 @@ pub fn chiang_demo_truth() -> crate::chiang::ChiangParams<f64> {
 /// `hairfit fit --force`).
 pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
     // A bad --fix is an error about the option, before anything touches the output directory.
-    if opts.family == ModelFamily::Marschner {
-        crate::fit::family::family_fit(opts.family)
-            .check_fixes(&opts.fix, demo_truth().sigma_a.len())?;
-    }
+    crate::fit::family::family_fit(opts.family).check_fixes(&opts.fix, DEMO_SCALE.len())?;
     crate::report::publish::publish_fit(out, "hairfit demo", force, &[], |staging| {
         demo_into(opts, out, staging)
     })
 }
 
-/// The demo's data, truth and fit, written into `staging` (published later as `out`).
-fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome<FamilyParams>> {
-    let config = ModelConfig {
-        mode: opts.mode,
-        ..ModelConfig::default()
-    };
-    let (model, file, config, chiang) = match opts.family {
-        ModelFamily::Marschner => {
-            let truth = demo_truth();
-            (
-                FamilyModel::Marschner {
-                    params: truth.clone(),
-                    config,
-                },
-                FamilyParams::Marschner(crate::params::ParamFile::from_params(&truth)),
-                config,
-                None,
-            )
-        }
+/// The demo's true parameters of `family` as its parameter file: [`demo_truth`],
+/// [`chiang_demo_truth`], or a table family's [`crate::table_family::demo_params`].
+pub fn demo_truth_file(family: ModelFamily) -> FamilyParams {
+    match family {
+        ModelFamily::Marschner => crate::params::ParamFile::from_params(&demo_truth()).into(),
         ModelFamily::Chiang => {
-            let truth = chiang_demo_truth();
-            (
-                FamilyModel::Chiang {
-                    params: truth.clone(),
-                    model: opts.chiang.clone(),
-                },
-                FamilyParams::Chiang(crate::chiang::ChiangParamFile::from_params(&truth)),
-                crate::chiang::lobes_config(&opts.chiang.effects),
-                Some(ChiangRecord {
-                    effects: opts.chiang.effects,
-                    width_nodes: opts.chiang.width_nodes(),
-                }),
-            )
+            crate::chiang::ChiangParamFile::from_params(&chiang_demo_truth()).into()
         }
+        other => {
+            let table = other.table().expect("every other family is a table");
+            let truth = crate::table_family::demo_params(table.facts(), DEMO_SCALE.len());
+            TableParamFile::from_params(table, &truth).into()
+        }
+    }
+}
+
+/// The demo's dataset and its truth for `opts` (family, terms, measurement, seed), in memory.
+pub fn demo_synthesis(opts: &FitOptions) -> Result<(crate::data::Dataset, crate::files::Truth)> {
+    let setup = ModelSetup {
+        config: ModelConfig {
+            mode: opts.mode,
+            ..ModelConfig::default()
+        },
+        chiang: opts.chiang.clone(),
+        terms: opts.terms,
     };
-    let noise = crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}"))?;
+    let file = demo_truth_file(opts.family);
+    let model = FamilyModel::new(&file, &setup);
     let source = crate::synth::Source {
         model: &model,
         file: &file,
-        config: &config,
-        chiang,
+        records: setup.records(opts.family),
     };
     let how = crate::synth::Acquisition {
         directions: &demo_directions(),
         label: "hairfit demo: 5 incidences x 13 exit inclinations x 36 azimuths",
-        noise: &noise,
+        noise: &demo_noise(),
         scale: &DEMO_SCALE,
         measurement: opts.measurement,
         seed: opts.seed,
     };
-    let (dataset, truth_record) = crate::synth::synthesize_model(&source, &how)?;
+    crate::synth::synthesize_model(&source, &how)
+}
+
+/// The demo's data as the fit sees them ([`demo_synthesis`]).
+pub fn demo_data(opts: &FitOptions) -> Result<FitData> {
+    Ok(crate::fit::fit_data(&demo_synthesis(opts)?.0))
+}
+
+fn demo_noise() -> crate::synth::Noise {
+    crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}")).expect("the demo noise parses")
+}
+
+/// The demo's data, truth and fit, written into `staging` (published later as `out`).
+fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome<FamilyParams>> {
+    let (dataset, truth_record) = demo_synthesis(opts)?;
     // Files go to the staging directory; the fit records where they will be.
     let data_path = out.join("data.csv");
     crate::data::write_csv(&dataset, &staging.join("data.csv"))?;
@@ -181,7 +184,8 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
         rows_read: dataset.len() as u64,
         accepted: dataset.len() as u64,
         notes: vec![format!(
-            "hairfit demo: crate::synth, noise {noise}, seed {}",
+            "hairfit demo: crate::synth, noise {}, seed {}",
+            demo_noise(),
             opts.seed
         )],
         ..LoadReport::default()
@@ -192,27 +196,17 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
 
 /// The demo's truth (of `family`), for the end of its summary.
 pub fn truth_line(out: &Path, family: ModelFamily) -> String {
-    match family {
-        ModelFamily::Marschner => {
-            let truth = demo_truth();
-            format!(
-                "truth: sigma_a {:?}, alpha_r_deg -7, beta_r_deg 7.5, k_g 2, w_c_deg 15, eccentricity 0.9, scale {:?} (see {})\n",
-                truth.sigma_a,
-                DEMO_SCALE,
-                out.join("truth.json").display()
-            )
-        }
-        ModelFamily::Chiang => {
-            let t = chiang_demo_truth();
-            format!(
-                "truth: sigma_a {:?}, beta_m {}, beta_n {}, alpha_deg {}, scale {:?} (see {})\n",
-                t.sigma_a,
-                t.beta_m,
-                t.beta_n,
-                t.alpha.to_degrees(),
-                DEMO_SCALE,
-                out.join("truth.json").display()
-            )
+    let params = serde_json::to_value(demo_truth_file(family)).unwrap_or_default();
+    let mut items = Vec::new();
+    if let Some(map) = params.as_object() {
+        for (key, value) in map.iter().filter(|(k, _)| *k != "model") {
+            items.push(format!("{key} {value}"));
         }
     }
+    format!(
+        "truth: {}, scale {:?} (see {})\n",
+        items.join(", "),
+        DEMO_SCALE,
+        out.join("truth.json").display()
+    )
 }

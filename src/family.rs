@@ -1,15 +1,15 @@
-//! The model families hairfit evaluates and fits (`--model marschner|chiang`): which family
-//! ([`ModelFamily`]), a parameter file of either ([`FamilyParams`], what fit.json's `params`,
-//! params.json and truth.json hold), and a family's model ready to evaluate ([`FamilyModel`]).
-//! Commands load and evaluate through these, so each command's contract holds for both.
+//! The model families hairfit evaluates and fits (`--model NAME`): which family
+//! ([`ModelFamily`]), a parameter file of any ([`FamilyParams`], what fit.json's `params`,
+//! params.json and truth.json hold), what the command line configures of each
+//! ([`ModelSetup`]) and a family's model ready to evaluate ([`FamilyModel`]). Commands load and
+//! evaluate through these, so each command's contract holds for every family. Marschner and
+//! Chiang have their own types; every other family is a [`crate::table_family`].
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::chiang::{
-    self, scattering_batch, ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams,
-};
+use crate::chiang::{self, scattering_batch, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
 use crate::json_file::ParameterFile;
 use crate::model::{
@@ -17,14 +17,25 @@ use crate::model::{
     Params,
 };
 use crate::params::ParamFile;
+use crate::table_family::{self, DynTable, TableParamFile, TableParams, TermSet};
 
-/// A model family: Marschner 2003 (MODEL.md) or Chiang 2016 (CHIANG.md).
+mod setup;
+pub use setup::{ChiangRecord, ModelRecords, ModelSetup};
+
+/// A model family: Marschner 2003 (MODEL.md), Chiang 2016 (CHIANG.md), or a table family
+/// ([`crate::table_family`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
 pub enum ModelFamily {
     #[default]
+    #[serde(rename = "marschner")]
+    #[value(name = "marschner")]
     Marschner,
+    #[serde(rename = "chiang")]
+    #[value(name = "chiang")]
     Chiang,
+    #[serde(rename = "kajiya-kay")]
+    #[value(name = "kajiya-kay")]
+    KajiyaKay,
 }
 
 impl ModelFamily {
@@ -33,18 +44,59 @@ impl ModelFamily {
         match self {
             ModelFamily::Marschner => "marschner",
             ModelFamily::Chiang => "chiang",
+            other => other.table().expect("every other family is a table").name(),
         }
     }
 
     /// Every family, Marschner first (the order `compare --models all` reports them in).
-    pub const ALL: [ModelFamily; 2] = [ModelFamily::Marschner, ModelFamily::Chiang];
+    pub const ALL: [ModelFamily; 3] = [
+        ModelFamily::Marschner,
+        ModelFamily::Chiang,
+        ModelFamily::KajiyaKay,
+    ];
 
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
     pub fn title(self) -> &'static str {
         match self {
             ModelFamily::Marschner => "Marschner",
             ModelFamily::Chiang => "Chiang",
+            other => other
+                .table()
+                .expect("every other family is a table")
+                .title(),
         }
+    }
+
+    /// The table family this is, or `None` for Marschner and Chiang.
+    pub fn table(self) -> Option<&'static dyn DynTable> {
+        use table_family::{kajiya_kay::KajiyaKay, Table};
+        match self {
+            ModelFamily::Marschner | ModelFamily::Chiang => None,
+            ModelFamily::KajiyaKay => Some(&Table::<KajiyaKay>::NEW),
+        }
+    }
+
+    /// The report's unit label of one of the family's parameters by its JSON name
+    /// (`sigma_a[1]` included): `deg`, `per fiber radius`, or empty.
+    pub fn unit_label(self, json_name: &str) -> &'static str {
+        match self {
+            ModelFamily::Marschner => crate::model::ParamName::from_json_name(json_name)
+                .map_or("", |n| n.spec().unit.label()),
+            ModelFamily::Chiang => crate::chiang::chiang_unit_label(json_name),
+            table => {
+                let base = json_name.split('[').next().unwrap_or(json_name);
+                let facts = table.table().map_or(&[][..], |t| t.facts());
+                facts
+                    .iter()
+                    .find(|f| f.name == base)
+                    .map_or("", |f| f.unit.label())
+            }
+        }
+    }
+
+    /// True when the family takes `--terms` (Chiang and every table family).
+    pub fn takes_terms(self) -> bool {
+        self != ModelFamily::Marschner
     }
 
     /// A `--model` spelling (case-insensitive), or an error listing every family.
@@ -92,12 +144,15 @@ impl ModelFamily {
     }
 
     /// The family-only options this family takes (the flags of `cli::ModelArgs` that not every
-    /// family takes). A command that fits several families (`compare --models`) gives each one
-    /// only these, and refuses such an option when no listed family takes it.
+    /// family takes; what `ModelArgs::check_family_options` accepts, which a unit test of
+    /// `cli::compare` checks). A command that fits several families (`compare --models`) gives
+    /// each one only these, and refuses such an option when no listed family takes it.
     pub fn own_options(self) -> &'static [&'static str] {
         match self {
             ModelFamily::Marschner => &["--mode", "--lobes", "--no-glints", "--no-eccentricity"],
             ModelFamily::Chiang => &["--terms", "--width-nodes"],
+            _ if self.takes_terms() => &["--terms"],
+            _ => &[],
         }
     }
 }
@@ -111,16 +166,54 @@ impl std::fmt::Display for ModelFamily {
 /// A parameter file of either family. Written untagged, so a Marschner file is byte for byte
 /// what it always was; a Chiang file carries `"model": "chiang"`. Read: a Marschner file (whose
 /// keys differ from Chiang's; unknown keys are refused by both) else a Chiang file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum FamilyParams {
     Marschner(ParamFile),
     Chiang(ChiangParamFile),
+    Table(TableParamFile),
+}
+
+/// Read by the `"model"` tag (no tag: Marschner, else an untagged Chiang file), so a table
+/// family whose keys happen to be another family's is still read as itself.
+impl<'de> Deserialize<'de> for FamilyParams {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let value = serde_json::Value::deserialize(d)?;
+        let tag = value
+            .get("model")
+            .and_then(|t| t.as_str())
+            .map(str::to_owned);
+        let err = |e: serde_json::Error| D::Error::custom(e.to_string());
+        match tag.as_deref() {
+            // Untagged: a Marschner file, else a Chiang file written without its tag.
+            None => ParamFile::deserialize(&value)
+                .map(FamilyParams::Marschner)
+                .or_else(|e| {
+                    ChiangParamFile::deserialize(&value)
+                        .map(FamilyParams::Chiang)
+                        .map_err(|_| e)
+                })
+                .map_err(err),
+            Some(chiang::file::MODEL_TAG) => ChiangParamFile::deserialize(&value)
+                .map(FamilyParams::Chiang)
+                .map_err(err),
+            Some(_) => TableParamFile::deserialize(&value)
+                .map(FamilyParams::Table)
+                .map_err(err),
+        }
+    }
 }
 
 impl From<ParamFile> for FamilyParams {
     fn from(p: ParamFile) -> Self {
         FamilyParams::Marschner(p)
+    }
+}
+
+impl From<TableParamFile> for FamilyParams {
+    fn from(p: TableParamFile) -> Self {
+        FamilyParams::Table(p)
     }
 }
 
@@ -167,6 +260,9 @@ impl FamilyParams {
         match self {
             FamilyParams::Marschner(_) => ModelFamily::Marschner,
             FamilyParams::Chiang(_) => ModelFamily::Chiang,
+            FamilyParams::Table(p) => {
+                ModelFamily::parse(p.table.name()).expect("every table family is a ModelFamily")
+            }
         }
     }
 
@@ -174,7 +270,7 @@ impl FamilyParams {
     pub fn marschner(&self) -> Option<&ParamFile> {
         match self {
             FamilyParams::Marschner(p) => Some(p),
-            FamilyParams::Chiang(_) => None,
+            _ => None,
         }
     }
 
@@ -182,7 +278,7 @@ impl FamilyParams {
     pub fn chiang(&self) -> Option<&ChiangParamFile> {
         match self {
             FamilyParams::Chiang(p) => Some(p),
-            FamilyParams::Marschner(_) => None,
+            _ => None,
         }
     }
 
@@ -191,23 +287,53 @@ impl FamilyParams {
         match self {
             FamilyParams::Marschner(p) => p.n_channels(),
             FamilyParams::Chiang(p) => p.n_channels(),
+            FamilyParams::Table(p) => p.n_channels(),
         }
     }
 
-    /// True when `sigma_a` is a single number (eval then writes one column `s`).
+    /// True when the per-channel values are single numbers (eval then writes one column `s`).
     pub fn sigma_a_is_scalar(&self) -> bool {
         let s = match self {
             FamilyParams::Marschner(p) => &p.sigma_a,
             FamilyParams::Chiang(p) => &p.sigma_a,
+            FamilyParams::Table(p) => return p.is_scalar(),
         };
         matches!(s, crate::params::SigmaA::Scalar(_))
     }
 
-    /// `sigma_a` as written.
-    pub fn sigma_a_mut(&mut self) -> &mut crate::params::SigmaA {
-        match self {
+    /// Write every per-channel value given once as `n` values (`hairfit synth --channels n`);
+    /// `Err((name, count))` names a per-channel value given for another number of channels.
+    /// `Some(note)` when a value was replicated.
+    pub fn replicate_channels(
+        &mut self,
+        n: usize,
+    ) -> std::result::Result<Option<String>, (&'static str, usize)> {
+        use crate::params::SigmaA;
+        let sigma_a = match self {
             FamilyParams::Marschner(p) => &mut p.sigma_a,
             FamilyParams::Chiang(p) => &mut p.sigma_a,
+            FamilyParams::Table(p) => {
+                let mut replicated = Vec::new();
+                for (f, v) in p.table.facts().iter().zip(&mut p.values) {
+                    if !f.per_channel || v.len() == n {
+                        continue;
+                    }
+                    if v.len() != 1 {
+                        return Err((f.name, v.len()));
+                    }
+                    *v = vec![v[0]; n];
+                    replicated.push(format!("{} = {}", f.name, v[0]));
+                }
+                return Ok((!replicated.is_empty()).then(|| replicated.join(", ")));
+            }
+        };
+        match sigma_a.clone() {
+            SigmaA::Scalar(s) if n > 1 => {
+                *sigma_a = SigmaA::PerChannel(vec![s; n]);
+                Ok(Some(format!("sigma_a = {s}")))
+            }
+            SigmaA::PerChannel(v) if v.len() != n => Err(("sigma_a", v.len())),
+            _ => Ok(None),
         }
     }
 
@@ -216,6 +342,7 @@ impl FamilyParams {
         match self {
             FamilyParams::Marschner(p) => p.validate(),
             FamilyParams::Chiang(p) => p.validate(),
+            FamilyParams::Table(p) => p.validate(),
         }
     }
 
@@ -224,7 +351,7 @@ impl FamilyParams {
     pub fn warnings(&self) -> Vec<String> {
         match self {
             FamilyParams::Marschner(p) => p.radians_in_degrees_keys(),
-            FamilyParams::Chiang(_) => Vec::new(),
+            _ => Vec::new(),
         }
     }
 
@@ -248,7 +375,7 @@ impl FamilyParams {
         if let Some(value) = &value {
             refuse_result_file(value, path)?;
         }
-        let tag = value.and_then(|v| v.get("model").cloned());
+        let tag = value.as_ref().and_then(|v| v.get("model").cloned());
         if let Some(tag) = &tag {
             let named = tag.as_str().unwrap_or_default();
             if named != family.as_str() {
@@ -257,9 +384,9 @@ impl FamilyParams {
                      (or use a {family} parameter file)",
                     path.display(),
                     if named.is_empty() {
-                        "marschner|chiang"
+                        ModelFamily::ALL.map(ModelFamily::as_str).join("|")
                     } else {
-                        named
+                        named.to_string()
                     }
                 )));
             }
@@ -268,6 +395,26 @@ impl FamilyParams {
             Error::Parameter { .. } => Error::Other(format!("{}: {e}", path.display())),
             other => other,
         };
+        if let Some(table) = family.table() {
+            if tag.is_none() {
+                // Another family's file read as this one: say whose it looks like.
+                let other = value.as_ref().and_then(|v| {
+                    [("alpha_r_deg", "marschner"), ("beta_m", "chiang")]
+                        .into_iter()
+                        .find(|(key, _)| v.get(*key).is_some())
+                });
+                if let Some((key, owner)) = other {
+                    return Err(Error::Other(format!(
+                        "{}: this looks like a {owner} parameter file (it has {key}) but --model \
+                         is {family}: pass --model {owner}",
+                        path.display()
+                    )));
+                }
+            }
+            return Ok(FamilyParams::Table(TableParamFile::from_json_str(
+                &text, path, table,
+            )?));
+        }
         match family {
             ModelFamily::Chiang => {
                 if tag.is_none() && text.contains("\"alpha_r_deg\"") {
@@ -302,6 +449,7 @@ impl FamilyParams {
                     ParamFile::from_json_str(&text, path).map_err(located)?,
                 ))
             }
+            _ => unreachable!("table families returned above"),
         }
     }
 }
@@ -317,19 +465,29 @@ pub enum FamilyModel {
         params: ChiangParams<f64>,
         model: ChiangModel,
     },
+    Table {
+        table: &'static dyn DynTable,
+        params: TableParams<f64>,
+        terms: TermSet,
+    },
 }
 
 impl FamilyModel {
     /// The model of `file` under the configuration of its family.
-    pub fn new(file: &FamilyParams, config: ModelConfig, chiang: &ChiangModel) -> FamilyModel {
+    pub fn new(file: &FamilyParams, setup: &ModelSetup) -> FamilyModel {
         match file {
             FamilyParams::Marschner(p) => FamilyModel::Marschner {
                 params: p.to_params(),
-                config,
+                config: setup.config,
             },
             FamilyParams::Chiang(p) => FamilyModel::Chiang {
                 params: p.to_params(),
-                model: chiang.clone(),
+                model: setup.chiang.clone(),
+            },
+            FamilyParams::Table(p) => FamilyModel::Table {
+                table: p.table,
+                params: p.to_params(),
+                terms: setup.table_terms(p.table),
             },
         }
     }
@@ -339,6 +497,7 @@ impl FamilyModel {
         match self {
             FamilyModel::Marschner { params, .. } => params.sigma_a.len(),
             FamilyModel::Chiang { params, .. } => params.sigma_a.len(),
+            FamilyModel::Table { params, .. } => params.n_channels,
         }
     }
 
@@ -351,6 +510,11 @@ impl FamilyModel {
                 marschner_batch(params, config, angles, out)
             }
             FamilyModel::Chiang { params, model } => scattering_batch(params, model, angles, out),
+            FamilyModel::Table {
+                table,
+                params,
+                terms,
+            } => table.eval_batch(params, *terms, angles, out),
         }
     }
 
@@ -362,12 +526,13 @@ impl FamilyModel {
             FamilyModel::Marschner { params, config } => {
                 scattering_lanes(params, config, angles, out)
             }
-            FamilyModel::Chiang { .. } => self.eval_batch(angles, out),
+            _ => self.eval_batch(angles, out),
         }
     }
 
     /// Per-lobe values `[R, TT, TRT]` per channel; for Chiang the TRT entry also holds the
-    /// p ≥ 3 residual term, so the three add up to `S`.
+    /// p ≥ 3 residual term, for a table family each term adds to its column, so the three add
+    /// up to `S`.
     pub fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]) {
         match self {
             FamilyModel::Marschner { params, config } => {
@@ -376,39 +541,11 @@ impl FamilyModel {
             FamilyModel::Chiang { params, model } => {
                 chiang::evaluator::scattering_by_lobe(params, model, angles, out);
             }
+            FamilyModel::Table {
+                table,
+                params,
+                terms,
+            } => table.by_lobe(params, *terms, angles, out),
         }
-    }
-}
-
-/// fit.json → `chiang`: a Chiang fit's model configuration (absent for Marschner fits, whose
-/// configuration is `model`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ChiangRecord {
-    /// The terms of `S` that were on.
-    pub effects: ChiangEffects,
-    /// Gauss–Legendre nodes of the width integral.
-    pub width_nodes: usize,
-}
-
-impl ChiangRecord {
-    /// `R+TT+TRT+residual`: the terms that were on.
-    pub fn effects_text(&self) -> String {
-        let e = &self.effects;
-        [
-            (e.r, "R"),
-            (e.tt, "TT"),
-            (e.trt, "TRT"),
-            (e.residual, "residual"),
-        ]
-        .iter()
-        .filter(|(on, _)| *on)
-        .map(|(_, n)| *n)
-        .collect::<Vec<_>>()
-        .join("+")
-    }
-
-    /// The model this record describes (an out-of-range node count is an error).
-    pub fn model(&self) -> Result<ChiangModel> {
-        ChiangModel::new(self.effects, self.width_nodes)
     }
 }

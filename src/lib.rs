@@ -70,5 +70,6 @@ pub mod report;
 pub mod rng;
 pub mod slices;
 pub mod synth;
+pub mod table_family;
 
 pub use error::{Error, Result};

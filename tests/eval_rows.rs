@@ -14,7 +14,7 @@ fn request() -> EvalRequest {
     let file = FamilyParams::load(&path, ModelFamily::Marschner).unwrap();
     EvalRequest {
         output_columns: output_columns(file.n_channels(), file.sigma_a_is_scalar()),
-        model: FamilyModel::new(&file, Default::default(), &Default::default()),
+        model: FamilyModel::new(&file, &Default::default()),
         params: file,
         angles: None,
     }

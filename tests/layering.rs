@@ -20,7 +20,10 @@ const LAYERS: &[(&str, &[&str])] = &[
             "json_file",
         ],
     ),
-    ("model families", &["model", "params", "chiang", "family"]),
+    (
+        "model families",
+        &["model", "params", "chiang", "table_family", "family"],
+    ),
     ("files and samples", &["files", "data", "slices"]),
     ("fit and synthesis", &["fit", "synth", "eval", "export"]),
     ("results", &["report", "compare", "demo", "cost"]),

@@ -234,6 +234,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
         goodness_of_fit: Default::default(),
         suggestions: vec![],
         chiang: None,
+        terms: None,
     }
 }
 

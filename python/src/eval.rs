@@ -90,11 +90,7 @@ pub(crate) fn eval<'py>(
     let args = cli.model;
     args.check_family_options().map_err(hf)?;
     let file = family_params(py, params_json, params_path, args.family)?;
-    let model = FamilyModel::new(
-        &file,
-        args.config().map_err(hf)?,
-        &args.chiang().map_err(hf)?,
-    );
+    let model = FamilyModel::new(&file, &args.setup().map_err(hf)?);
     let arrays = [
         vec_of(&theta_i),
         vec_of(&phi_i),

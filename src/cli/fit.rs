@@ -209,6 +209,7 @@ impl FitArgs {
             intervals: self.intervals,
             family: self.model.family,
             chiang: self.model.chiang()?,
+            terms: self.model.setup()?.terms,
             curves: self.curves.0,
         })
     }

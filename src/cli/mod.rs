@@ -14,8 +14,9 @@ use clap::Args;
 
 use crate::chiang::{ChiangEffects, ChiangModel, DEFAULT_WIDTH_NODES};
 use crate::error::{Error, Result};
-use crate::family::ModelFamily;
+use crate::family::{ModelFamily, ModelSetup};
 use crate::model::{Effects, Measurement, ModelConfig, RootMode};
+use crate::table_family::TermSet;
 
 /// Write one line to stderr, as `eprintln!` would, but without its panic when stderr has gone (a
 /// pipe whose reader left): then no one is left to tell, and the exit code still says how the
@@ -26,13 +27,16 @@ pub fn tell(line: std::fmt::Arguments<'_>) {
 }
 
 /// The model family (`--model`), its accuracy knobs and effect switches (Marschner: `--mode`,
-/// `--lobes`, `--no-glints`, `--no-eccentricity`; Chiang: `--terms`, `--width-nodes`).
+/// `--lobes`, `--no-glints`, `--no-eccentricity`; Chiang: `--terms`, `--width-nodes`; the
+/// table families: `--terms`).
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
-    /// Model family: `marschner` (Marschner 2003) or `chiang` (Chiang 2016, pbrt-v4's hair).
+    /// Model family: `marschner` (Marschner 2003), `chiang` (Chiang 2016, pbrt-v4's hair),
+    /// `kajiya-kay` (Kajiya-Kay 1989); docs/families.md lists each one's parameters and terms.
     #[arg(long = "model", value_enum, default_value_t = ModelFamily::Marschner)]
     pub family: ModelFamily,
-    /// Chiang only: terms of S, comma-separated (R, TT, TRT, residual) [default: all four].
+    /// Terms of S, comma-separated [default: all]: Chiang's R, TT, TRT, residual; a table
+    /// family's own (kajiya-kay: diffuse, specular). Not for marschner (see --lobes).
     #[arg(long)]
     pub terms: Option<String>,
     /// Chiang only: Gauss-Legendre nodes of the width integral [default: 1024].
@@ -65,27 +69,60 @@ fn parse_mode(s: &str) -> std::result::Result<RootMode, String> {
 }
 
 impl ModelArgs {
-    /// The Chiang model these options ask for (`--terms`, `--width-nodes`); with `--model
-    /// marschner` those options are an error, since they would silently do nothing.
+    /// The Chiang model these options ask for (`--terms`, `--width-nodes`); those options are
+    /// an error for a family that does not take them, since they would silently do nothing.
     pub fn chiang(&self) -> Result<ChiangModel> {
-        if self.family != ModelFamily::Chiang {
-            for (given, flag) in [
-                (self.terms.is_some(), "--terms"),
-                (self.width_nodes.is_some(), "--width-nodes"),
-            ] {
-                if given {
-                    return Err(Error::Other(format!(
-                        "{flag} applies to --model chiang only (the Marschner model takes --lobes, --mode, --no-glints, --no-eccentricity)"
-                    )));
+        let takes_terms = ModelFamily::ALL
+            .into_iter()
+            .filter(|f| f.takes_terms())
+            .map(ModelFamily::as_str)
+            .collect::<Vec<_>>()
+            .join(", ");
+        let refusals = [
+            (
+                self.terms.is_some() && !self.family.takes_terms(),
+                "--terms",
+                format!("the families {takes_terms}"),
+            ),
+            (
+                self.width_nodes.is_some() && self.family != ModelFamily::Chiang,
+                "--width-nodes",
+                "--model chiang".to_string(),
+            ),
+        ];
+        if let Some((_, flag, owners)) = refusals.iter().find(|r| r.0) {
+            return Err(Error::Other(format!(
+                "{flag} applies to {owners} only, not --model {}{}",
+                self.family,
+                if self.family == ModelFamily::Marschner {
+                    " (the Marschner model takes --lobes, --mode, --no-glints, --no-eccentricity)"
+                } else {
+                    ""
                 }
-            }
+            )));
         }
-        let effects = match &self.terms {
-            Some(t) => ChiangEffects::parse(t)?,
-            None => ChiangEffects::default(),
+        let effects = match (&self.terms, self.family) {
+            (Some(t), ModelFamily::Chiang) => ChiangEffects::parse(t)?,
+            _ => ChiangEffects::default(),
         };
         ChiangModel::new(effects, self.width_nodes.unwrap_or(DEFAULT_WIDTH_NODES))
             .map_err(|e| Error::Other(format!("--width-nodes: {e}")))
+    }
+
+    /// Every family's configuration these options ask for (what is not the chosen family's
+    /// stays at its default; giving it is an error, [`ModelArgs::check_family_options`]).
+    pub fn setup(&self) -> Result<ModelSetup> {
+        let terms = match (self.family.table(), &self.terms) {
+            (Some(table), Some(list)) => {
+                Some(TermSet::parse(list, table.terms(), self.family.as_str())?)
+            }
+            _ => None,
+        };
+        Ok(ModelSetup {
+            config: self.config()?,
+            chiang: self.chiang()?,
+            terms,
+        })
     }
 
     /// True when a Marschner-only option was given a non-default value.
@@ -103,13 +140,20 @@ impl ModelArgs {
         }
     }
 
-    /// [`ModelArgs::marschner_options_given`] as an error under `--model chiang`.
+    /// Every option of another family than `--model`'s is an error naming whose it is, and the
+    /// chosen family's are checked.
     pub fn check_family_options(&self) -> Result<()> {
-        self.chiang()?;
-        if self.family == ModelFamily::Chiang {
+        self.setup()?;
+        if self.family != ModelFamily::Marschner {
             if let Some(flag) = self.marschner_options_given() {
                 return Err(Error::Other(format!(
-                    "{flag} applies to --model marschner only; the Chiang model takes --terms and --width-nodes"
+                    "{flag} applies to --model marschner only; the {} model takes --terms{}",
+                    self.family.title(),
+                    if self.family == ModelFamily::Chiang {
+                        " and --width-nodes"
+                    } else {
+                        ""
+                    }
                 )));
             }
         }

@@ -57,6 +57,13 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
         j.data.file
     );
     match &j.chiang {
+        None if j.terms.is_some() => {
+            s += &format!(
+                "model: {}, terms {}\n",
+                j.family(),
+                j.terms.as_deref().unwrap_or_default().join("+")
+            )
+        }
         Some(c) => {
             s += &format!(
                 "model: chiang, terms {}, {} width nodes\n",

@@ -6,8 +6,7 @@ use std::path::{Path, PathBuf};
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::write_csv;
 use crate::error::{Error, Result};
-use crate::family::{ChiangRecord, FamilyModel, FamilyParams};
-use crate::params::SigmaA;
+use crate::family::{FamilyModel, FamilyParams};
 use crate::synth::noise::{self, Noise};
 use crate::synth::{
     memory, random, record_truth, synthesize_model, truth_path, Acquisition, Rig, Source,
@@ -101,8 +100,7 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     let noise =
         Noise::parse(&args.noise)?.with_outlier_options(args.outlier_kind, args.outlier_range)?;
     args.model.check_family_options()?;
-    let config = args.model.config()?;
-    let chiang = args.model.chiang()?;
+    let setup = args.model.setup()?;
     let file = FamilyParams::load(&args.params, args.model.family)?;
     let (file, notes) = reconcile_channels(file, args.channels, &args.params)?;
     let nc = file.n_channels();
@@ -118,22 +116,11 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
             )))
         }
     };
-    let model = FamilyModel::new(&file, config, &chiang);
-    let (config, record) = match &file {
-        FamilyParams::Marschner(_) => (config, None),
-        FamilyParams::Chiang(_) => (
-            crate::chiang::lobes_config(&chiang.effects),
-            Some(ChiangRecord {
-                effects: chiang.effects,
-                width_nodes: chiang.width_nodes(),
-            }),
-        ),
-    };
+    let model = FamilyModel::new(&file, &setup);
     let source = Source {
         model: &model,
         file: &file,
-        config: &config,
-        chiang: record,
+        records: setup.records(file.family()),
     };
     let directions = rig.angles(&mut random::generator(args.seed, random::Stream::Angles));
     let how = Acquisition {
@@ -195,28 +182,27 @@ fn reconcile_channels(
     path: &Path,
 ) -> Result<(FamilyParams, Vec<String>)> {
     let mut notes = Vec::new();
-    match (channels, file.sigma_a_mut().clone()) {
-        (Some(0), _) => {
+    match channels {
+        Some(0) => {
             return Err(Error::Other(
                 "--channels 0: give at least one colour channel".into(),
             ))
         }
-        (Some(n), SigmaA::Scalar(s)) if n > 1 => {
-            *file.sigma_a_mut() = SigmaA::PerChannel(vec![s; n]);
-            notes.push(format!(
-                "sigma_a = {s} (a scalar in {}) replicated to all {n} channels",
+        Some(n) => match file.replicate_channels(n) {
+            Ok(Some(what)) => notes.push(format!(
+                "{what} (a scalar in {}) replicated to all {n} channels",
                 path.display()
-            ));
-        }
-        (Some(n), SigmaA::PerChannel(v)) if v.len() != n => {
-            return Err(Error::Other(format!(
-                "--channels {n}, but sigma_a in {} has {} values: give one sigma_a per channel, \
-                 or a single number to use in every channel",
-                path.display(),
-                v.len()
-            )))
-        }
-        _ => {}
+            )),
+            Ok(None) => {}
+            Err((name, count)) => {
+                return Err(Error::Other(format!(
+                    "--channels {n}, but {name} in {} has {count} values: give one {name} per \
+                     channel, or a single number to use in every channel",
+                    path.display()
+                )))
+            }
+        },
+        None => {}
     }
     Ok((file, notes))
 }

@@ -10,16 +10,18 @@ use crate::error::{Error, Result};
 use crate::plot::{render, FigureInfo};
 
 /// Mark each section's Pareto front of (time, rms error): no other row of the section is at
-/// least as fast and as accurate and strictly better in one.
+/// least as fast and as accurate and strictly better in one. A row without an error (another
+/// model, a yardstick) is on no front.
 pub fn mark_pareto(rows: &mut [CostRow]) {
     let snapshot = rows.to_vec();
     for r in rows.iter_mut() {
-        r.pareto = !snapshot.iter().any(|o| {
-            o.section == r.section
-                && o.time_s <= r.time_s
-                && o.error_rms <= r.error_rms
-                && (o.time_s < r.time_s || o.error_rms < r.error_rms)
-        });
+        r.pareto = r.error_rms.is_finite()
+            && !snapshot.iter().any(|o| {
+                o.section == r.section
+                    && o.time_s <= r.time_s
+                    && o.error_rms <= r.error_rms
+                    && (o.time_s < r.time_s || o.error_rms < r.error_rms)
+            });
     }
 }
 
@@ -113,12 +115,13 @@ mod tests {
         let mut rows = vec![
             row("a", 1.0, 1.0),
             row("a", 2.0, 0.5),
-            row("a", 3.0, 0.6),   // dominated by (2, 0.5)
-            row("a", 2.0, 0.5),   // tie: neither strictly better, both stay
-            row("b", 10.0, 10.0), // alone in its section
+            row("a", 3.0, 0.6),      // dominated by (2, 0.5)
+            row("a", 2.0, 0.5),      // tie: neither strictly better, both stay
+            row("b", 10.0, 10.0),    // alone in its section
+            row("c", 1.0, f64::NAN), // no error: on no front
         ];
         mark_pareto(&mut rows);
         let flags: Vec<bool> = rows.iter().map(|r| r.pareto).collect();
-        assert_eq!(flags, [true, true, false, true, true]);
+        assert_eq!(flags, [true, true, false, true, true, false]);
     }
 }

@@ -9,6 +9,7 @@
 //! Pareto front and writes the files, [`figure`] draws cost.svg/png with the plotting kit.
 
 mod chiang;
+mod families;
 mod figure;
 mod fits;
 mod jacobian;
@@ -104,13 +105,22 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
     let t0 = Instant::now();
     let quick = options.quick;
     let mut rows = Vec::new();
-    if options.family == crate::family::ModelFamily::Chiang {
-        rows.extend(chiang::chiang_rows(quick)?);
-    } else {
-        rows.extend(model::model_rows(quick));
-        let data = fits::synthetic_data();
-        rows.extend(jacobian::jacobian_rows(&data, quick)?);
-        rows.extend(fits::fit_rows(&data, quick)?);
+    match options.family {
+        crate::family::ModelFamily::Marschner => {
+            rows.extend(model::model_rows(quick));
+            let data = fits::synthetic_data();
+            rows.extend(jacobian::jacobian_rows(&data, quick)?);
+            rows.extend(fits::fit_rows(&data, quick)?);
+        }
+        crate::family::ModelFamily::Chiang => rows.extend(chiang::chiang_rows(quick)?),
+        // A table family's one knob is its terms: each family's cost below is the ledger.
+        _ => {}
+    }
+    // Every family's cost beside the others' (what each approximation saves).
+    let random = representative_angles(if quick { 256 } else { 1024 }, COST_SEED);
+    rows.extend(families::eval_rows(&random, quick));
+    if !quick {
+        rows.extend(families::fit_rows()?);
     }
     mark_pareto(&mut rows);
     let ledger = CostLedger {
@@ -122,6 +132,7 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
             "model": "relative error of S per channel against exact roots with every effect, denominator floored at 1e-3 x the median reference S; time per evaluation (one direction pair, all channels, one thread)",
             "jacobian": "per parameter column: ||J_fd - J_ad|| / ||J_ad|| (max and RMS over columns); time per full Jacobian of the synthetic data",
             "fit": "|estimate - truth| / width of the parameter's typical range (docs/model.md), over the free shape parameters (max and RMS); wall time of the whole fit",
+            "families": "every model family's S: time per direction pair (3 channels, its demo truth, every term, its default accuracy, one thread) and, in the full ledger, the wall time of fitting its own demo data (linearised intervals); the families are different models, so no error is comparable (hairfit compare ranks what each loses on the same data)",
             "chiang-b0.3, chiang-b0.05": "relative error of the Chiang S per channel against 4096 width nodes, denominator floored at 1e-3 x the median reference S; time per sample (all channels, one thread); evaluations per second per core = 1/time_s; section baseline: the Marschner model's time on the same random directions (its error is not comparable)",
         }),
         rows,

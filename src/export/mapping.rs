@@ -269,6 +269,17 @@ fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>>
             },
             gain,
         }],
+        // Another family: the typical middle of pbrt's ranges, β_n at two widths.
+        SourceModel::Table(model) => [0.3, 0.7]
+            .iter()
+            .map(|&beta_n| VariantParams {
+                chiang: ChiangParams {
+                    beta_n,
+                    ..crate::chiang::reference_params(model.n_channels())
+                },
+                gain,
+            })
+            .collect(),
         SourceModel::Marschner { params, .. } => [0.3, 0.7]
             .iter()
             .map(|&beta_n| VariantParams {

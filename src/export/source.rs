@@ -10,7 +10,7 @@ use serde_json::Value;
 
 use crate::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
-use crate::family::ChiangRecord;
+use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::{Curves, ParameterFile};
 use crate::model::{Angles, ModelConfig, Params};
 use crate::params::ParamFile;
@@ -31,6 +31,8 @@ pub enum SourceModel {
         params: Params<f64>,
         config: ModelConfig,
     },
+    /// A table family's fit under the terms it ran with.
+    Table(FamilyModel),
 }
 
 impl SourceModel {
@@ -39,6 +41,10 @@ impl SourceModel {
         match self {
             SourceModel::Chiang { .. } => "Chiang",
             SourceModel::Marschner { .. } => "Marschner",
+            SourceModel::Table(model) => match model {
+                FamilyModel::Table { table, .. } => table.title(),
+                _ => "a model family",
+            },
         }
     }
 
@@ -47,6 +53,7 @@ impl SourceModel {
         match self {
             SourceModel::Chiang { params, .. } => params.sigma_a.len(),
             SourceModel::Marschner { params, .. } => params.sigma_a.len(),
+            SourceModel::Table(model) => model.n_channels(),
         }
     }
 
@@ -66,6 +73,7 @@ impl SourceModel {
                     crate::model::scattering(params, config, a, row);
                 }
             }
+            SourceModel::Table(model) => model.eval_batch(angles, &mut out),
         }
         out
     }
@@ -147,10 +155,20 @@ impl SourceFit {
                 }
             }
             Some(other) => {
-                return Err(Error::Other(format!(
-                    "{}: model `{other}` is not one export knows (chiang, marschner)",
-                    params_path.display()
-                )))
+                let family = ModelFamily::parse(other)
+                    .map_err(|e| Error::Other(format!("{}: {e}", params_path.display())))?;
+                let file = FamilyParams::from_json_text(text.clone(), &params_path, family)?;
+                // The fit's terms, so the S matched is the fitted one.
+                let terms = fit
+                    .get("terms")
+                    .and_then(|t| serde_json::from_value::<Vec<String>>(t.clone()).ok());
+                let setup = ModelSetup::from_records(
+                    family,
+                    ModelConfig::default(),
+                    None,
+                    terms.as_deref(),
+                )?;
+                SourceModel::Table(FamilyModel::new(&file, &setup))
             }
         };
         let n = model.n_channels();

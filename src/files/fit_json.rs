@@ -437,12 +437,25 @@ pub struct FitJson {
     /// A Chiang fit's model configuration; absent for a Marschner fit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chiang: Option<ChiangRecord>,
+    /// A table family's terms that were on (`--terms`); absent for Marschner and Chiang.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terms: Option<Vec<String>>,
 }
 
 impl FitJson {
     /// The model family the fit used.
     pub fn family(&self) -> crate::family::ModelFamily {
         self.params.family()
+    }
+
+    /// The model configuration the fit used, as its records say.
+    pub fn setup(&self) -> Result<crate::family::ModelSetup> {
+        crate::family::ModelSetup::from_records(
+            self.family(),
+            self.model,
+            self.chiang.as_ref(),
+            self.terms.as_deref(),
+        )
     }
 
     /// Read `fit.json`; a syntax or schema error names line and column.

@@ -43,6 +43,9 @@ pub struct Truth {
     /// Data made by the Chiang model: its configuration; absent for Marschner data.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chiang: Option<ChiangRecord>,
+    /// Data made by a table family: the terms that were on.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terms: Option<Vec<String>>,
 }
 
 impl Truth {

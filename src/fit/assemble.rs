@@ -11,14 +11,13 @@ use super::diagnostics::{NULL_WEIGHT, POORLY_DETERMINED};
 use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode};
 use super::FitOutcome;
 use crate::error::Result;
-use crate::family::{ChiangRecord, FamilyParams};
+use crate::family::{FamilyParams, ModelRecords};
 use crate::files::CurvesMode;
 use crate::files::{
     finite, ChannelCorrelation, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo,
     DownWeighted, FitJson, FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry,
     ResidualSummary, ScaleEntry, StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
-use crate::model::ModelConfig;
 
 /// Why the data cannot determine a parameter: words for its warning, from the parameter, the
 /// fitted set and its strongly correlated partners (family-specific geometry).
@@ -30,11 +29,9 @@ pub struct Assembly<'a, 'e, 'f, F: Forward> {
     pub data: &'a FitData,
     pub file: &'a str,
     pub load_report: LoadReport,
-    /// fit.json `model`: the Marschner configuration (for a Chiang fit: its lobes, no glints,
-    /// no eccentricity; the Chiang configuration is `chiang`).
-    pub config: ModelConfig,
-    /// fit.json `chiang`, for a Chiang fit.
-    pub chiang: Option<ChiangRecord>,
+    /// fit.json `model` (the Marschner configuration; for another family the lobes it
+    /// draws), `chiang` and `terms`.
+    pub records: ModelRecords,
     /// Every parameter of the family in output order (fit.json `parameters`).
     pub all: Vec<F::Param>,
     pub why: WhyUndetermined<'a, F::Param>,
@@ -403,8 +400,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         data,
         file,
         load_report,
-        config,
-        chiang,
+        records,
         all,
         why,
         params_file,
@@ -466,7 +462,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         data,
         ev,
         e: &e,
-        config: &config,
+        config: &records.config,
         params: &params,
         status,
         parameters: &parameters,
@@ -502,7 +498,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
             n_samples: data.len(),
             load_report,
         },
-        model: config,
+        model: records.config,
         options,
         params: params_file(&params),
         parameters,
@@ -515,7 +511,8 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         reasons: judgement.reasons,
         goodness_of_fit: judgement.goodness_of_fit,
         suggestions: judgement.suggestions,
-        chiang,
+        chiang: records.chiang,
+        terms: records.terms,
     };
     Ok(FitOutcome {
         json,

@@ -29,35 +29,46 @@ pub fn parse_fixes<P: FitParam>(
                 value.trim()
             ))
         })?;
-        let names: Vec<P> = if name == "sigma_a" {
-            // Per-channel absorption is `sigma_a[c]` in both families.
-            all.iter()
-                .copied()
-                .filter(|p| p.json_name().starts_with("sigma_a["))
-                .collect()
+        // `NAME=v` of a per-channel parameter fixes every channel (`sigma_a=0.4`).
+        let channels: Vec<P> = all
+            .iter()
+            .copied()
+            .filter(|p| p.channel().is_some() && split_channel(&p.json_name()).0 == name)
+            .collect();
+        let names: Vec<P> = if !channels.is_empty() {
+            channels
         } else {
+            let base = split_channel(name).0;
+            let nc = all
+                .iter()
+                .filter(|p| p.channel().is_some() && split_channel(&p.json_name()).0 == base)
+                .count();
             match all.iter().find(|p| p.json_name() == name) {
                 Some(&p) => vec![p],
-                None if channel_index(name).is_some() => {
-                    let nc = all
-                        .iter()
-                        .filter(|p| p.json_name().starts_with("sigma_a["))
-                        .count();
+                None if channel_of(name).is_some() && nc > 0 => {
                     return Err(Error::Other(format!(
                         "--fix `{item}`: `{name}` names a channel the data do not have: they have \
-                         {nc} channel{} (sigma_a[0]{}); sigma_a=VALUE fixes every channel",
+                         {nc} channel{} ({base}[0]{}); {base}=VALUE fixes every channel",
                         if nc == 1 { "" } else { "s" },
                         if nc > 1 {
-                            format!(" … sigma_a[{}]", nc - 1)
+                            format!(" … {base}[{}]", nc - 1)
                         } else {
                             String::new()
                         }
                     )));
                 }
                 None => {
-                    let known: Vec<String> = all.iter().map(|p| p.json_name()).collect();
+                    let mut known: Vec<String> = Vec::new();
+                    for p in all {
+                        let n = p.json_name();
+                        let shown = split_channel(&n).0.to_string();
+                        if !known.contains(&shown) {
+                            known.push(shown);
+                        }
+                    }
                     return Err(Error::Other(format!(
-                        "--fix `{item}`: unknown {what} `{name}`; use one of sigma_a, {}",
+                        "--fix `{item}`: unknown {what} `{name}`; use one of {} (NAME[c] for one \
+                         channel of a per-channel parameter)",
                         known.join(", ")
                     )));
                 }
@@ -88,11 +99,24 @@ pub fn parse_fixes<P: FitParam>(
 
 /// The channel `k` of a `sigma_a[k]` name (digits only), if it is one.
 pub fn channel_index(name: &str) -> Option<usize> {
-    let digits = name.strip_prefix("sigma_a[")?.strip_suffix(']')?;
+    channel_of(name).filter(|_| split_channel(name).0 == "sigma_a")
+}
+
+/// The channel `k` of any per-channel name `base[k]` (digits only), if it is one.
+pub fn channel_of(name: &str) -> Option<usize> {
+    let digits = name.strip_suffix(']')?.split_once('[')?.1;
     if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
     digits.parse().ok()
+}
+
+/// `("base", Some("k"))` of `base[k]`; `(name, None)` for any other name.
+pub fn split_channel(name: &str) -> (&str, Option<&str>) {
+    match name.strip_suffix(']').and_then(|n| n.split_once('[')) {
+        Some((base, k)) => (base, Some(k)),
+        None => (name, None),
+    }
 }
 
 /// The fewest channels under which every `sigma_a[k]` of these `--fix` items names a channel
@@ -102,7 +126,7 @@ pub fn channels_named(items: &[String]) -> Result<usize> {
     const MAX_CHANNELS: usize = 1 << 20;
     let most = items
         .iter()
-        .filter_map(|i| channel_index(i.split_once('=')?.0.trim()))
+        .filter_map(|i| channel_of(i.split_once('=')?.0.trim()))
         .max()
         .map_or(1, |k| k.saturating_add(1));
     if most > MAX_CHANNELS {

@@ -51,7 +51,7 @@ use crate::family::{FamilyParams, ModelFamily};
 use crate::files::{
     Curves, CurvesMode, FitJson, FitStatus, Floored, LoadReport, OptionsRecord, Timing,
 };
-use crate::model::{Effects, Measurement, ModelConfig, ParamName, Params, RootMode};
+use crate::model::{Effects, Measurement, ParamName, Params, RootMode};
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -116,6 +116,8 @@ pub struct FitOptions {
     pub family: ModelFamily,
     /// The Chiang model's terms and width nodes (`--terms`, `--width-nodes`), for `--model chiang`.
     pub chiang: ChiangModel,
+    /// A table family's terms (`--terms`; `None`: all), for the table families.
+    pub terms: Option<crate::table_family::TermSet>,
     /// How much of the curves the fit's directory gets (`--curves`); `None`: auto (full up to
     /// [`AUTO_FULL_CURVES_ROWS`] rows, the summary above).
     pub curves: Option<CurvesMode>,
@@ -144,6 +146,7 @@ impl Default for FitOptions {
             intervals: Intervals::Auto,
             family: ModelFamily::Marschner,
             chiang: ChiangModel::default(),
+            terms: None,
             curves: None,
         }
     }
@@ -282,8 +285,8 @@ pub struct FitRun<'a, F: Forward> {
     pub base: ParamSet<F>,
     pub free: Vec<F::Param>,
     pub options: OptionsOf<'a>,
-    pub config: ModelConfig,
-    pub chiang: Option<crate::family::ChiangRecord>,
+    /// What fit.json records of the family's configuration.
+    pub records: crate::family::ModelRecords,
     pub all: Vec<F::Param>,
     pub why: assemble::WhyUndetermined<'a, F::Param>,
     pub params_file: fn(&ParamSet<F>) -> FamilyParams,
@@ -398,8 +401,7 @@ pub fn fit_with<F: Forward>(
         data,
         file: run.file,
         load_report: run.load_report,
-        config: run.config,
-        chiang: run.chiang,
+        records: run.records,
         all: run.all,
         why: run.why,
         params_file: run.params_file,

@@ -137,6 +137,11 @@ fn summary_section(h: &mut String, fit: &FitJson) {
     row(
         "model",
         match &fit.chiang {
+            None if fit.terms.is_some() => format!(
+                "{}; terms {}",
+                fit.family().title(),
+                fit.terms.as_deref().unwrap_or_default().join("+")
+            ),
             Some(c) => format!(
                 "Chiang 2016; terms {}; {} width nodes (the TRT curve includes the p ≥ 3 residual)",
                 c.effects_text(),
@@ -201,13 +206,7 @@ fn table_section(
 fn parameter_table(h: &mut String, fit: &FitJson) {
     let rows = fit.parameters.iter().map(|p| {
         // The parameter table knows each unit (σ_a: per fiber radius).
-        let unit = match fit.family() {
-            crate::family::ModelFamily::Marschner => {
-                crate::model::ParamName::from_json_name(&p.name)
-                    .map_or("", |n| n.spec().unit.label())
-            }
-            crate::family::ModelFamily::Chiang => crate::chiang::chiang_unit_label(&p.name),
-        };
+        let unit = fit.family().unit_label(&p.name);
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
             ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),

@@ -133,11 +133,7 @@ pub fn write_report_of(
     curves: Option<&Curves>,
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
-    let chiang_model = match &fit.chiang {
-        Some(record) => record.model()?,
-        None => crate::chiang::ChiangModel::default(),
-    };
-    let family_model = FamilyModel::new(&fit.params, fit.model, &chiang_model);
+    let family_model = FamilyModel::new(&fit.params, &fit.setup()?);
     let measurement = fit.options.measurement;
     let model = move |a: &Angles, out: &mut [[f64; 3]]| {
         family_model.by_lobe(a, out);

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::data::{round_trip_degrees, Dataset};
 use crate::error::{Error, Result};
-use crate::family::{ChiangRecord, FamilyModel, FamilyParams};
+use crate::family::{FamilyModel, FamilyParams, ModelRecords};
 pub use crate::files::{ScaleEntry, Truth};
 use crate::model::{Angles, Measurement, ModelConfig, Params};
 use crate::params::ParamFile;
@@ -94,8 +94,11 @@ pub fn synthesize_directions(
     let source = Source {
         model: &model,
         file: &file,
-        config,
-        chiang: None,
+        records: ModelRecords {
+            config: *config,
+            chiang: None,
+            terms: None,
+        },
     };
     let how = Acquisition {
         directions,
@@ -113,9 +116,8 @@ pub fn synthesize_directions(
 pub struct Source<'a> {
     pub model: &'a FamilyModel,
     pub file: &'a FamilyParams,
-    /// The truth's `model` (for Chiang data: its lobes, see `chiang::lobes_config`).
-    pub config: &'a ModelConfig,
-    pub chiang: Option<ChiangRecord>,
+    /// What the truth records of the family's configuration (`model`, `chiang`, `terms`).
+    pub records: ModelRecords,
 }
 
 /// How a synthetic dataset's samples are taken: at which directions `[θ_i, φ_i, θ_r, φ_r]`
@@ -202,8 +204,9 @@ pub fn synthesize_model(source: &Source<'_>, how: &Acquisition<'_>) -> Result<(D
         sigma_written: dataset.sigma.is_some(),
         seed: how.seed,
         rng: RNG_DESCRIPTION.into(),
-        model: *source.config,
-        chiang: source.chiang,
+        model: source.records.config,
+        chiang: source.records.chiang,
+        terms: source.records.terms.clone(),
         n_samples: dataset.len(),
         outliers: noisy.outliers,
         notes: Vec::new(),

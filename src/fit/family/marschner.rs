@@ -69,8 +69,11 @@ pub fn fit(
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
-            config: choice.config,
-            chiang: None,
+            records: crate::family::ModelRecords {
+                config: choice.config,
+                chiang: None,
+                terms: None,
+            },
             all: all_parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Marschner(ParamFile::from_params(p)),

@@ -5,11 +5,13 @@
 
 pub mod chiang;
 pub mod marschner;
+pub mod table;
 
 use crate::error::Result;
 use crate::family::{FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 use crate::fit::{FitData, FitOptions, FitOutcome, FitParam};
+use crate::table_family::{kajiya_kay::KajiyaKay, Table};
 
 /// What a fit is given: the samples, the file they came from (for messages and fit.json), the
 /// loader's report of that file, and the options.
@@ -85,5 +87,6 @@ pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
     match family {
         ModelFamily::Marschner => &marschner::Marschner,
         ModelFamily::Chiang => &chiang::Chiang,
+        ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
     }
 }

@@ -152,11 +152,14 @@ pub fn fit_chiang(
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
-            config: lobes_config(&effects),
-            chiang: Some(ChiangRecord {
-                effects,
-                width_nodes: opts.chiang.width_nodes(),
-            }),
+            records: crate::family::ModelRecords {
+                config: lobes_config(&effects),
+                chiang: Some(ChiangRecord {
+                    effects,
+                    width_nodes: opts.chiang.width_nodes(),
+                }),
+                terms: None,
+            },
             all: all_parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Chiang(ChiangParamFile::from_params(p)),

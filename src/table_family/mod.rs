@@ -1,0 +1,449 @@
+//! The model families that are one parameter table and one scattering function: Kajiya–Kay
+//! 1989 and the families real-time renderers approximate Marschner with. A family is one type
+//! implementing [`TableFamily`] — its terms ([`Term`]), its parameter table ([`Fact`], every
+//! parameter's name, unit, domain, fit bounds, typical range and default in one line) and
+//! `scatter`, generic over the number type so dual numbers give exact derivatives. Everything
+//! else is written once for all of them: the parameter file ([`file`]), evaluation
+//! ([`DynTable`], what commands hold), and, in `crate::fit::family::table`, the fit.
+//!
+//! What a term switch turns off is not computed, and a parameter only the switched-off terms
+//! read is not fitted ([`Fact::terms`]).
+
+pub mod file;
+pub mod kajiya_kay;
+
+use std::marker::PhantomData;
+
+use num_dual::DualNum;
+
+use crate::error::{Error, Result};
+use crate::model::parameters::{Fitted, Interval, Unit};
+use crate::model::{Angles, Effects, Lobes, ModelConfig};
+
+pub use file::TableParamFile;
+
+/// Which of curves.csv's per-lobe columns a term adds to (`R`, `TT`, `TRT`; a diffuse or
+/// multiple-scattering term goes with `TRT`, as Chiang's p ≥ 3 residual does).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LobeColumn {
+    R = 0,
+    TT = 1,
+    TRT = 2,
+}
+
+/// One term of a family's `S`, switched by `--terms`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Term {
+    /// The `--terms` word (case-insensitive on input).
+    pub name: &'static str,
+    pub meaning: &'static str,
+    pub column: LobeColumn,
+}
+
+/// The terms that are on, as bits over the family's [`TableFamily::TERMS`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TermSet(pub u32);
+
+impl TermSet {
+    /// Every one of `n` terms.
+    pub fn all(n: usize) -> TermSet {
+        TermSet((1u32 << n) - 1)
+    }
+
+    /// True when term `k` is on.
+    pub fn has(self, k: usize) -> bool {
+        self.0 & (1 << k) != 0
+    }
+
+    /// Parse `R,TT,TRT` against `terms` (case-insensitive); `family` names the family in errors.
+    pub fn parse(list: &str, terms: &[Term], family: &str) -> Result<TermSet> {
+        let names = || terms.iter().map(|t| t.name).collect::<Vec<_>>().join(", ");
+        let mut bits = 0u32;
+        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let k = terms
+                .iter()
+                .position(|t| t.name.eq_ignore_ascii_case(item))
+                .ok_or_else(|| {
+                    Error::Other(format!(
+                        "unknown {family} term `{item}` in `{list}`: use a comma-separated list of {}",
+                        names()
+                    ))
+                })?;
+            bits |= 1 << k;
+        }
+        if bits == 0 {
+            return Err(Error::Other(format!(
+                "term list `{list}` is empty: name at least one of {}",
+                names()
+            )));
+        }
+        Ok(TermSet(bits))
+    }
+
+    /// The names of the terms that are on, in the table's order.
+    pub fn names(self, terms: &[Term]) -> Vec<String> {
+        let on = terms.iter().enumerate().filter(|(k, _)| self.has(*k));
+        on.map(|(_, t)| t.name.to_string()).collect()
+    }
+
+    /// True when a term named in `names` is on (empty `names`: every term reads it).
+    fn any_named(self, terms: &[Term], names: &[&str]) -> bool {
+        names.is_empty()
+            || terms
+                .iter()
+                .enumerate()
+                .any(|(k, t)| self.has(k) && names.contains(&t.name))
+    }
+}
+
+/// One line of a family's parameter table. Numbers are in file units (degrees for angles).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fact {
+    /// The parameter file's key (`sigma_a`, `roughness`, `alpha_deg`).
+    pub name: &'static str,
+    /// The symbol in docs (`σ_a`, `β_R`).
+    pub symbol: &'static str,
+    pub meaning: &'static str,
+    pub unit: Unit,
+    /// One value per colour channel (written `name[c]` in fit.json and `--fix`).
+    pub per_channel: bool,
+    /// What the model accepts; every command checks it.
+    pub domain: Interval,
+    /// The fit's bounds, inside the domain.
+    pub fit: (f64, f64),
+    /// The box the fit's start design samples.
+    pub typical: (f64, f64),
+    /// The value a fit holds the parameter at when it does not vary it, and the one a parameter
+    /// file may omit it at when [`Fact::fitted`] is not `Yes`.
+    pub default: f64,
+    pub fitted: Fitted,
+    /// The terms that read it (empty: every term); off with all of them, it is not fitted.
+    pub terms: &'static [&'static str],
+}
+
+impl Fact {
+    /// Check a file-unit value against the domain; `Err` says what the domain is.
+    pub fn check(&self, x: f64) -> std::result::Result<(), String> {
+        if self.domain.contains(x) {
+            return Ok(());
+        }
+        let unit = match self.unit.label() {
+            "" => String::new(),
+            label => format!(" {label}"),
+        };
+        Err(format!(
+            "{} must be finite and in {}{unit}",
+            self.meaning,
+            self.domain.text()
+        ))
+    }
+}
+
+/// A family's parameters in model units (radians for angles): one vector per table line, one
+/// value (shared) or one per channel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableParams<T> {
+    pub values: Vec<Vec<T>>,
+    pub n_channels: usize,
+}
+
+impl<T: Clone> TableParams<T> {
+    /// Parameter `fact` of channel `c` (a shared parameter has one value for every channel).
+    #[inline]
+    pub fn get(&self, fact: usize, c: usize) -> T {
+        let v = &self.values[fact];
+        v[if v.len() == 1 { 0 } else { c }].clone()
+    }
+
+    /// Map `f` over every value (e.g. lift f64 to duals).
+    pub fn map<U>(&self, f: impl Fn(&T) -> U) -> TableParams<U> {
+        TableParams {
+            values: self
+                .values
+                .iter()
+                .map(|v| v.iter().map(&f).collect())
+                .collect(),
+            n_channels: self.n_channels,
+        }
+    }
+}
+
+impl TableParams<f64> {
+    /// Every parameter at its table default, for `nc` channels.
+    pub fn defaults(facts: &[Fact], nc: usize) -> TableParams<f64> {
+        let values = facts
+            .iter()
+            .map(|f| vec![f.unit.to_model(f.default); if f.per_channel { nc } else { 1 }])
+            .collect();
+        TableParams {
+            values,
+            n_channels: nc,
+        }
+    }
+
+    /// Check every value against its domain; the error names the parameter (`base_color[1]`).
+    pub fn validate(&self, facts: &[Fact]) -> Result<()> {
+        for (fact, values) in facts.iter().zip(&self.values) {
+            for (c, &v) in values.iter().enumerate() {
+                let file_value = v * fact.unit.file_factor();
+                if let Err(message) = fact.check(file_value) {
+                    return Err(Error::Parameter {
+                        name: param_name(fact, fact.per_channel.then_some(c)),
+                        value: file_value,
+                        message,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The demo's truth of a table family for `nc` channels: shared parameters at their default,
+/// per-channel ones spread over the typical range (a quarter, half and three quarters of the
+/// way for three channels), so the channels differ as hair colours do.
+pub fn demo_params(facts: &[Fact], nc: usize) -> TableParams<f64> {
+    let mut p = TableParams::defaults(facts, nc);
+    for (f, values) in facts.iter().zip(&mut p.values) {
+        if f.per_channel {
+            let (lo, hi) = f.typical;
+            for (c, v) in values.iter_mut().enumerate() {
+                let t = (c as f64 + 1.0) / (nc as f64 + 1.0);
+                *v = f.unit.to_model(lo + t * (hi - lo));
+            }
+        }
+    }
+    p
+}
+
+/// The parameter table as docs print it (a header and one Markdown row per line), so
+/// `tests/table_families.rs` can check each family's page holds exactly its table.
+pub fn markdown_table(facts: &[Fact]) -> Vec<String> {
+    let num = |x: f64| {
+        if x.is_infinite() {
+            return if x > 0.0 { "inf" } else { "-inf" }.to_string();
+        }
+        let rounded: f64 = format!("{x:.6e}").parse().unwrap_or(x);
+        format!("{rounded}")
+    };
+    let mut rows = vec![
+        "| key | symbol | meaning | unit | per channel | domain | fit bounds | typical | default | fitted | read by |".to_string(),
+        "|---|---|---|---|---|---|---|---|---|---|---|".to_string(),
+    ];
+    rows.extend(facts.iter().map(|f| {
+        let fitted = match f.fitted {
+            Fitted::Yes => "yes",
+            Fitted::OnRequest => "with `--free eta`",
+            Fitted::No => "no (held; `--fix` sets it)",
+        };
+        let read_by = if f.terms.is_empty() {
+            "every term".to_string()
+        } else {
+            f.terms.join(", ")
+        };
+        format!(
+            "| `{}` | {} | {} | {} | {} | {} | [{}, {}] | {} to {} | {} | {} | {} |",
+            f.name,
+            f.symbol,
+            f.meaning,
+            f.unit.describe(),
+            if f.per_channel { "yes" } else { "no" },
+            f.domain.text(),
+            num(f.fit.0),
+            num(f.fit.1),
+            num(f.typical.0),
+            num(f.typical.1),
+            num(f.default),
+            fitted,
+            read_by
+        )
+    }));
+    rows
+}
+
+/// `name` or `name[c]`.
+pub fn param_name(fact: &Fact, channel: Option<usize>) -> String {
+    match channel {
+        Some(c) => format!("{}[{c}]", fact.name),
+        None => fact.name.to_string(),
+    }
+}
+
+/// A model family given by one parameter table and one scattering function.
+pub trait TableFamily: Send + Sync + 'static {
+    /// The `--model` name.
+    const NAME: &'static str;
+    /// Who and what, for summaries ("Kajiya–Kay 1989").
+    const TITLE: &'static str;
+    const TERMS: &'static [Term];
+    const PARAMETERS: &'static [Fact];
+    /// A `--fix` item for messages to show.
+    const FIX_EXAMPLE: &'static str;
+
+    /// Each channel's `S` term by term (`out[c][k]` for [`TableFamily::TERMS`]`[k]`; they add
+    /// up to `S`) at angles `a` with the terms `on`. `out` comes zeroed; a term that is off is
+    /// not computed and stays zero.
+    fn scatter<T: DualNum<f64>>(p: &TableParams<T>, a: &Angles, on: TermSet, out: &mut [Terms<T>]);
+}
+
+/// The most terms a family has.
+pub const MAX_TERMS: usize = 6;
+
+/// One channel's value of each term.
+pub type Terms<T> = [T; MAX_TERMS];
+
+/// `nc` channels of zeroed terms.
+pub fn zero_terms<T: DualNum<f64>>(nc: usize) -> Vec<Terms<T>> {
+    (0..nc)
+        .map(|_| std::array::from_fn(|_| T::zero()))
+        .collect()
+}
+
+/// Zero every term of `out` (the state [`TableFamily::scatter`] expects).
+pub fn clear_terms<T: DualNum<f64>>(out: &mut [Terms<T>]) {
+    for t in out.iter_mut().flatten() {
+        *t = T::zero();
+    }
+}
+
+/// The terms of one channel summed into curves.csv's columns `[R, TT, TRT]`.
+pub fn columns<T: DualNum<f64>>(terms: &[Term], values: &Terms<T>) -> [T; 3] {
+    let mut out = [T::zero(), T::zero(), T::zero()];
+    for (t, v) in terms.iter().zip(values) {
+        let col = &mut out[t.column as usize];
+        *col = col.clone() + v.clone();
+    }
+    out
+}
+
+/// The terms of one channel summed: `S`.
+pub fn total<T: DualNum<f64>>(values: &Terms<T>) -> T {
+    values.iter().fold(T::zero(), |s, v| s + v.clone())
+}
+
+/// A [`TableFamily`] as a value: what commands hold ([`DynTable`]) and what the fit implements
+/// its `Family` for.
+pub struct Table<F>(PhantomData<fn() -> F>);
+
+impl<F> Table<F> {
+    pub const NEW: Table<F> = Table(PhantomData);
+}
+
+/// A table family behind a pointer, chosen at run time by `--model`.
+pub trait DynTable: Sync {
+    fn name(&self) -> &'static str;
+    fn title(&self) -> &'static str;
+    fn terms(&self) -> &'static [Term];
+    fn facts(&self) -> &'static [Fact];
+    /// `S` of a batch, `out[k·nc + c]`.
+    fn eval_batch(&self, p: &TableParams<f64>, on: TermSet, angles: &[Angles], out: &mut [f64]);
+    /// Per-column values `[R, TT, TRT]` per channel at one direction pair.
+    fn by_lobe(&self, p: &TableParams<f64>, on: TermSet, a: &Angles, out: &mut [[f64; 3]]);
+}
+
+impl<F: TableFamily> DynTable for Table<F> {
+    fn name(&self) -> &'static str {
+        F::NAME
+    }
+    fn title(&self) -> &'static str {
+        F::TITLE
+    }
+    fn terms(&self) -> &'static [Term] {
+        F::TERMS
+    }
+    fn facts(&self) -> &'static [Fact] {
+        F::PARAMETERS
+    }
+    fn eval_batch(&self, p: &TableParams<f64>, on: TermSet, angles: &[Angles], out: &mut [f64]) {
+        let nc = p.n_channels;
+        let mut terms = zero_terms(nc);
+        for (a, row) in angles.iter().zip(out.chunks_mut(nc)) {
+            clear_terms(&mut terms);
+            F::scatter(p, a, on, &mut terms);
+            for (v, t) in row.iter_mut().zip(&terms) {
+                *v = total(t);
+            }
+        }
+    }
+    fn by_lobe(&self, p: &TableParams<f64>, on: TermSet, a: &Angles, out: &mut [[f64; 3]]) {
+        let mut terms = zero_terms(p.n_channels);
+        F::scatter(p, a, on, &mut terms);
+        for (o, t) in out.iter_mut().zip(&terms) {
+            *o = columns(F::TERMS, t);
+        }
+    }
+}
+
+impl std::fmt::Debug for dyn DynTable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Every table family, in `--model` order.
+pub const ALL: [&dyn DynTable; 1] = [&Table::<kajiya_kay::KajiyaKay>::NEW];
+
+/// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,
+/// what the report draws): no glints, no eccentricity.
+pub fn lobes_config(terms: &[Term], on: TermSet) -> ModelConfig {
+    let filled = |col: LobeColumn| {
+        terms
+            .iter()
+            .enumerate()
+            .any(|(k, t)| on.has(k) && t.column == col)
+    };
+    ModelConfig {
+        mode: Default::default(),
+        effects: Effects {
+            lobes: Lobes {
+                r: filled(LobeColumn::R),
+                tt: filled(LobeColumn::TT),
+                trt: filled(LobeColumn::TRT),
+            },
+            glints: false,
+            eccentricity: false,
+        },
+    }
+}
+
+/// The table family called `name` (a `--model` spelling).
+pub fn by_name(name: &str) -> Option<&'static dyn DynTable> {
+    ALL.into_iter().find(|t| t.name() == name)
+}
+
+/// The parameters (table index, channel) a fit of `facts` under the terms `on` varies before
+/// `--fix`: those an on term reads, an `OnRequest` `eta` only when `free_on_request`
+/// (`--free eta`).
+pub fn fitted(
+    facts: &[Fact],
+    terms: &[Term],
+    on: TermSet,
+    nc: usize,
+    free_on_request: bool,
+) -> Vec<(usize, Option<usize>)> {
+    let wanted = |f: &Fact| {
+        let asked = match f.fitted {
+            Fitted::Yes => true,
+            // `--free` frees η only; the tables mark nothing else on request.
+            Fitted::OnRequest => free_on_request && f.name == "eta",
+            Fitted::No => false,
+        };
+        asked && on.any_named(terms, f.terms)
+    };
+    let mut all = every_parameter(facts, nc);
+    all.retain(|&(k, _)| wanted(&facts[k]));
+    all
+}
+
+/// Every parameter (table index, channel) for `nc` channels, in output order.
+pub fn every_parameter(facts: &[Fact], nc: usize) -> Vec<(usize, Option<usize>)> {
+    let mut out = Vec::new();
+    for (k, f) in facts.iter().enumerate() {
+        if f.per_channel {
+            out.extend((0..nc).map(|c| (k, Some(c))));
+        } else {
+            out.push((k, None));
+        }
+    }
+    out
+}
