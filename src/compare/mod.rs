@@ -217,10 +217,16 @@ pub fn summary_text(c: &Comparison, out: &Path) -> String {
         c.channels.len(),
         c.data
     );
+    let width = c
+        .models
+        .iter()
+        .map(|m| m.family.as_str().len())
+        .max()
+        .unwrap_or(0);
     for r in &c.ranking {
         let Some(m) = c.model(r.family) else { continue };
         s += &format!(
-            "  {:>2}{} {:<10} status {:<14} chi2 {:>12.5e}  k {:>2}  AIC {:>12.2}  ΔAIC {:>10.2}  BIC {:>12.2}  ΔBIC {:>10.2}\n",
+            "  {:>2}{} {:<width$} status {:<14} chi2 {:>12.5e}  k {:>2}  AIC {:>12.2}  ΔAIC {:>10.2}  BIC {:>12.2}  ΔBIC {:>10.2}\n",
             r.rank,
             if r.tied_with_best && r.family != c.best() { "=" } else { " " },
             m.family.as_str(),
