@@ -470,3 +470,32 @@ fn a_family_option_no_listed_family_takes_is_refused() {
         assert!(!out.exists(), "{flag}: nothing may be written");
     }
 }
+
+/// A family-only option several listed families take goes to each of them with the same
+/// value; a value one of them refuses says so.
+#[test]
+fn an_option_several_families_take_goes_to_each() {
+    let takers: Vec<ModelFamily> = ModelFamily::ALL
+        .into_iter()
+        .filter(|f| f.own_options().contains(&"--terms"))
+        .collect();
+    if takers.len() < 2 {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let data = small_data(dir.path());
+    let out = dir.path().join("cmp");
+    let list: Vec<&str> = takers.iter().map(|f| f.as_str()).collect();
+    let list = list.join(",");
+    let run = cli::hairfit(&quick_compare_of(
+        &data,
+        &out,
+        &takers,
+        &["--models", &list, "--terms", "no-such-term"],
+    ));
+    cli::assert_fails_with(
+        &run,
+        &["compare gives --terms to every listed family that takes it"],
+    );
+    assert!(!out.exists());
+}

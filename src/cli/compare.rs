@@ -143,6 +143,39 @@ pub fn check_family_options(families: &[ModelFamily], args: &FitArgs) -> Result<
     Ok(())
 }
 
+/// `e`, the error of `family`'s options, with a hint when a family-only option that several
+/// listed families take caused it (each gets the same value: `--terms` naming one family's
+/// terms fails for another).
+fn shared_option_hint(
+    e: Error,
+    family: ModelFamily,
+    families: &[ModelFamily],
+    args: &FitArgs,
+) -> Error {
+    for o in &FAMILY_OPTIONS {
+        let takers: Vec<&str> = families
+            .iter()
+            .filter(|&&f| takes(f, o.flag))
+            .map(|f| f.as_str())
+            .collect();
+        if !(o.given)(&args.model) || takers.len() < 2 || !takes(family, o.flag) {
+            continue;
+        }
+        let mut without = args_for(family, args);
+        (o.reset)(&mut without.model);
+        if without.options(None).is_ok() {
+            return Error::Other(format!(
+                "{e}. compare gives {} to every listed family that takes it ({}), and {family} \
+                 refuses this value: compare families that need different values in separate \
+                 runs, or fit them alone",
+                o.flag,
+                takers.join(", ")
+            ));
+        }
+    }
+    e
+}
+
 /// The families of `--models`.
 pub fn families(models: &str) -> Result<Vec<ModelFamily>> {
     ModelFamily::parse_list(models).map_err(|e| Error::Other(format!("--models: {e}")))
@@ -173,7 +206,9 @@ pub fn compare_command(
     let fits = families
         .iter()
         .map(|&family| {
-            let opts = args_for(family, &args.fit).options(cancel.clone())?;
+            let opts = args_for(family, &args.fit)
+                .options(cancel.clone())
+                .map_err(|e| shared_option_hint(e, family, &families, &args.fit))?;
             Ok(crate::fit::FitOptions {
                 curves: Some(CurvesMode::Full),
                 ..opts
