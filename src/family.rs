@@ -159,6 +159,19 @@ impl ModelFamily {
         }
         Ok(out)
     }
+
+    /// The family-only options this family takes (the flags of `cli::ModelArgs` that not every
+    /// family takes; what `ModelArgs::check_family_options` accepts, which a unit test of
+    /// `cli::compare` checks). A command that fits several families (`compare --models`) gives
+    /// each one only these, and refuses such an option when no listed family takes it.
+    pub fn own_options(self) -> &'static [&'static str] {
+        match self {
+            ModelFamily::Marschner => &["--mode", "--lobes", "--no-glints", "--no-eccentricity"],
+            ModelFamily::Chiang => &["--terms", "--width-nodes"],
+            _ if self.takes_terms() => &["--terms"],
+            _ => &[],
+        }
+    }
 }
 
 impl std::fmt::Display for ModelFamily {

@@ -1,5 +1,7 @@
-//! `hairfit compare` end to end: on data made by one family, the comparison prefers it, names
-//! where the other misses, and writes both fit directories, compare.json and index.html.
+//! `hairfit compare` end to end: on data made by one family, the ranking puts it first and
+//! the findings name what the others lose and where; every listed family gets a fit directory,
+//! a summary, a place in the ranking and an RMS per region in compare.json. Tests that list
+//! families use `--models all` or the default, so a new family needs no change here.
 
 #[path = "support/cli.rs"]
 mod cli;
@@ -8,6 +10,7 @@ use cli::{hairfit_ok, s as p, stdout, write};
 use std::path::Path;
 
 use hairfit::compare::Comparison;
+use hairfit::family::ModelFamily;
 
 /// Synthesize with `model` and `params`, 2% relative noise, and compare.
 fn compare_on(dir: &Path, model: &str, params: &str) -> (Comparison, String) {
@@ -56,22 +59,68 @@ fn compare_on(dir: &Path, model: &str, params: &str) -> (Comparison, String) {
     (Comparison::load(&out.join("compare.json")).unwrap(), text)
 }
 
+/// Every listed family has its summary, its place in the ranking (sorted by AIC, ΔAIC
+/// against the first), and an RMS in every region; the lobe regions come first.
+fn assert_complete(c: &Comparison, families: &[ModelFamily]) {
+    let listed: Vec<ModelFamily> = c.models.iter().map(|m| m.family).collect();
+    assert_eq!(listed, families);
+    let mut ranked: Vec<ModelFamily> = c.ranking.iter().map(|r| r.family).collect();
+    ranked.sort_by_key(|f| families.iter().position(|g| g == f));
+    assert_eq!(ranked, families);
+    for w in c.ranking.windows(2) {
+        assert!(w[0].aic <= w[1].aic);
+    }
+    for r in &c.ranking {
+        let delta = r.aic - c.ranking[0].aic;
+        assert!((r.delta_aic - delta).abs() <= 1e-9 * delta.abs().max(1.0));
+        assert_eq!(r.tied_with_best, delta < hairfit::compare::AIC_TIE);
+    }
+    assert_eq!(c.regions[0].axis, "lobe");
+    for region in c.regions.iter().filter(|r| r.n >= 3) {
+        let named: Vec<ModelFamily> = region.rms.0.iter().map(|v| v.0).collect();
+        assert_eq!(named, families, "{}", region.name);
+    }
+}
+
 #[test]
-fn compare_prefers_the_family_that_made_the_data() {
+fn compare_ranks_the_family_that_made_the_data_first() {
     let dir = tempfile::tempdir().unwrap();
+    let both = [ModelFamily::Marschner, ModelFamily::Chiang];
     let (m, text) = compare_on(
         dir.path(),
         "marschner",
         r#"{"sigma_a": [0.3, 0.5, 0.9], "alpha_r_deg": -7, "beta_r_deg": 7.5, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#,
     );
-    assert_eq!(m.better, "marschner", "{text}");
-    assert!(m.delta_aic > 0.0);
-    assert!(text.contains("Marschner fits better"), "{text}");
+    assert_complete(&m, &both);
+    assert_eq!(m.best(), ModelFamily::Marschner, "{text}");
+    let chiang = m.rank_of(ModelFamily::Chiang).unwrap();
+    assert!(chiang.delta_aic > 0.0 && !chiang.tied_with_best, "{text}");
+    assert_eq!(chiang.rank, 2);
+    assert!(chiang.chi2_ratio.unwrap() > 1.0);
+    assert!(text.contains("Marschner fits best"), "{text}");
     assert!(
-        m.findings.iter().any(|f| f.starts_with("Chiang misses")),
+        text.contains("Chiang loses against Marschner: ΔAIC"),
+        "{text}"
+    );
+    // One line per family in rank order.
+    let first = text.find("1  marschner").expect(&text);
+    assert!(text.find("2  chiang").expect(&text) > first, "{text}");
+    assert!(
+        m.findings
+            .iter()
+            .any(|f| f.starts_with("Chiang misses the data most at")),
         "{:?}",
         m.findings
     );
+    // The azimuthal rig measures on the specular cone only (θh = 0): the R and TT regions
+    // have residuals, the TRT region (beside the cone) none, so it has no RMS.
+    let lobes: Vec<(&str, bool)> = m
+        .regions
+        .iter()
+        .filter(|r| r.axis == "lobe")
+        .map(|r| (r.name.as_str(), r.n > 0 && !r.rms.0.is_empty()))
+        .collect();
+    assert_eq!(lobes, [("R", true), ("TT", true), ("TRT", false)]);
     assert!(m.scale_note.contains("not comparable"));
 
     let (c, text) = compare_on(
@@ -79,8 +128,9 @@ fn compare_prefers_the_family_that_made_the_data() {
         "chiang",
         r#"{"sigma_a": [0.3, 0.5, 0.9], "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2.5}"#,
     );
-    assert_eq!(c.better, "chiang", "{text}");
-    assert!(c.delta_aic < 0.0);
+    assert_complete(&c, &both);
+    assert_eq!(c.best(), ModelFamily::Chiang, "{text}");
+    assert!(c.rank_of(ModelFamily::Marschner).unwrap().delta_aic > 0.0);
     assert!(
         c.findings.iter().any(|f| f.starts_with("Marschner misses")),
         "{:?}",
@@ -131,6 +181,25 @@ fn quick_compare<'a>(data: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'
         p(out),
     ];
     a.extend_from_slice(extra);
+    a
+}
+
+/// [`quick_compare`] of `families` (named in `extra`): its `--width-nodes` only when a listed
+/// family takes it (else it would be refused as an option of no listed family).
+fn quick_compare_of<'a>(
+    data: &'a Path,
+    out: &'a Path,
+    families: &[ModelFamily],
+    extra: &[&'a str],
+) -> Vec<&'a str> {
+    let mut a = quick_compare(data, out, extra);
+    if !families
+        .iter()
+        .any(|f| f.own_options().contains(&"--width-nodes"))
+    {
+        let at = a.iter().position(|a| *a == "--width-nodes").unwrap();
+        a.drain(at..at + 2);
+    }
     a
 }
 
@@ -249,4 +318,184 @@ fn compare_fix_is_checked_for_both_families_before_any_fit() {
         let eta = serde_json::to_value(&m.params).unwrap()["eta"].as_f64();
         assert_eq!(eta, Some(1.6), "{}", m.family);
     }
+}
+
+/// `--models all` fits every family, each in DIR/<family>, ranked in one compare.json and
+/// drawn in one figure; a list in another order is reported in that order.
+#[test]
+fn compare_models_lists_every_family_it_fits() {
+    let dir = tempfile::tempdir().unwrap();
+    // A small scan off the cone too (θ_i = 20°, θ_r from −72° to 72°), so every lobe region
+    // has residuals.
+    let truth = write(
+        dir.path(),
+        "truth.json",
+        r#"{"sigma_a": [0.3, 0.5, 0.9], "alpha_r_deg": -7, "beta_r_deg": 7.5, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#,
+    );
+    let data = dir.path().join("scan.csv");
+    hairfit_ok(&[
+        "synth",
+        "--params",
+        p(&truth),
+        "--rig",
+        "longitudinal:incidences=20:phi=0,60,180:steps=13:max=72",
+        "--noise",
+        "relative:0.02",
+        "--output",
+        p(&data),
+    ]);
+    let out = dir.path().join("all");
+    let text = stdout(&hairfit_ok(&quick_compare(
+        &data,
+        &out,
+        &["--models", "all"],
+    )));
+    let c = Comparison::load(&out.join("compare.json")).unwrap();
+    assert_complete(&c, &ModelFamily::ALL);
+    let lobes: Vec<(&str, bool)> = c
+        .regions
+        .iter()
+        .filter(|r| r.axis == "lobe")
+        .map(|r| (r.name.as_str(), r.n >= 3))
+        .collect();
+    assert_eq!(lobes, [("R", true), ("TT", true), ("TRT", true)]);
+    for family in ModelFamily::ALL {
+        for f in ["fit.json", "params.json", "index.html"] {
+            assert!(out.join(family.as_str()).join(f).is_file(), "{family}/{f}");
+        }
+        assert!(text.contains(&format!(" {} ", family.as_str())), "{text}");
+    }
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    for family in ModelFamily::ALL {
+        assert!(
+            html.contains(&format!("<th>RMS {}</th>", family.title())),
+            "{family}"
+        );
+    }
+    let svg = std::fs::read_to_string(out.join("compare.svg")).unwrap();
+    for family in ModelFamily::ALL {
+        assert!(svg.contains(family.title()), "{family} not in the legend");
+    }
+
+    let mut reversed: Vec<ModelFamily> = ModelFamily::ALL.to_vec();
+    reversed.reverse();
+    let list: Vec<&str> = reversed.iter().map(|f| f.as_str()).collect();
+    let out = dir.path().join("reversed");
+    hairfit_ok(&quick_compare(&data, &out, &["--models", &list.join(",")]));
+    assert_complete(
+        &Comparison::load(&out.join("compare.json")).unwrap(),
+        &reversed,
+    );
+
+    // One family alone is a ranking of one.
+    let out = dir.path().join("one");
+    hairfit_ok(&quick_compare_of(
+        &data,
+        &out,
+        &reversed[..1],
+        &["--models", list[0]],
+    ));
+    let one = Comparison::load(&out.join("compare.json")).unwrap();
+    assert_complete(&one, &reversed[..1]);
+    assert!(
+        one.findings[0].contains("the only family listed"),
+        "{:?}",
+        one.findings
+    );
+}
+
+/// A bad --models is refused before the data load, naming what is wrong; nothing is written.
+#[test]
+fn compare_models_errors_name_the_valid_families() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = small_data(dir.path());
+    let out = dir.path().join("cmp");
+    let names = ModelFamily::names();
+    for (models, needles) in [
+        (
+            "marschner,bogus",
+            vec!["--models", "unknown model family `bogus`", names.as_str()],
+        ),
+        ("chiang,Chiang", vec!["--models", "`Chiang` is named twice"]),
+        (",", vec!["--models", "is empty", names.as_str()]),
+    ] {
+        let run = cli::hairfit(&quick_compare(&data, &out, &["--models", models]));
+        cli::assert_fails_with(&run, &needles);
+        assert!(!out.exists(), "--models {models}: nothing may be written");
+    }
+    // --model is not compare's: --models is.
+    let run = cli::hairfit(&quick_compare(&data, &out, &["--model", "chiang"]));
+    cli::assert_fails_with(&run, &["drop --model", "--models chiang"]);
+}
+
+/// A family-only option goes to the listed families that take it; when none does, it is an
+/// error naming the families that do, before anything is fitted.
+#[test]
+fn a_family_option_no_listed_family_takes_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = small_data(dir.path());
+    let out = dir.path().join("cmp");
+    for family in ModelFamily::ALL {
+        let others: Vec<ModelFamily> = ModelFamily::ALL
+            .into_iter()
+            .filter(|&f| f != family)
+            .collect();
+        // An option only `family` takes, with the others listed alone.
+        let Some(&flag) = family
+            .own_options()
+            .iter()
+            .find(|f| others.iter().all(|o| !o.own_options().contains(f)))
+        else {
+            continue;
+        };
+        let Some(other) = others.first() else {
+            continue;
+        };
+        let mut extra = vec!["--models", other.as_str(), flag];
+        match flag {
+            "--mode" => extra.push("exact"),
+            "--lobes" | "--terms" => extra.push("R"),
+            "--width-nodes" => extra.push("64"),
+            _ => {}
+        }
+        let run = cli::hairfit(&quick_compare_of(&data, &out, &[*other], &extra));
+        cli::assert_fails_with(
+            &run,
+            &[
+                &format!("{flag} applies to --model"),
+                family.as_str(),
+                &format!("--models lists {other}"),
+            ],
+        );
+        assert!(!out.exists(), "{flag}: nothing may be written");
+    }
+}
+
+/// A family-only option several listed families take goes to each of them with the same
+/// value; a value one of them refuses says so.
+#[test]
+fn an_option_several_families_take_goes_to_each() {
+    let takers: Vec<ModelFamily> = ModelFamily::ALL
+        .into_iter()
+        .filter(|f| f.own_options().contains(&"--terms"))
+        .collect();
+    if takers.len() < 2 {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let data = small_data(dir.path());
+    let out = dir.path().join("cmp");
+    let list: Vec<&str> = takers.iter().map(|f| f.as_str()).collect();
+    let list = list.join(",");
+    let run = cli::hairfit(&quick_compare_of(
+        &data,
+        &out,
+        &takers,
+        &["--models", &list, "--terms", "no-such-term"],
+    ));
+    cli::assert_fails_with(
+        &run,
+        &["compare gives --terms to every listed family that takes it"],
+    );
+    assert!(!out.exists());
 }

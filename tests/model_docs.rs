@@ -78,7 +78,12 @@ fn docs_link_only_to_files_inside_the_repository() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .canonicalize()
         .unwrap();
-    for file in ["README.md", "docs/model.md", "docs/README.md"] {
+    for file in [
+        "README.md",
+        "docs/model.md",
+        "docs/README.md",
+        "docs/compare.md",
+    ] {
         let path = root.join(file);
         let text = std::fs::read_to_string(&path).unwrap();
         for (i, line) in text.lines().enumerate() {

@@ -13,7 +13,7 @@ Functions:
 - :func:`data` -- samples from NumPy arrays, ready to fit.
 - :func:`fit` -- fit a file, loaded data or arrays (``hairfit fit``): a :class:`FitResult`.
 - :func:`synth` -- a synthetic dataset with its truth (``hairfit synth``).
-- :func:`compare` -- fit both model families and compare them (``hairfit compare``).
+- :func:`compare` -- fit several model families and rank them (``hairfit compare``).
 - :func:`export` -- a renderer's material from a saved fit (``hairfit export``).
 
 Long calls (:func:`fit`, :func:`compare`) release the GIL and stop on Ctrl-C with
@@ -469,17 +469,31 @@ def synth(
     return {"csv": csv, "truth": truth, "n_samples": n, "n_outliers": n_out, "notes": notes}
 
 
-def compare(data: PathLike, out: PathLike, progress: bool = False, **options: Any) -> Dict[str, Any]:
-    """Fit both model families to the same data, as ``hairfit compare DATA --out DIR``.
+def compare(
+    data: PathLike,
+    out: PathLike,
+    progress: bool = False,
+    models: Union[str, Sequence[str], None] = None,
+    **options: Any,
+) -> Dict[str, Any]:
+    """Fit several model families to the same data and rank them, as
+    ``hairfit compare DATA --models A,B --out DIR``.
 
-    Writes DIR/marschner/, DIR/chiang/, DIR/compare.json and DIR/index.html. Returns
-    compare.json's content with the printed summary under ``"summary_text"``. ``options`` are
-    ``hairfit compare``'s (the fit's and the loader's, e.g. ``fix``, ``loss``, ``force``).
+    Args:
+        models: the families, ``"marschner,chiang"`` (the default when None), a list of
+            names, or ``"all"``.
+
+    Writes DIR/<family>/ per family, DIR/compare.json and DIR/index.html. Returns
+    compare.json's content (``models``, ``ranking`` best first, ``regions``, ``findings``) with
+    the printed summary under ``"summary_text"``. ``options`` are ``hairfit compare``'s (the
+    fit's and the loader's, e.g. ``fix``, ``loss``, ``force``, ``terms``).
     """
     options = dict(options)
     if "global_" in options:
         options["global"] = options.pop("global_")
-    flags = [os.fspath(data)] + _flags(out=out, no_progress=not progress, **options)
+    if models is not None and not isinstance(models, str):
+        models = ",".join(models)
+    flags = [os.fspath(data)] + _flags(out=out, no_progress=not progress, models=models, **options)
     text = _native.compare(flags)
     result: Dict[str, Any] = {}
     path = os.path.join(os.fspath(out), "compare.json")

@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 import hairfit
 from conftest import DATA, run_cli
 
@@ -22,6 +24,20 @@ def test_compare_equals_the_cli(cli, tmp_path):
         theirs = json.loads((tmp_path / "cli" / family / "fit.json").read_text())
         assert mine == theirs, family
     assert result.keys() == expected.keys()
+    assert [r["family"] for r in result["ranking"]] == [r["family"] for r in expected["ranking"]]
+
+
+def test_compare_takes_models_as_a_list(tmp_path):
+    data = DATA / "azimuthal_rgb.csv"
+    result = hairfit.compare(data, tmp_path / "py", models=["chiang", "marschner"], starts=2,
+                             polish=1, intervals="linear", width_nodes=64)
+    assert [m["family"] for m in result["models"]] == ["chiang", "marschner"]
+    assert {r["family"] for r in result["ranking"]} == {"chiang", "marschner"}
+    for region in result["regions"]:
+        if region["n"] >= 3:
+            assert set(region["rms"]) == {"chiang", "marschner"}, region
+    with pytest.raises(hairfit.HairfitError, match="unknown model family `nope`"):
+        hairfit.compare(data, tmp_path / "bad", models="marschner,nope")
 
 
 def test_export_equals_the_cli(cli, tmp_path):

@@ -1,51 +1,53 @@
-//! DIR/index.html of `hairfit compare`: the verdict in words, the criteria side by side, both
-//! parameter tables, the bins where the models differ, the overlay figure, links to each fit's
-//! own report. Offline (no scripts, no external resources).
+//! DIR/index.html of `hairfit compare`: the findings in words, the ranking table, every
+//! family's RMS residual per region (lobe regions, then bins of |φ| and θh; a cell is marked
+//! where that family misses the data against the region's best), the overlay figure, each
+//! family's parameter table and links to each fit's own report. Offline (no scripts, no
+//! external resources).
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::Comparison;
+use super::comparison::{Comparison, Region, AIC_TIE, BIN_RATIO, MIN_RMS_GAP};
+use super::findings::and_list;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::files::FitJson;
+use crate::family::ModelFamily;
 use crate::plot::{escape, fmt_num, FigureInfo};
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1500px;margin:1em auto}\
+table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;\
+text-align:left}td.n{text-align:right}td.miss{background:#fbd5d5}td.low{font-weight:bold}\
+tr.best td{background:#e6f2e6}.key{color:#555}";
 
 fn opt(v: Option<f64>) -> String {
     v.map_or("—".into(), fmt_num)
 }
 
-/// Write DIR/index.html.
-pub fn write_index(
-    dir: &Path,
-    c: &Comparison,
-    fig: &FigureInfo,
-    marschner: &FitJson,
-    chiang: &FitJson,
-) -> Result<()> {
-    let mut h = String::new();
-    h.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>hairfit compare</title>\n<style>body{font-family:sans-serif;max-width:1500px;margin:1em auto}table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:left}td.n{text-align:right}</style>\n</head><body>\n");
-    let _ = writeln!(h, "<h1>Marschner vs Chiang on {}</h1>", escape(&c.data));
-    h.push_str("<ul>\n");
-    for f in &c.findings {
-        let _ = writeln!(h, "<li>{}</li>", escape(f));
-    }
-    h.push_str("</ul>\n<h2>Criteria</h2>\n<table><tr><th>model</th><th>status</th><th>χ²</th><th>k</th><th>AIC</th><th>BIC</th><th>reduced χ²</th><th>verdict</th><th>report</th></tr>\n");
-    for m in &c.models {
-        let verdict = m
-            .verdict
-            .as_ref()
-            .map(|v| v.to_string())
-            .unwrap_or_else(|| "—".into());
+/// The ranking: one row per family, best first.
+fn ranking(h: &mut String, c: &Comparison) {
+    h.push_str("<h2>Ranking</h2>\n<table><tr><th>rank</th><th>model</th><th>status</th><th>χ²</th><th>χ² / best</th><th>k</th><th>AIC</th><th>ΔAIC</th><th>BIC</th><th>ΔBIC</th><th>reduced χ²</th><th>verdict</th><th>report</th></tr>\n");
+    for r in &c.ranking {
+        let Some(m) = c.model(r.family) else { continue };
+        let verdict = match &m.verdict {
+            Some(serde_json::Value::String(s)) => s.clone(),
+            Some(v) => v.to_string(),
+            None => "—".into(),
+        };
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{}</td><td>{}</td><td><a href=\"{}/index.html\">{}/</a></td></tr>",
-            m.family,
+            "<tr{}><td class=\"n\">{}{}</td><td>{}</td><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{}</td><td>{}</td><td><a href=\"{}/index.html\">{}/</a></td></tr>",
+            if r.rank == 1 { " class=\"best\"" } else { "" },
+            r.rank,
+            if r.tied_with_best && r.family != c.best() { " (tie)" } else { "" },
+            escape(m.family.title()),
             escape(&m.status),
             fmt_num(m.chi2),
+            r.chi2_ratio.map_or("—".into(), fmt_num),
             m.n_params,
-            m.aic,
-            m.bic,
+            r.aic,
+            r.delta_aic,
+            r.bic,
+            r.delta_bic,
             opt(m.reduced_chi2),
             escape(&verdict),
             m.dir,
@@ -54,19 +56,68 @@ pub fn write_index(
     }
     let _ = writeln!(
         h,
-        "</table>\n<p>{}; ΔAIC = AIC(chiang) − AIC(marschner) = {:.2}, ΔBIC = {:.2}.</p>",
-        escape(&c.criterion),
-        c.delta_aic,
-        c.delta_bic
+        "</table>\n<p class=\"key\">{}. ΔAIC and ΔBIC are against the family with the lowest AIC; \
+         a family within ΔAIC &lt; {AIC_TIE} of it is tied with it (rank 1).</p>",
+        escape(&c.criterion)
     );
-    let _ = writeln!(h, "<p><b>Scales:</b> {}.</p>", escape(&c.scale_note));
+}
+
+/// One table of regions: a column per family; a cell is marked where that family misses the
+/// data against the family with the lowest RMS in the region.
+fn regions(h: &mut String, c: &Comparison, rows: &[&Region], lobes: bool) {
+    let families: Vec<ModelFamily> = c.models.iter().map(|m| m.family).collect();
+    h.push_str("<table><tr><th>region</th>");
+    if lobes {
+        h.push_str("<th>definition</th>");
+    }
+    h.push_str("<th>residuals</th>");
+    for f in &families {
+        let _ = write!(h, "<th>RMS {}</th>", escape(f.title()));
+    }
+    h.push_str("</tr>\n");
+    for r in rows {
+        let lowest = families
+            .iter()
+            .copied()
+            .min_by(|a, b| {
+                let v = |f: ModelFamily| r.rms.get(f).unwrap_or(f64::INFINITY);
+                v(*a).total_cmp(&v(*b))
+            })
+            .unwrap_or_default();
+        let _ = write!(h, "<tr><td>{}</td>", escape(&r.name));
+        if lobes {
+            let _ = write!(h, "<td>{}</td>", escape(&r.definition));
+        }
+        let _ = write!(h, "<td class=\"n\">{}</td>", r.n);
+        for &f in &families {
+            let class = if r.misses(f, lowest) {
+                "n miss"
+            } else if f == lowest && families.len() > 1 && r.rms.get(f).is_some() {
+                "n low"
+            } else {
+                "n"
+            };
+            let _ = write!(
+                h,
+                "<td class=\"{class}\">{}</td>",
+                r.rms.get(f).map_or("—".into(), fmt_num)
+            );
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n");
+}
+
+/// Each family's parameters (and its scales, which are not comparable).
+fn parameters(h: &mut String, c: &Comparison) {
     h.push_str("<h2>Parameters</h2>\n");
-    for (name, fit) in [("Marschner", marschner), ("Chiang", chiang)] {
+    for m in &c.models {
         let _ = writeln!(
             h,
-            "<h3>{name}</h3>\n<table><tr><th>parameter</th><th>value</th><th>std. error</th><th>status</th></tr>"
+            "<h3>{}</h3>\n<table><tr><th>parameter</th><th>value</th><th>std. error</th><th>status</th></tr>",
+            escape(m.family.title())
         );
-        for p in &fit.parameters {
+        for p in &m.parameters {
             let _ = writeln!(
                 h,
                 "<tr><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td>{}</td></tr>",
@@ -76,7 +127,7 @@ pub fn write_index(
                 p.status
             );
         }
-        for s in &fit.scale {
+        for s in &m.scale {
             let _ = writeln!(
                 h,
                 "<tr><td>scale[{}] (not comparable)</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td></td></tr>",
@@ -87,27 +138,57 @@ pub fn write_index(
         }
         h.push_str("</table>\n");
     }
-    h.push_str("<h2>Where they differ</h2>\n<table><tr><th>bin</th><th>residuals</th><th>RMS Marschner</th><th>RMS Chiang</th><th>worse</th></tr>\n");
-    for r in &c.regions {
-        let _ = writeln!(
-            h,
-            "<tr><td>{} {:.0}±{:.0}°</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td>{}</td></tr>",
-            if r.axis == "abs_phi" { "|φ|" } else { "θh" },
-            r.centre_deg,
-            r.half_width_deg,
-            r.n,
-            fmt_num(r.rms_marschner),
-            fmt_num(r.rms_chiang),
-            r.worse().map_or("", |f| f.as_str())
-        );
-    }
+}
+
+/// Write DIR/index.html.
+pub fn write_index(dir: &Path, c: &Comparison, fig: &FigureInfo) -> Result<()> {
+    let names: Vec<&str> = c.models.iter().map(|m| m.family.title()).collect();
+    let mut h = String::new();
     let _ = writeln!(
         h,
-        "</table>\n<h2>{}</h2>\n<img src=\"{}.svg\" width=\"{}\" alt=\"{}\">\n</body></html>",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>hairfit compare: {}</title>\n<style>{STYLE}</style>\n</head><body>",
+        escape(&and_list(&names))
+    );
+    let _ = writeln!(
+        h,
+        "<h1>{} on {}</h1>\n<ul>",
+        escape(&names.join(" vs ")),
+        escape(&c.data)
+    );
+    for f in &c.findings {
+        let _ = writeln!(h, "<li>{}</li>", escape(f));
+    }
+    h.push_str("</ul>\n");
+    ranking(&mut h, c);
+    let _ = writeln!(
+        h,
+        "<h2>Where each model misses</h2>\n<p class=\"key\">RMS of the normalised residuals \
+         (samples × channels) over each region, per family. Marked red: that family's RMS is at \
+         least {BIN_RATIO}× the region's lowest and larger by {MIN_RMS_GAP} or more; bold: the \
+         lowest. φ = φ_r − φ_i (|φ| = 0° backward, 180° forward), θh = (θ_i + θ_r)/2 (θ &gt; 0 \
+         toward the tip). A lobe region with fewer than 3 residuals has no RMS (an azimuthal rig, \
+         θ_r = −θ_i, measures on the cone only: nothing beside it); such bins are left out.</p>\n<h3>Lobe regions</h3>"
+    );
+    let by_axis =
+        |axis: &str| -> Vec<&Region> { c.regions.iter().filter(|r| r.axis == axis).collect() };
+    regions(&mut h, c, &by_axis("lobe"), true);
+    h.push_str("<h3>10° bins of |φ|</h3>\n");
+    regions(&mut h, c, &by_axis("abs_phi"), false);
+    h.push_str("<h3>10° bins of θh</h3>\n");
+    regions(&mut h, c, &by_axis("theta_h"), false);
+    let _ = writeln!(
+        h,
+        "<h2>{}</h2>\n<img src=\"{}.svg\" width=\"{}\" alt=\"{}\">",
         escape(&fig.title),
         fig.stem,
         fig.width,
         escape(&fig.title)
+    );
+    parameters(&mut h, c);
+    let _ = writeln!(
+        h,
+        "<p><b>Scales:</b> {}.</p>\n</body></html>",
+        escape(&c.scale_note)
     );
     let path = dir.join("index.html");
     write_atomically(&path, |w| {
