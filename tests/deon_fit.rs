@@ -322,26 +322,3 @@ fn other_families_options_are_refused() {
     ]));
     assert!(e.contains("beta_n_deg"), "{e}");
 }
-
-/// docs/deon.md's parameter table is the code's: each line's name, symbol, unit, domain, fit
-/// bound, typical range and default as `DEon::PARAMETERS` holds them.
-#[test]
-fn docs_table_matches_the_parameter_table() {
-    let docs = include_str!("../docs/deon.md");
-    let num = |x: f64| format!("{x}");
-    for f in DEon::PARAMETERS {
-        let row = format!(
-            "| `{}` | {} | {} | {} | [{}, {}] | {} to {} | {} |",
-            f.name,
-            f.symbol,
-            f.unit.describe(),
-            f.domain.text(),
-            num(f.fit.0),
-            num(f.fit.1),
-            num(f.typical.0),
-            num(f.typical.1),
-            num(f.default)
-        );
-        assert!(docs.contains(&row), "docs/deon.md lacks the row\n{row}");
-    }
-}
