@@ -4,8 +4,9 @@ Times, on the same 1,000,000 random directions (|θ| ≤ 85°, all effects, cubi
 channels):
 
 - the model alone (``cargo bench --bench eval_rate``: the same parameters, angles and 256-sample
-  batches, one thread, only the kernel timed, from radians into a buffer already allocated): the
-  rate ``hairfit.eval`` is compared with;
+  batches, one thread, from radians), into a new result each run as hairfit.eval returns one
+  (the rate ``hairfit.eval`` is compared with), and into a buffer already written (the kernel
+  alone, warm pages);
 - ``hairfit.eval`` from NumPy arrays, one thread (RAYON_NUM_THREADS=1) and all cores;
 - ``hairfit eval`` (the CLI, CSV text in and out: parsing and formatting included) on the same
   angles, one thread and all cores;
@@ -71,6 +72,10 @@ def params(channels: int) -> dict:
 
 def python_eval(rows: int, runs: int, channels: int, threads: str | None) -> dict:
     env = dict(os.environ)
+    # NumPy's OpenBLAS keeps worker threads spinning after a call; on 2 cores they take the
+    # core hairfit.eval's thread needs (measured: 80% of the model's rate with them, 91%
+    # without, 1 channel). hairfit uses no BLAS, so they are pinned to the calling thread.
+    env.setdefault("OPENBLAS_NUM_THREADS", "1")
     if threads:
         env["RAYON_NUM_THREADS"] = threads
     out = subprocess.run([sys.executable, "-c", CHILD, str(rows), str(runs),
@@ -149,12 +154,17 @@ def main() -> None:
     rate = lambda t: f"{args.rows / t / 1e6:.2f}"  # noqa: E731
     with tempfile.TemporaryDirectory() as tmp:
         for channels in (1, 3):
-            model, model_cpu = median(model_rate(args.rows, args.runs, channels, Path(tmp)))
-            print(f"{channels} ch, the model alone, 1 thread: {model:.3f} s ({model_cpu:.3f} s): "
-                  f"{rate(model)} ({rate(model_cpu)}) M samples/s")
+            times = model_rate(args.rows, args.runs, channels, Path(tmp))
+            kernel, kernel_cpu = median(times)
+            print(f"{channels} ch, the model alone into a warm buffer, 1 thread: {kernel:.3f} s "
+                  f"({kernel_cpu:.3f} s): {rate(kernel)} ({rate(kernel_cpu)}) M samples/s")
+            model, model_cpu = median({"wall": times["fresh_wall"], "cpu": times["fresh_cpu"]})
+            print(f"{channels} ch, the model alone into a new result, 1 thread: {model:.3f} s "
+                  f"({model_cpu:.3f} s): {rate(model)} ({rate(model_cpu)}) M samples/s")
             for threads, label in (("1", "1 thread"), (None, "all cores")):
                 py, py_cpu = median(python_eval(args.rows, args.runs, channels, threads))
-                ratio = (f", {model / py:.0%} ({model_cpu / py_cpu:.0%}) of the model's rate"
+                ratio = (f", {model / py:.0%} ({model_cpu / py_cpu:.0%}) of the model's rate "
+                         f"into a new result, {kernel / py:.0%} of its warm-buffer rate"
                          if threads == "1" else "")
                 print(f"{channels} ch, {label:9}: hairfit.eval {py:.3f} s ({py_cpu:.3f} s): "
                       f"{rate(py)} ({rate(py_cpu)}) M samples/s{ratio}")

@@ -148,16 +148,18 @@ def eval(  # noqa: A001 (the command's name)
     the same angles (same kernel, same batches).
 
     Args:
-        params: the parameters: a dict like a params.json (docs/model.md's names; with
-            ``model="chiang"`` docs/chiang.md's), or the path of a params.json or of a fit's
-            directory (its params.json).
+        params: the parameters: a dict like a params.json (docs/model.md's names; with another
+            ``model``, that family's page's, e.g. docs/chiang.md), or the path of a params.json
+            or of a fit's directory (its params.json).
         theta_i, phi_i, theta_r, phi_r: the angles, 1-D arrays of one length (scalars are one
             sample), in ``angles`` units.
-        model: ``"marschner"`` (default) or ``"chiang"``.
+        model: ``"marschner"`` (default), ``"chiang"``, ``"kajiya-kay"``,
+            ``"deon"``, ``"karis"`` or ``"frostbite"`` (docs/families.md).
         angles: ``"deg"`` (default) or ``"rad"``.
         **model_options: the command line's model options: ``mode="cubic"|"exact"``,
             ``lobes="R,TT,TRT"``, ``no_glints=True``, ``no_eccentricity=True`` (Marschner);
-            ``terms="R,TT,TRT,residual"``, ``width_nodes=1024`` (Chiang).
+            ``terms="R,TT,TRT,residual"``, ``width_nodes=1024`` (Chiang); ``terms=...`` with
+            the family's own term names (kajiya-kay, deon, karis, frostbite).
 
     Raises:
         HairfitError: bad parameters, options or angles (|θ| ≥ 90°, |φ| > 720°, not finite), or
@@ -405,7 +407,8 @@ def fit(
             ``options``), a :class:`Data`, or a dict of arrays for :func:`data`
             (``theta_i, phi_i, theta_r, phi_r, radiance``, optional ``sigma``, ``weight``,
             ``channels``).
-        model: ``"marschner"`` or ``"chiang"``.
+        model: ``"marschner"`` (default), ``"chiang"``, ``"kajiya-kay"``,
+            ``"deon"``, ``"karis"`` or ``"frostbite"`` (docs/families.md).
         fix: parameters to fix, ``{"eta": 1.55}`` or ``["eta=1.55"]`` (degrees for ``*_deg``).
         loss: ``l2``, ``huber``, ``cauchy`` or ``soft-l1``.
         angles: for a file, its unit (``deg``/``rad``); for a dict of arrays, theirs (default deg).
@@ -509,7 +512,10 @@ def export(fit_dir: PathLike, to: str, output: Optional[PathLike] = None) -> str
 
     Args:
         fit_dir: a fit's directory (:meth:`FitResult.save` or ``hairfit fit --out``).
-        to: ``pbrt``, ``blender`` or ``materialx``.
+        to: ``pbrt``, ``blender``, ``materialx`` (the renderer's Chiang variant), ``unreal``
+            (Unreal Engine 5 hair material inputs as JSON; with ``output``, its editor Python
+            script beside it) or ``unity`` (Unity HDRP hair inputs: ``output`` is required and
+            names the JSON; the C# editor script goes beside it).
         output: a file to write (atomically); when None the text is returned.
 
     Returns:

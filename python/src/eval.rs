@@ -188,7 +188,11 @@ pub(crate) fn eval<'py>(
     let a: [&[f64]; 4] = [&inputs[0], &inputs[1], &inputs[2], &inputs[3]];
     let n = common_length(a).map_err(HairfitError::new_err)?;
     let nc = model.n_channels().max(1);
-    let result = PyArray2::<f64>::zeros(py, [n, nc], false);
+    // Not zeroed: a pass over the whole array that `eval_rows` overwrites anyway (every value
+    // when it succeeds; on a fault the array is dropped, never returned).
+    // SAFETY: f64 has no invalid bit patterns, so reading an unwritten value would give garbage
+    // but not undefined behaviour, and none is read before it is written.
+    let result = unsafe { PyArray2::<f64>::new(py, [n, nc], false) };
     // SAFETY: the array was just created here and no other reference to it exists until it is
     // returned; it is C-contiguous (n, nc), the layout `eval_rows` writes.
     let out = unsafe { result.as_slice_mut() }

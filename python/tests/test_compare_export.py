@@ -46,3 +46,21 @@ def test_export_equals_the_cli(cli, tmp_path):
     text = hairfit.export(fit_dir, to="pbrt")
     assert text == run_cli(cli, "export", fit_dir, "--to", "pbrt").stdout
     assert "MakeNamedMaterial" in text
+
+
+def test_engine_exports_equal_the_cli(cli, tmp_path):
+    """--to unreal and --to unity through Python write the CLI's files (the JSON and the
+    script beside it) from the same fit."""
+    fit_dir = tmp_path / "fit"
+    hairfit.fit(str(DATA / "azimuthal_rgb.csv"), intervals="linear").save(fit_dir)
+    for to, script in (("unreal", ".py"), ("unity", ".cs")):
+        ours, theirs = tmp_path / f"py_{to}.json", tmp_path / f"cli_{to}.json"
+        summary = hairfit.export(fit_dir, to=to, output=ours)
+        run_cli(cli, "export", fit_dir, "--to", to, "--output", theirs)
+        assert "rms |d ln S|" in summary
+        a, b = json.loads(ours.read_text()), json.loads(theirs.read_text())
+        for doc in (a, b):  # the output's own name differs, nothing else
+            doc.pop("script", None)
+            doc.pop("material_instance", None)
+        assert a == b
+        assert ours.with_suffix(script).is_file() and theirs.with_suffix(script).is_file()
