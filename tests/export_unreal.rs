@@ -52,7 +52,11 @@ fn a_karis_fit_exports_its_own_inputs() {
     let dir = karis_fit_dir(root.path(), "brown", brown(), &["R", "TT", "TRT"]);
     let out = unreal::export(&dir).unwrap();
     let m = &out.mapping;
-    assert!(m.rms_log < 1e-9 && m.max_log < 1e-9, "{}", m.quality_text());
+    assert!(
+        m.errors.rms < 1e-9 && m.errors.max < 1e-9,
+        "{}",
+        m.quality_text()
+    );
     assert_eq!(m.as_fitted, Some((0.0, 0.0)));
     assert!(out.warnings.is_empty(), "{:?}", out.warnings);
     let json: Value = serde_json::from_str(&out.json).unwrap();
@@ -88,9 +92,9 @@ fn a_karis_fit_off_the_engines_constants_is_refitted_with_a_warning() {
     let out = unreal::export(&dir).unwrap();
     let m = &out.mapping;
     let (as_is, _) = m.as_fitted.unwrap();
-    eprintln!("as fitted {as_is}, refitted {}", m.rms_log);
+    eprintln!("as fitted {as_is}, refitted {}", m.errors.rms);
     assert!(as_is > 1e-3, "{as_is}");
-    assert!(m.rms_log < as_is, "{} vs {as_is}", m.rms_log);
+    assert!(m.errors.rms < as_is, "{} vs {as_is}", m.errors.rms);
     assert!(
         out.warnings.iter().any(|w| w.contains("eta")),
         "{:?}",
@@ -129,9 +133,13 @@ fn a_marschner_fit_exports_with_a_stated_loss() {
     let out = unreal::export(&dir).unwrap();
     let m = &out.mapping;
     eprintln!("{}\n{:?}", m.quality_text(), m.inputs);
-    assert!(m.rms_log.is_finite() && m.rms_log > 0.01, "{}", m.rms_log);
+    assert!(
+        m.errors.rms.is_finite() && m.errors.rms > 0.01,
+        "{}",
+        m.errors.rms
+    );
     let json: Value = serde_json::from_str(&out.json).unwrap();
-    assert_eq!(json["mapping"]["rms_log"].as_f64(), Some(m.rms_log));
+    assert_eq!(json["mapping"]["rms_log"].as_f64(), Some(m.errors.rms));
     assert_eq!(json["source"]["model"], "Marschner");
     let colour = json["parameters"]["BaseColor"].as_array().unwrap();
     assert!(
@@ -141,7 +149,7 @@ fn a_marschner_fit_exports_with_a_stated_loss() {
     assert!(out.summary.contains("from the Marschner fit"));
     assert!(out
         .summary
-        .contains(&format!("rms |d ln S| {:.4}", m.rms_log)));
+        .contains(&format!("rms |d ln S| {:.4}", m.errors.rms)));
 }
 
 /// Engines take RGB: a 2-channel fit is refused as the renderer exports refuse it.

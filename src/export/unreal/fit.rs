@@ -13,6 +13,7 @@ use nalgebra::{allocator::Allocator, Const, DMatrix, DVector, DefaultAllocator, 
 use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::error::{Error, Result};
+use crate::export::log_fit::LogErrors;
 use crate::export::mapping::{
     least_squares, log_errors, log_floored, max, rms, MappingTarget, MAX_ITERATIONS,
 };
@@ -86,15 +87,12 @@ pub fn engine_scattering(inputs: &EngineInputs, on: TermSet, angles: &[Angles]) 
 #[derive(Debug, Clone)]
 pub struct EngineMapping {
     pub inputs: EngineInputs,
-    pub n_measured: usize,
-    pub n_sphere: usize,
-    /// rms and max of `|ln(S_engine + f) − ln(S_source + f)|` over all directions and channels.
-    pub rms_log: f64,
-    pub max_log: f64,
-    /// The rms over the measured directions only (None without curves.csv).
-    pub rms_log_measured: Option<f64>,
-    pub iterations: u64,
-    pub starts: usize,
+    /// `|ln(S_engine + f) − ln(S_source + f)|` over all directions and channels.
+    pub errors: LogErrors,
+    /// Directions: measured (curves.csv), then the dense sphere.
+    pub directions: (usize, usize),
+    /// LM iterations, and starts.
+    pub work: (u64, usize),
     /// A Karis fit: the (rms, max) error of the engine at the fit's own parameters (gain 1) —
     /// what passing them on unchanged costs; 0 when the engine renders the fitted model itself.
     pub as_fitted: Option<(f64, f64)>,
@@ -106,7 +104,8 @@ pub struct EngineMapping {
 impl EngineMapping {
     /// One line: how the inputs were obtained and how well they reproduce S.
     pub fn quality_text(&self) -> String {
-        let measured = match self.rms_log_measured {
+        let e = &self.errors;
+        let measured = match e.rms_measured {
             Some(r) => format!(", measured directions only {r:.4}"),
             None => String::new(),
         };
@@ -114,13 +113,13 @@ impl EngineMapping {
             "engine inputs fitted over {} measured + {} sphere directions: rms |d ln S| {:.4} \
              (max {:.3}{measured}; floor {:e} of each channel's peak), {} LM iterations from {} \
              starts",
-            self.n_measured,
-            self.n_sphere,
-            self.rms_log,
-            self.max_log,
+            self.directions.0,
+            self.directions.1,
+            e.rms,
+            e.max,
             crate::export::mapping::FLOOR_FRACTION,
-            self.iterations,
-            self.starts
+            self.work.0,
+            self.work.1
         )
     }
 }
@@ -252,7 +251,9 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
         let e = log_errors(&engine_scattering(inputs, on, angles), target, floor, n);
         (rms(&e), max(&e), e)
     };
-    let (rms_log, max_log, errors) = errors_of(&inputs, engine_terms());
+    let n_measured = source.measured.len();
+    let (_, _, all) = errors_of(&inputs, engine_terms());
+    let errors = LogErrors::of(&all, n_measured * n);
     let as_fitted = match &source.model {
         SourceModel::Table(FamilyModel::Table { table, .. }) if table.name() == Karis::NAME => {
             let (r, m, _) = errors_of(&starts[0], engine_terms());
@@ -265,8 +266,7 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
         let (r, m, _) = errors_of(&inputs, strands);
         (r, m)
     });
-    let n_measured = source.measured.len();
-    if !(rms_log.is_finite() && max_log.is_finite()) {
+    if !(errors.rms.is_finite() && errors.max.is_finite()) {
         return Err(Error::Other(
             "the Unreal mapping fit ended with non-finite errors; the source fit may be degenerate"
                 .into(),
@@ -274,13 +274,9 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     }
     Ok(EngineMapping {
         inputs,
-        n_measured,
-        n_sphere: t.n_sphere,
-        rms_log,
-        max_log,
-        rms_log_measured: (n_measured > 0).then(|| rms(&errors[..n_measured * n])),
-        iterations,
-        starts: starts.len(),
+        errors,
+        directions: (n_measured, t.n_sphere),
+        work: (iterations, starts.len()),
         as_fitted,
         without_scatter,
     })

@@ -80,14 +80,14 @@ pub fn warnings(m: &EngineMapping) -> Vec<String> {
              shift differ from the engine's 1.55 and 0.035 rad, or a term it ran without is \
              nonzero): as they are they would miss the fit's S by rms |d ln S| {rms:.4} (max \
              {max:.3}); the inputs written were refitted and miss it by rms {:.4} (max {:.3})",
-            m.rms_log, m.max_log
+            m.errors.rms, m.errors.max
         ));
     }
     // A Scatter whose removal costs less than this much rms is not worth a warning.
     const NOTICEABLE: f64 = 1e-3;
     if let Some((rms, max)) = m
         .without_scatter
-        .filter(|(rms, _)| rms - m.rms_log >= NOTICEABLE)
+        .filter(|(rms, _)| rms - m.errors.rms >= NOTICEABLE)
     {
         out.push(format!(
             "Scatter {:.4} is applied to hair cards and meshes only: hair strands ignore it and \
