@@ -219,6 +219,21 @@ fn intervals_bracket_the_value_and_match_the_se_where_the_cost_is_nearly_quadrat
     }
     // α_R and β_R are undetermined on azimuthal scans (θ_h = 0 throughout): four remain.
     assert!(checked >= 4, "only {checked} free parameters");
+    // Where the quadratic holds, a side costs two solves: the SE (Δχ² ≈ 1, accepted) and the
+    // quadratic's 95% point (accepted as it stands), not a bracket and a refinement (three):
+    // such a profile stores five points (the optimum and two per side). At 0.5% noise σ_a's
+    // profile is quadratic to that tolerance (k_G, w_c and the eccentricity's are not quite,
+    // and take the bracket: 9–10 points).
+    let points: Vec<(String, usize)> = (out.json.parameters.iter())
+        .filter(|e| e.status == ParamStatus::Free)
+        .map(|e| (e.name.clone(), e.profile.len()))
+        .collect();
+    assert!(
+        points
+            .iter()
+            .any(|(name, n)| name == "sigma_a[0]" && *n == 5),
+        "{points:?}"
+    );
     assert!(out
         .json
         .options

@@ -9,6 +9,9 @@
 //!
 //! Each crossing is bracketed by steps that grow like a parabola's extrapolation would need, then
 //! refined by a few regula-falsi steps on `√Δχ²` (linear in the value for a quadratic profile).
+//! Where the first step (the linearised SE) lands on Δχ² ≈ 1, the profile is the local
+//! quadratic there, so the next solve is aimed at the quadratic's 95% point and accepted as it
+//! stands when it lands within the crossing tolerance: two solves a side instead of three.
 //! Every solve is warm-started from the nearest solved point. Parameters run in parallel (rayon);
 //! each parameter's sequence of solves is fixed, so results are identical for any thread count.
 
@@ -280,11 +283,19 @@ impl<F: Forward> Pinned<'_, '_, F> {
             let pt = self.solve(dir * h, &last);
             let d = pt.d;
             pts.push(pt);
-            if d >= CHI2_95 || h >= hmax {
+            if d >= CHI2_95 || near(d, CHI2_95) || h >= hmax {
                 break;
             }
-            // A parabola through the optimum reaches 1.3·3.84 at h·√(5/d); grow by 1.5–4×.
-            let grow = (1.3 * CHI2_95 / d.max(0.05)).sqrt().clamp(1.5, 4.0);
+            // Where the first step (the linearised SE) found Δχ² ≈ 1, the profile is the local
+            // quadratic there: aim at its 95% crossing, h·√(3.84/d), which the crossing search
+            // then accepts as it stands when the quadratic still holds (one solve, not a
+            // bracket and a refinement). Otherwise a parabola through the optimum reaches
+            // 1.3·3.84 at h·√(5/d); grow by 1.5–4×.
+            let grow = if pts.len() == 2 && near(d, CHI2_68) {
+                (CHI2_95 / d).sqrt()
+            } else {
+                (1.3 * CHI2_95 / d.max(0.05)).sqrt().clamp(1.5, 4.0)
+            };
             h = (h * grow).min(hmax);
         }
         Some(pts)
@@ -293,7 +304,7 @@ impl<F: Forward> Pinned<'_, '_, F> {
     /// Where the side's profile crosses `target` (refining between bracketing points, which are
     /// added to `pts`), or where it ends open.
     fn crossing(&mut self, pts: &mut Vec<Pt>, target: f64, bounded: bool) -> Option<End> {
-        let Some(k) = pts.iter().position(|p| p.d >= target) else {
+        let Some(k) = pts.iter().position(|p| p.d >= target || near(p.d, target)) else {
             let last = pts.last()?;
             return Some(End::Open {
                 at: self.x0 + last.h,
@@ -301,6 +312,9 @@ impl<F: Forward> Pinned<'_, '_, F> {
                 bound: bounded,
             });
         };
+        if near(pts[k].d, target) {
+            return Some(End::Closed(self.x0 + pts[k].h));
+        }
         let g = |d: f64| d.max(0.0).sqrt() - target.sqrt();
         let (mut a, mut b) = (k - 1, k);
         for _ in 0..MAX_REFINE {
@@ -341,6 +355,12 @@ impl<F: Forward> Pinned<'_, '_, F> {
             self.x0 + pa.h + (pb.h - pa.h) * t.clamp(0.0, 1.0),
         ))
     }
+}
+
+/// Whether a solved Δχ² is close enough to `target` to be its crossing: `√Δχ²` within
+/// [`SQRT_TOL`] of `√target`.
+fn near(d: f64, target: f64) -> bool {
+    (d.max(0.0).sqrt() - target.sqrt()).abs() < SQRT_TOL
 }
 
 /// Profile free parameter `j` of `opt`, stepping first by `step` (natural units, e.g. the
