@@ -371,3 +371,39 @@ fn a_fix_naming_a_channel_the_data_lack_is_found_before_any_item_runs() {
     let r = run_in(dir, &["batch", "c.csv", "--out", "o"]);
     assert_eq!(code(&r), Some(0), "{}", cli::stderr(&r));
 }
+
+/// Issue 27: every family runs in a batch. A `terms` cell is checked with its item's `model`
+/// (the family's own terms), and a family's option on an item of another family is refused
+/// with the line and column, naming the families it belongs to.
+#[test]
+fn items_of_table_families_take_their_own_terms() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(shipped("sphere_1ch.csv"), dir.path().join("sphere.csv")).unwrap();
+    write(
+        dir.path(),
+        "m.csv",
+        "name,data,model,terms,starts,no-progress\n\
+         kk,sphere.csv,kajiya-kay,\"diffuse,specular\",2,true\n\
+         fb,sphere.csv,frostbite,\"R,TT,TRT\",2,true\n",
+    );
+    let out = run_in(dir.path(), &["batch", "m.csv", "--out", "b"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(code(&out).is_some(), "{err}");
+    assert!(!err.contains("m.csv:"), "a manifest error: {err}");
+    for item in ["kk", "fb"] {
+        let fit = std::fs::read_to_string(dir.path().join("b").join(item).join("fit.json"))
+            .unwrap_or_else(|e| panic!("{item}: {e}; {err}"));
+        assert!(fit.contains("\"terms\""), "{item}: {fit}");
+    }
+    write(
+        dir.path(),
+        "bad.csv",
+        "name,data,terms\nm,sphere.csv,\"R,TT\"\n",
+    );
+    let out = run_in(dir.path(), &["batch", "bad.csv", "--out", "c"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.csv:2:") && err.contains("not --model marschner"),
+        "{err}"
+    );
+}

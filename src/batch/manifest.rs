@@ -353,6 +353,13 @@ fn item_from_cells(
         base.join(&data)
     };
     let mut argv = vec![data_path.display().to_string()];
+    // A family's own options (`terms`, `width-nodes`, …) are valid only with its `model`, so a
+    // cell is checked alone together with the item's model cell.
+    let model_words: Vec<String> = match (find("model"), options.iter().find(|o| o.long == "model"))
+    {
+        (Some(cell), Some(option)) => option_words(option, &cell.value).unwrap_or_default(),
+        _ => Vec::new(),
+    };
     for cell in cells.iter().filter(|c| c.key != "name" && c.key != "data") {
         let at = place(cell.column, cell.key);
         let Some(option) = options.iter().find(|o| o.long == cell.key) else {
@@ -362,6 +369,9 @@ fn item_from_cells(
             .map_err(|m| at.error(path, format!("`{}`: {m}", cell.key)))?;
         // Check each cell alone so an error points at its column.
         let mut alone = vec![argv[0].clone()];
+        if cell.key != "model" {
+            alone.extend(model_words.iter().cloned());
+        }
         alone.extend(words.iter().cloned());
         check_fit_words(&alone)
             .map_err(|m| at.error(path, format!("`{}` = `{}`: {m}", cell.key, cell.value)))?;
