@@ -15,8 +15,8 @@ use crate::synth::{
 /// Options of `hairfit synth`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SynthArgs {
-    /// Parameter file with the true parameters (JSON, MODEL.md's names; CHIANG.md's with
-    /// --model chiang).
+    /// Parameter file with the true parameters (JSON, docs/model.md's names; with --model
+    /// NAME, that family's page's: docs/families.md lists them).
     #[arg(long)]
     pub params: PathBuf,
     /// Sample geometry: azimuthal, longitudinal, sphere or photo, with options, e.g.
