@@ -3,6 +3,7 @@
 //! and residuals. Decimation happens here; drawing is in [`super::figures`].
 
 use plotters::prelude::RGBColor;
+use rayon::prelude::*;
 
 use super::figures::{ChannelSeries, DataVsFitFigure, Point, ResidualsFigure, SlicePanel};
 use super::{LobeModel, ReportSummary, DENSE_POINTS, MAX_SCATTER_POINTS, MAX_SLICE_POINTS};
@@ -39,13 +40,18 @@ impl Ctx<'_> {
 
     /// The model's R, TT, TRT for `channel` at angles in degrees (`None` without a model).
     fn lobes_at(&self, deg: &[f64; 4], channel: usize) -> Option<[f64; 3]> {
+        Some(self.all_lobes_at(deg)?[channel.min(self.n_model - 1)])
+    }
+
+    /// The model's R, TT, TRT for every channel at angles in degrees.
+    fn all_lobes_at(&self, deg: &[f64; 4]) -> Option<Vec<[f64; 3]>> {
         let model = self.model?;
         let mut out = vec![[0.0; 3]; self.n_model];
         model(
             &Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]),
             &mut out,
         );
-        Some(out[channel.min(self.n_model - 1)])
+        Some(out)
     }
 
     /// One slice: decimated points per channel and the dense model curve, calibrated to the
@@ -64,6 +70,12 @@ impl Ctx<'_> {
             let l = self.fit.model.effects.lobes;
             [l.r, l.tt, l.trt]
         };
+        // The dense curve for every channel at once, the grid in parallel: one evaluation per
+        // point, not one per point and channel (a Chiang curve point costs a width integral).
+        let dense: Vec<Option<Vec<[f64; 3]>>> = grid
+            .par_iter()
+            .map(|&x| self.all_lobes_at(&slice.angles_at(x)))
+            .collect();
         let mut channels = Vec::new();
         for (c, (name, colour)) in self.colours.iter().enumerate() {
             // (x, row) of this channel in the slice, in x order.
@@ -109,10 +121,10 @@ impl Ctx<'_> {
                 Some(k) => {
                     let mut lobes = [Vec::new(), Vec::new(), Vec::new()];
                     let mut total = Vec::with_capacity(grid.len());
-                    for &x in &grid {
-                        let l = self
-                            .lobes_at(&slice.angles_at(x), c)
-                            .unwrap_or([f64::NAN; 3]);
+                    for point in &dense {
+                        let l = point
+                            .as_ref()
+                            .map_or([f64::NAN; 3], |all| all[c.min(self.n_model - 1)]);
                         total.push(k * (l[0] + l[1] + l[2]));
                         for p in 0..3 {
                             lobes[p].push(k * l[p]);
