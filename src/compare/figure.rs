@@ -130,10 +130,17 @@ impl Figure for OverlayFigure {
     }
     fn title(&self) -> String {
         let names: Vec<&str> = self.families.iter().map(|f| f.title()).collect();
-        format!(
+        let full = format!(
             "Residuals of the {} fits, per slice",
             super::findings::and_list(&names)
-        )
+        );
+        // Beyond ~90 characters the 1500-pixel header cuts the title at both ends (six
+        // families' titles); the key under it names each family.
+        if full.chars().count() <= 90 {
+            full
+        } else {
+            format!("Residuals of the {} families' fits, per slice", names.len())
+        }
     }
     fn size(&self) -> (u32, u32) {
         let rows = self.panels.len().div_ceil(3).max(1) as u32;

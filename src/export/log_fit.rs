@@ -46,6 +46,17 @@ impl LogTarget {
             .collect()
     }
 
+    /// `x` with its log-gain variable `x[gain]` moved so the mean log residual of `model` is
+    /// zero (where each LM start begins: the light's level matched, the shape left alone).
+    pub fn with_best_gain(&self, model: &dyn LogModel, mut x: Vec<f64>, gain: usize) -> Vec<f64> {
+        let r = self.residuals(&model.values(&x));
+        let mean = r.iter().sum::<f64>() / r.len() as f64;
+        if mean.is_finite() {
+            x[gain] -= mean;
+        }
+        x
+    }
+
     /// `|Δ ln S|` for every row.
     pub fn errors(&self, values: &[f64]) -> Vec<f64> {
         self.residuals(values).iter().map(|r| r.abs()).collect()

@@ -288,13 +288,7 @@ pub fn fit_unity(source: &SourceFit) -> Result<UnityMapping> {
     // Each start's gain is the geometric mean ratio of the source's S to the engine's there.
     let starts: Vec<Vec<f64>> = starting_inputs(&source.model, n)
         .into_iter()
-        .map(|u| {
-            let mut x = variables_of(&u);
-            let r = target.residuals(&model.values(&x));
-            let shift = -r.iter().sum::<f64>() / r.len() as f64;
-            x[n + 3] += if shift.is_finite() { shift } else { 0.0 };
-            x
-        })
+        .map(|u| target.with_best_gain(&model, variables_of(&u), n + 3))
         .collect();
     let LogFit {
         x,

@@ -8,15 +8,12 @@
 //! iterate is a value the engine accepts, and the ends are reachable: a Backlit of 1 or a
 //! Scatter of 0 is written as such), the gain is `eˣ`. Exact Jacobians by forward-mode duals.
 
-use argmin::core::{Jacobian, Operator};
-use nalgebra::{allocator::Allocator, Const, DMatrix, DVector, DefaultAllocator, Dim, Dyn, U1};
+use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::error::{Error, Result};
-use crate::export::log_fit::LogErrors;
-use crate::export::mapping::{
-    least_squares, log_errors, log_floored, max, rms, MappingTarget, MAX_ITERATIONS,
-};
+use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
+use crate::export::mapping::{max, rms, MappingTarget};
 use crate::export::source::{SourceFit, SourceModel};
 use crate::family::FamilyModel;
 use crate::model::Angles;
@@ -225,30 +222,19 @@ fn start_inputs(model: &SourceModel) -> Vec<EngineInputs> {
 /// Fit the engine's inputs to the source's `S`.
 pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     let t = MappingTarget::new(source)?;
-    let (angles, target, floor) = (&t.angles, &t.target, &t.floor);
+    let angles = &t.angles;
     let n = source.model.n_channels();
-    let problem = EngineProblem {
-        angles,
-        target_log: &log_floored(target, floor, n),
-        floor,
-        n,
-    };
+    let target = LogTarget::new(&t.target, n);
+    let model = UnrealModel { angles, n };
     let starts = start_inputs(&source.model);
-    let mut best: Option<(f64, Vec<f64>)> = None;
-    let mut iterations = 0;
-    for start in &starts {
-        let x0 = problem.with_best_gain(unbuild(start));
-        let (x, iters) = least_squares(problem, &x0, MAX_ITERATIONS)?;
-        iterations += iters;
-        let cost = problem.cost(x.as_slice());
-        if best.as_ref().is_none_or(|(c, _)| cost < *c) {
-            best = Some((cost, x.as_slice().to_vec()));
-        }
-    }
-    let (_, x) = best.expect("at least one start");
+    let gain = unbuild(&starts[0]).len() - 1;
+    let x0: Vec<Vec<f64>> = (starts.iter())
+        .map(|start| target.with_best_gain(&model, unbuild(start), gain))
+        .collect();
+    let LogFit { x, iterations, .. } = fit_log(&model, &target, &x0)?;
     let inputs = inputs_of(&x, n);
     let errors_of = |inputs: &EngineInputs, on: TermSet| {
-        let e = log_errors(&engine_scattering(inputs, on, angles), target, floor, n);
+        let e = target.errors(&engine_scattering(inputs, on, angles));
         (rms(&e), max(&e), e)
     };
     let n_measured = source.measured.len();
@@ -282,43 +268,16 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     })
 }
 
-/// The least-squares problem of the Unreal mapping: residuals in log S, exact Jacobian.
-#[derive(Clone, Copy)]
-struct EngineProblem<'a> {
+/// The engine's `S` as a function of the free variables, for [`fit_log`]; exact Jacobians by
+/// forward-mode duals (on the stack for 1 and 3 channels).
+struct UnrealModel<'a> {
     angles: &'a [Angles],
-    target_log: &'a [f64],
-    floor: &'a [f64],
     n: usize,
 }
 
-impl EngineProblem<'_> {
-    fn residuals(&self, x: &[f64]) -> Vec<f64> {
-        let s = engine_scattering(&inputs_of(x, self.n), engine_terms(), self.angles);
-        let fitted = log_floored(&s, self.floor, self.n);
-        fitted
-            .iter()
-            .zip(self.target_log)
-            .map(|(a, b)| a - b)
-            .collect()
-    }
-
-    /// ½‖r‖².
-    fn cost(&self, x: &[f64]) -> f64 {
-        0.5 * self.residuals(x).iter().map(|r| r * r).sum::<f64>()
-    }
-
-    /// `x` with its gain replaced by the one that zeroes the mean log residual.
-    fn with_best_gain(&self, mut x: Vec<f64>) -> Vec<f64> {
-        let r = self.residuals(&x);
-        let mean = r.iter().sum::<f64>() / r.len() as f64;
-        if mean.is_finite() {
-            *x.last_mut().expect("the gain is the last variable") -= mean;
-        }
-        x
-    }
-
-    /// Residuals and their derivatives in the `dim` free variables.
-    fn dual_pass<D: Dim>(&self, dim: D, x: &[f64]) -> DMatrix<f64>
+impl UnrealModel<'_> {
+    /// `S` (times the gain) and its derivatives in the `dim` free variables, row-major.
+    fn dual_pass<D: Dim>(&self, dim: D, x: &[f64]) -> (Vec<f64>, Vec<f64>)
     where
         DefaultAllocator: Allocator<D>,
         DualVec64<D>: DualNum<f64>,
@@ -327,49 +286,36 @@ impl EngineProblem<'_> {
             .map(|(j, &v)| DualVec64::new(v, Derivative::derivative_generic(dim, U1, j)))
             .collect();
         let (p, gain) = build(&seeded, self.n);
-        let mut jac = DMatrix::zeros(self.angles.len() * self.n, x.len());
+        let rows = self.angles.len() * self.n;
+        let (mut values, mut jac) = (vec![0.0; rows], vec![0.0; rows * x.len()]);
         let mut terms = zero_terms::<DualVec64<D>>(self.n);
         for (i, a) in self.angles.iter().enumerate() {
             clear_terms(&mut terms);
             Karis::scatter(&p, a, engine_terms(), &mut terms);
             for (c, t) in terms.iter().enumerate() {
-                let r = (total(t) * gain.clone() + self.floor[c]).ln();
-                let e = r.eps.unwrap_generic(dim, U1);
-                for (j, v) in e.iter().enumerate() {
-                    jac[(i * self.n + c, j)] = *v;
-                }
+                let row = i * self.n + c;
+                let s = total(t) * gain.clone();
+                values[row] = s.re;
+                let e = s.eps.unwrap_generic(dim, U1);
+                jac[row * x.len()..(row + 1) * x.len()].copy_from_slice(e.as_slice());
             }
         }
-        jac
+        (values, jac)
     }
 }
 
-impl Operator for EngineProblem<'_> {
-    type Param = DVector<f64>;
-    type Output = DVector<f64>;
-    fn apply(&self, x: &DVector<f64>) -> std::result::Result<DVector<f64>, argmin::core::Error> {
-        // A non-finite residual is a failed trial step to the solver, not an error.
-        Ok(DVector::from_vec(self.residuals(x.as_slice())))
+impl LogModel for UnrealModel<'_> {
+    fn values(&self, x: &[f64]) -> Vec<f64> {
+        engine_scattering(&inputs_of(x, self.n), engine_terms(), self.angles)
     }
-}
 
-impl Jacobian for EngineProblem<'_> {
-    type Param = DVector<f64>;
-    type Jacobian = DMatrix<f64>;
-    fn jacobian(&self, x: &DVector<f64>) -> std::result::Result<DMatrix<f64>, argmin::core::Error> {
-        let x = x.as_slice();
-        // Stack duals for 1 and 3 channels (5 shared variables besides Base Color).
-        let m = match x.len() {
+    fn jacobian(&self, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        // 5 shared variables besides Base Color.
+        match x.len() {
             6 => self.dual_pass(Const::<6>, x),
             8 => self.dual_pass(Const::<8>, x),
             nx => self.dual_pass(Dyn(nx), x),
-        };
-        if m.iter().any(|v| !v.is_finite()) {
-            return Err(argmin::core::Error::msg(
-                "non-finite Jacobian in the Unreal mapping fit",
-            ));
         }
-        Ok(m)
     }
 }
 
@@ -403,13 +349,11 @@ mod tests {
         };
         let angles = crate::export::mapping::dense_sphere();
         let target = engine_scattering(&truth, engine_terms(), &angles);
-        let floor = vec![1e-3 * target.iter().copied().fold(0.0, f64::max); 3];
-        let problem = EngineProblem {
+        let model = UnrealModel {
             angles: &angles,
-            target_log: &log_floored(&target, &floor, 3),
-            floor: &floor,
             n: 3,
         };
+        let target = LogTarget::new(&target, 3);
         let start = EngineInputs {
             base_color: vec![0.3; 3],
             roughness: 0.35,
@@ -418,10 +362,10 @@ mod tests {
             scatter: 0.02,
             gain: 1.0,
         };
-        let x0 = problem.with_best_gain(unbuild(&start));
-        let (x, _) = least_squares(problem, &x0, 200).unwrap();
-        let got = inputs_of(x.as_slice(), 3);
-        let r = problem.residuals(x.as_slice());
+        let x0 = target.with_best_gain(&model, unbuild(&start), 3 + 4);
+        let fit = fit_log(&model, &target, &[x0]).unwrap();
+        let got = inputs_of(&fit.x, 3);
+        let r = target.residuals(&model.values(&fit.x));
         assert!(rms(&r) < 1e-6, "{} {got:?}", rms(&r));
         let close = |a: f64, b: f64| (a - b).abs() < 1e-4 * b.max(1.0);
         assert!(got
