@@ -219,7 +219,10 @@ fn synth_then_fit_recovers_noise_free_truth() {
     ]);
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
     assert!(matches!(t.params, FamilyParams::Chiang(_)));
-    assert_eq!(t.chiang.unwrap().width_nodes, 256);
+    assert_eq!(
+        t.chiang.unwrap().width_nodes,
+        hairfit::chiang::WidthNodes::Fixed(256)
+    );
     let out = dir.path().join("fit");
     let summary = stdout(&hairfit_ok(&[
         "fit",
@@ -355,5 +358,79 @@ fn cost_ledger_has_the_chiang_section() {
     assert!(row("chiang-b0.05", "256 nodes, random, uncached").error_max > 1e-3);
     for f in ["cost.csv", "cost.json", "cost.svg", "cost.png"] {
         assert!(dir.path().join("cost").join(f).exists(), "{f}");
+    }
+}
+
+/// The default (automatic) width rule fits noisy data to the parameters the plain 1024-node rule
+/// finds, within a hundredth of each standard error (issue 30's bar for a faster rule), with
+/// the same verdict — at β_n = 0.5, where the plain rule's kink error (≈4e-7) is largest of the
+/// two. fit.json records which rule ran.
+#[test]
+fn auto_width_rule_fits_like_the_plain_rule() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = write(
+        dir.path(),
+        "truth.json",
+        r#"{"eta": 1.55, "sigma_a": [0.3, 0.9], "beta_m": 0.2, "beta_n": 0.5, "alpha_deg": 3}"#,
+    );
+    let data = dir.path().join("d.csv");
+    hairfit_ok(&[
+        "synth",
+        "--model",
+        "chiang",
+        "--params",
+        p(&truth),
+        "--rig",
+        "azimuthal:incidences=15,30,45:steps=36",
+        "--noise",
+        "relative:0.02",
+        "--output",
+        p(&data),
+    ]);
+    let fit = |rule: &str| {
+        let out = dir.path().join(format!("fit-{rule}"));
+        hairfit_ok(&[
+            "fit",
+            p(&data),
+            "--model",
+            "chiang",
+            "--width-nodes",
+            rule,
+            "--starts",
+            "4",
+            "--intervals",
+            "linear",
+            "--no-progress",
+            "--out",
+            p(&out),
+        ]);
+        FitJson::load(&out.join("fit.json")).unwrap()
+    };
+    let (auto, plain) = (fit("auto"), fit("1024"));
+    assert_eq!(
+        auto.chiang.unwrap().width_nodes,
+        hairfit::chiang::WidthNodes::Auto
+    );
+    assert_eq!(
+        plain.chiang.unwrap().width_nodes,
+        hairfit::chiang::WidthNodes::Fixed(1024)
+    );
+    assert_eq!(auto.verdict, plain.verdict);
+    assert_eq!(
+        auto.verdict,
+        hairfit::files::Verdict::Good,
+        "{:?}",
+        auto.reasons
+    );
+    for (a, b) in auto.parameters.iter().zip(&plain.parameters) {
+        assert_eq!(a.name, b.name);
+        let (Some(se), Some(va), Some(vb)) = (b.std_error, a.value, b.value) else {
+            continue;
+        };
+        assert!(
+            (va - vb).abs() <= se / 100.0,
+            "{}: auto {va} vs plain {vb} (SE {se})",
+            a.name
+        );
     }
 }

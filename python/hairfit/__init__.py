@@ -158,7 +158,7 @@ def eval(  # noqa: A001 (the command's name)
         angles: ``"deg"`` (default) or ``"rad"``.
         **model_options: the command line's model options: ``mode="cubic"|"exact"``,
             ``lobes="R,TT,TRT"``, ``no_glints=True``, ``no_eccentricity=True`` (Marschner);
-            ``terms="R,TT,TRT,residual"``, ``width_nodes=1024`` (Chiang); ``terms=...`` with
+            ``terms="R,TT,TRT,residual"``, ``width_nodes="auto"|1024`` (Chiang); ``terms=...`` with
             the family's own term names (kajiya-kay, deon, karis, frostbite).
 
     Raises:

@@ -4,11 +4,11 @@
 //! Everything here depends on θ_r and φ only, never on θ_i: one [`AzimuthalTable`] serves every
 //! incidence that shares an exit direction (see [`super::evaluator`]).
 
-use std::f64::consts::{FRAC_PI_2, PI};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use num_dual::DualNum;
 
-use super::quadrature::WidthRule;
+use super::quadrature::WidthNode;
 use super::{ChiangEffects, ChiangParams};
 use crate::model::angles::wrap_t;
 
@@ -47,6 +47,72 @@ pub fn exit_azimuth<T: DualNum<f64>>(p: usize, gamma_o: f64, gamma_t: &T) -> T {
 #[inline]
 pub fn azimuthal_lobe<T: DualNum<f64>>(phi: f64, exit: &T, inv_s: &T, norm: &T) -> T {
     trimmed_logistic(&wrap_t(-exit.clone() - phi), inv_s, norm)
+}
+
+/// Where lobe `p`'s integrand has its kink: the offsets γ ∈ (−π/2, π/2) at which the logistic's
+/// argument `−φ − Φ_p(γ)` crosses π (mod 2π), where the trimmed logistic wraps with a jump in
+/// slope. Appended to `out`. `Φ_p` is monotone in γ except for TRT's caustic at
+/// `sin²γ_c = (4 − η'²)/3` (η' < 2), so each monotone piece is searched for every crossing.
+pub fn wrap_kinks(p: usize, eta_prime: f64, phi: f64, out: &mut Vec<f64>) {
+    let pf = p as f64;
+    let excess = |gamma: f64| {
+        let gamma_t = (gamma.sin() / eta_prime).asin();
+        -phi - exit_azimuth(p, gamma, &gamma_t) - PI
+    };
+    let slope = |gamma: f64| {
+        let s = gamma.sin();
+        2.0 - 2.0 * pf * gamma.cos() / (eta_prime * eta_prime - s * s).sqrt()
+    };
+    let mut ends = vec![-FRAC_PI_2];
+    if p == 2 && eta_prime < 2.0 {
+        let caustic = ((4.0 - eta_prime * eta_prime) / 3.0).sqrt().asin();
+        ends.extend([-caustic, caustic]);
+    }
+    ends.push(FRAC_PI_2);
+    for piece in ends.windows(2) {
+        let (a, b) = (piece[0], piece[1]);
+        let (ga, gb) = (excess(a), excess(b));
+        let (lo, hi) = (ga.min(gb), ga.max(gb));
+        let mut k = (lo / TAU).ceil();
+        while k * TAU <= hi {
+            let target = k * TAU;
+            if target > lo && target < hi {
+                out.push(monotone_root(|g| excess(g) - target, slope, a, b));
+            }
+            k += 1.0;
+        }
+    }
+}
+
+/// The root of `f` in `[a, b]` (`f(a)`, `f(b)` of opposite signs, `f` monotone): Newton steps
+/// with `slope = f'`, bisection whenever a step leaves the bracket, to ~1 ulp of γ.
+fn monotone_root(f: impl Fn(f64) -> f64, slope: impl Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+    let rising = f(b) > f(a);
+    let (mut lo, mut hi) = (a, b);
+    let mut x = 0.5 * (a + b);
+    for _ in 0..100 {
+        let fx = f(x);
+        if fx == 0.0 {
+            return x;
+        }
+        if (fx < 0.0) == rising {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let d = slope(x);
+        let newton = x - fx / d;
+        let next = if d != 0.0 && newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if (next - x).abs() <= 2.0 * f64::EPSILON || hi - lo <= 2.0 * f64::EPSILON {
+            return next;
+        }
+        x = next;
+    }
+    x
 }
 
 /// Unpolarised dielectric Fresnel reflectance from 1 into `eta` at incidence cosine `cos_i`.
@@ -103,6 +169,14 @@ pub fn attenuations<T: DualNum<f64>>(f: &T, t: &T) -> [T; 4] {
     [a0, a1, a2, a3]
 }
 
+/// The nodes of one exit direction's width integral: the lobes' and the residual's (the same
+/// slice for a plain rule; the smooth `Ā₃` needs no breaks at the logistics' kinks).
+#[derive(Debug, Clone, Copy)]
+pub struct WidthSet<'a> {
+    pub lobes: &'a [WidthNode],
+    pub residual: &'a [WidthNode],
+}
+
 /// The width-averaged azimuthal factors of one exit direction, per channel:
 /// `lobes[c][p] = Ñ_p = ⟨A_p N_p⟩_h` (p < 3) and `residual[c] = Ā₃ = ⟨A₃⟩_h`. Disabled terms are 0.
 #[derive(Debug, Clone, PartialEq)]
@@ -120,14 +194,14 @@ impl<T: DualNum<f64>> AzimuthalTable<T> {
         }
     }
 
-    /// The width integral for exit inclination `theta_r` and azimuth `phi` (radians) with the
-    /// rule `rule`. Per node: one `asin`, one Fresnel, the enabled logistics (channel
-    /// independent), then per channel one `exp` for T and a few products.
+    /// The width integral for exit inclination `theta_r` and azimuth `phi` (radians) over the
+    /// width rule's nodes (see [`super::ChiangModel::width_nodes_for`]): the lobes over
+    /// `nodes.lobes`, `Ā₃` over `nodes.residual` (one pass when they are the same rule).
     pub fn fill(
         &mut self,
         params: &ChiangParams<T>,
         effects: &ChiangEffects,
-        rule: &WidthRule,
+        nodes: WidthSet<'_>,
         theta_r: f64,
         phi: f64,
     ) {
@@ -137,6 +211,30 @@ impl<T: DualNum<f64>> AzimuthalTable<T> {
             self.lobes[c] = [T::from(0.0), T::from(0.0), T::from(0.0)];
             self.residual[c] = T::from(0.0);
         }
+        if std::ptr::eq(nodes.lobes, nodes.residual) {
+            return self.accumulate(params, effects, nodes.lobes, theta_r, phi);
+        }
+        let (lobes, residual) = effects.split_residual();
+        if lobes.r || lobes.tt || lobes.trt {
+            self.accumulate(params, &lobes, nodes.lobes, theta_r, phi);
+        }
+        if residual.residual {
+            self.accumulate(params, &residual, nodes.residual, theta_r, phi);
+        }
+    }
+
+    /// Add the enabled terms' integrals over `nodes`. Per node: one `asin`, one Fresnel, the
+    /// enabled logistics (channel independent), then per channel one `exp` for T and a few
+    /// products.
+    fn accumulate(
+        &mut self,
+        params: &ChiangParams<T>,
+        effects: &ChiangEffects,
+        nodes: &[WidthNode],
+        theta_r: f64,
+        phi: f64,
+    ) {
+        let n = params.sigma_a.len();
         let on = [effects.r, effects.tt, effects.trt];
         let transmitted = effects.tt || effects.trt || effects.residual;
         let any_lobe = effects.r || effects.tt || effects.trt;
@@ -150,7 +248,7 @@ impl<T: DualNum<f64>> AzimuthalTable<T> {
         let inv_eta_prime = refraction.eta_prime.recip();
         let two_over_cos_tt = refraction.cos_theta_t.recip() * 2.0;
         let mut lobe_n: [T; 3] = [T::from(0.0), T::from(0.0), T::from(0.0)];
-        for node in &rule.nodes {
+        for node in nodes {
             let f = fresnel(&params.eta, refraction.cos_theta_r * node.cos_gamma);
             let sin_gt = inv_eta_prime.clone() * node.h;
             let gamma_t = sin_gt.asin();

@@ -11,7 +11,7 @@ use num_dual::DualNum;
 
 use super::azimuthal::AzimuthalTable;
 use super::longitudinal::{base_variance, longitudinal};
-use super::{combine, ChiangEffects, ChiangModel, ChiangParams};
+use super::{combine, ChiangEffects, ChiangModel, ChiangParams, WidthScratch};
 use crate::model::angles::wrap;
 use crate::model::Angles;
 
@@ -51,6 +51,20 @@ pub fn scattering_from_table<T: DualNum<f64>>(
     }
 }
 
+/// The width integral of exit direction (`theta_r`, `phi`) over `model`'s width nodes.
+pub fn fill_table<T: DualNum<f64>>(
+    table: &mut AzimuthalTable<T>,
+    params: &ChiangParams<T>,
+    model: &ChiangModel,
+    theta_r: f64,
+    phi: f64,
+) {
+    let mut scratch = WidthScratch::default();
+    let (eta, beta_n) = (params.eta.re(), params.beta_n.re());
+    let nodes = model.width_nodes_for(eta, beta_n, theta_r, phi, &mut scratch);
+    table.fill(params, &model.effects, nodes, theta_r, phi);
+}
+
 /// `S` per channel for one sample, width integral included (no cache). Parameters and angles are
 /// assumed valid ([`ChiangParams::validate`], [`Angles::validate`]).
 pub fn scattering<T: DualNum<f64>>(
@@ -60,8 +74,9 @@ pub fn scattering<T: DualNum<f64>>(
     out: &mut [T],
 ) {
     let mut table = AzimuthalTable::zeros(params.sigma_a.len());
-    let phi = wrap(angles.phi_r - angles.phi_i);
-    table.fill(params, &model.effects, model.rule(), angles.theta_r, phi);
+    // S is even in φ: |φ|, as the batches key their tables.
+    let phi = wrap(angles.phi_r - angles.phi_i).abs();
+    fill_table(&mut table, params, model, angles.theta_r, phi);
     scattering_from_table(
         params,
         &model.effects,
@@ -108,7 +123,7 @@ pub fn for_each_with_table<T: DualNum<f64>>(
         let key = (a.theta_r.to_bits(), phi.to_bits());
         let slot = *index.entry(key).or_insert_with(|| {
             let mut table = AzimuthalTable::zeros(n);
-            table.fill(params, &model.effects, model.rule(), a.theta_r, phi);
+            fill_table(&mut table, params, model, a.theta_r, phi);
             tables.push(table);
             tables.len() - 1
         });
@@ -137,7 +152,7 @@ pub fn scattering_by_lobe(
     let n = params.sigma_a.len();
     let mut table = AzimuthalTable::zeros(n);
     let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    table.fill(params, &model.effects, model.rule(), angles.theta_r, phi);
+    fill_table(&mut table, params, model, angles.theta_r, phi);
     let m = longitudinal_terms(params, &model.effects, angles.theta_i, angles.theta_r);
     let cos_i = angles.theta_i.cos();
     for (c, o) in out.iter_mut().enumerate() {

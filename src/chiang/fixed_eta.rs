@@ -16,8 +16,10 @@ use num_dual::DualSVec64;
 use super::azimuthal::trimmed_logistic_norm;
 use super::azimuthal::{attenuations, exit_azimuth, fresnel, logistic_scale, ExitRefraction};
 use super::longitudinal::{base_variance, longitudinal};
-use super::quadrature::WidthRule;
-use super::{combine, ChiangEffects, ChiangModel, ChiangParamName, ChiangParams};
+use super::quadrature::WidthNode;
+use super::{
+    combine, ChiangEffects, ChiangModel, ChiangParamName, ChiangParams, WidthScratch, WidthSet,
+};
 use crate::model::angles::wrap;
 use crate::model::Angles;
 
@@ -38,7 +40,8 @@ fn logistic_scale_slope(beta_n: f64) -> f64 {
 /// exit azimuths `Φ_p`, and per channel `A_1..A_3` with their σ_a-derivatives; plus the residual
 /// `Ā₃ = ⟨A₃⟩_h` (azimuthally uniform) and its σ_a-derivative per channel.
 struct ExitColumn {
-    theta_r: u64,
+    /// The exit direction's (θ_r, |φ|) bits; |φ| only when the width nodes depend on it.
+    key: (u64, u64),
     weight: Vec<f64>,
     fresnel: Vec<f64>,
     exit: Vec<[f64; 3]>,
@@ -51,15 +54,29 @@ struct ExitColumn {
 }
 
 impl ExitColumn {
-    fn new(p: &ChiangParams<f64>, effects: &ChiangEffects, rule: &WidthRule, theta_r: f64) -> Self {
+    /// The column over `rule.lobes`; the residual too when the rule is plain (one node set),
+    /// else [`ExitColumn::residual`] fills it from `Ā₃` over the residual's own nodes.
+    fn new(
+        p: &ChiangParams<f64>,
+        effects: &ChiangEffects,
+        rule: WidthSet,
+        key: (u64, u64),
+    ) -> Self {
+        let theta_r = f64::from_bits(key.0);
         let n = p.sigma_a.len();
         let refraction = ExitRefraction::new(&p.eta, theta_r);
         let inv_eta_prime = refraction.eta_prime.recip();
         let two_over_cos_tt = refraction.cos_theta_t.recip() * 2.0;
-        let transmitted = effects.tt || effects.trt || effects.residual;
-        let nodes = rule.len();
+        let residual = effects.residual && std::ptr::eq(rule.lobes, rule.residual);
+        let any_lobe = effects.r || effects.tt || effects.trt;
+        let nodes = if any_lobe || residual {
+            rule.lobes.len()
+        } else {
+            0
+        };
+        let transmitted = effects.tt || effects.trt || residual;
         let mut col = ExitColumn {
-            theta_r: theta_r.to_bits(),
+            key,
             weight: Vec::with_capacity(nodes),
             fresnel: Vec::with_capacity(nodes),
             exit: Vec::with_capacity(nodes),
@@ -68,7 +85,7 @@ impl ExitColumn {
             residual: vec![0.0; n],
             d_residual: vec![0.0; n],
         };
-        for node in &rule.nodes {
+        for node in &rule.lobes[..nodes] {
             let f = fresnel(&p.eta, refraction.cos_theta_r * node.cos_gamma);
             let sin_gt = inv_eta_prime * node.h;
             let gamma_t = sin_gt.asin();
@@ -80,28 +97,53 @@ impl ExitColumn {
             if !transmitted {
                 continue;
             }
-            let cos_gt = (-sin_gt.powi(2) + 1.0).sqrt();
-            let chord = cos_gt * two_over_cos_tt;
+            let chord = (-sin_gt.powi(2) + 1.0).sqrt() * two_over_cos_tt;
             for c in 0..n {
                 let t = (-(p.sigma_a[c] * chord)).exp();
                 let a = attenuations(&f, &t);
-                // T = e^{−σ·chord}: ∂A₁ = −chord·A₁, ∂A₂ = −2chord·A₂, and with q = TF,
-                // A₃ = A₂q/(1−q): ∂A₃ = −chord·A₃·(2 + 1/(1−q)).
-                let one_minus = 1.0 - t * f;
-                let d3 = if one_minus == 0.0 {
-                    0.0
-                } else {
-                    -chord * a[3] * (2.0 + one_minus.recip())
-                };
                 col.atten.push([a[1], a[2]]);
                 col.d_atten.push([-chord * a[1], -2.0 * chord * a[2]]);
-                if effects.residual {
+                if residual {
                     col.residual[c] += a[3] * node.weight;
-                    col.d_residual[c] += d3 * node.weight;
+                    col.d_residual[c] += residual_slope(t, f, chord, a[3]) * node.weight;
                 }
             }
         }
         col
+    }
+
+    /// `Ā₃ = ⟨A₃⟩_h` and its σ_a-derivative per channel over `nodes` (a plain rule), for the
+    /// column's θ_r: what a composite rule's columns share across every azimuth.
+    fn residual(p: &ChiangParams<f64>, nodes: &[WidthNode], theta_r: f64) -> [Vec<f64>; 2] {
+        let n = p.sigma_a.len();
+        let refraction = ExitRefraction::new(&p.eta, theta_r);
+        let inv_eta_prime = refraction.eta_prime.recip();
+        let two_over_cos_tt = refraction.cos_theta_t.recip() * 2.0;
+        let (mut value, mut slope) = (vec![0.0; n], vec![0.0; n]);
+        for node in nodes {
+            let f = fresnel(&p.eta, refraction.cos_theta_r * node.cos_gamma);
+            let sin_gt = inv_eta_prime * node.h;
+            let chord = (-sin_gt.powi(2) + 1.0).sqrt() * two_over_cos_tt;
+            for ((sigma, v), d) in p.sigma_a.iter().zip(&mut value).zip(&mut slope) {
+                let t = (-(sigma * chord)).exp();
+                let a3 = attenuations(&f, &t)[3];
+                *v += a3 * node.weight;
+                *d += residual_slope(t, f, chord, a3) * node.weight;
+            }
+        }
+        [value, slope]
+    }
+}
+
+/// `∂A₃/∂σ_a`: with T = e^{−σ·chord} and q = TF, `A₃ = A₂q/(1−q)` gives
+/// `∂A₃ = −chord·A₃·(2 + 1/(1−q))` (as `∂A₁ = −chord·A₁`, `∂A₂ = −2chord·A₂`).
+#[inline]
+fn residual_slope(t: f64, f: f64, chord: f64, a3: f64) -> f64 {
+    let one_minus = 1.0 - t * f;
+    if one_minus == 0.0 {
+        0.0
+    } else {
+        -chord * a3 * (2.0 + one_minus.recip())
     }
 }
 
@@ -264,15 +306,33 @@ pub fn batch(
     let on = [effects.r, effects.tt, effects.trt, effects.residual];
 
     let mut column: Option<ExitColumn> = None;
+    let mut scratch = WidthScratch::default();
+    let per_direction = model.width().per_direction();
+    // A composite rule's `Ā₃` per θ_r: (θ_r bits, [Ā₃, ∂Ā₃/∂σ_a] per channel).
+    let mut residual: Option<(u64, [Vec<f64>; 2])> = None;
     let mut table: Option<((u64, u64), LobeTable)> = None;
     for &i in &order {
         let a = &angles[i];
         let (theta_r, phi) = key(a);
-        if column
-            .as_ref()
-            .is_none_or(|c| c.theta_r != theta_r.to_bits())
-        {
-            column = Some(ExitColumn::new(params, effects, model.rule(), theta_r));
+        // A plain rule's column serves every azimuth of θ_r; a composite rule's nodes move with φ.
+        let column_key = (
+            theta_r.to_bits(),
+            if per_direction { phi.to_bits() } else { 0 },
+        );
+        if column.as_ref().is_none_or(|c| c.key != column_key) {
+            let nodes =
+                model.width_nodes_for(params.eta, params.beta_n, theta_r, phi, &mut scratch);
+            let mut col = ExitColumn::new(params, effects, nodes, column_key);
+            if effects.residual && !std::ptr::eq(nodes.lobes, nodes.residual) {
+                if residual.as_ref().is_none_or(|r| r.0 != column_key.0) {
+                    let r = ExitColumn::residual(params, nodes.residual, theta_r);
+                    residual = Some((column_key.0, r));
+                }
+                let [r, d] = &residual.as_ref().expect("set above").1;
+                col.residual.clone_from(r);
+                col.d_residual.clone_from(d);
+            }
+            column = Some(col);
         }
         let col = column.as_ref().expect("set above");
         let bits = (theta_r.to_bits(), phi.to_bits());

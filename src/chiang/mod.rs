@@ -5,7 +5,8 @@
 //! - [`bessel`]: exact exponentially scaled `I₀`;
 //! - [`longitudinal`]: `v_p`, the tilt on θ_r, `M_p`;
 //! - [`azimuthal`]: `s`, Fresnel, `T`, `A_p`, `Φ_p`, trimmed logistic `N_p`, the width integral;
-//! - [`quadrature`]: cached Gauss–Legendre rules in γ = asin h;
+//! - [`quadrature`]: cached Gauss–Legendre rules in γ = asin h, plain and composite;
+//! - [`width`]: which rule a model uses (`auto` or N) and its nodes for one exit direction;
 //! - [`evaluator`]: batches grouped by exit direction so the width integral is paid once each;
 //! - [`fixed_eta`]: the fit's f64 values and Jacobian with η fixed (hand-written chain rule);
 //! - [`file`]: the Chiang parameter file (JSON names of CHIANG.md);
@@ -35,12 +36,14 @@ pub mod jacobian;
 pub mod longitudinal;
 pub mod quadrature;
 pub mod variant;
+pub mod width;
 
-pub use azimuthal::AzimuthalTable;
+pub use azimuthal::{AzimuthalTable, WidthSet};
 pub use evaluator::{scattering, scattering_batch, scattering_from_table};
 pub use file::ChiangParamFile;
 pub use jacobian::{batch_jacobian, batch_jacobian_static, seeded};
-pub use quadrature::{WidthRule, DEFAULT_WIDTH_NODES};
+pub use quadrature::{WidthNode, WidthRule, DEFAULT_WIDTH_NODES};
+pub use width::WidthNodes;
 
 /// Which terms of `S` are on; what is off is not computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -96,6 +99,26 @@ impl ChiangEffects {
             )));
         }
         Ok(e)
+    }
+
+    /// `(these effects without the residual, the residual alone if on)`.
+    pub fn split_residual(&self) -> (ChiangEffects, ChiangEffects) {
+        let off = ChiangEffects {
+            r: false,
+            tt: false,
+            trt: false,
+            residual: false,
+        };
+        (
+            ChiangEffects {
+                residual: false,
+                ..*self
+            },
+            ChiangEffects {
+                residual: self.residual,
+                ..off
+            },
+        )
     }
 
     /// The parameters `S` depends on under these effects, for `n_channels` absorption values.
@@ -349,44 +372,82 @@ impl ChiangParams<f64> {
     }
 }
 
-/// What one evaluation computes: the effect switches and the width-quadrature rule. The rule
-/// is built on first use: every command carries a `ChiangModel`, and a Marschner run should not
-/// pay for 1024 Gauss–Legendre nodes it never reads (~18 ms, 3% of a 1M-row `eval`).
+/// What one evaluation computes: the effect switches and the width rule. A plain rule is built
+/// on first use: every command carries a `ChiangModel`, and a Marschner run should not pay for
+/// 1024 Gauss–Legendre nodes it never reads (~18 ms, 3% of a 1M-row `eval`).
 #[derive(Debug, Clone)]
 pub struct ChiangModel {
     pub effects: ChiangEffects,
-    width_nodes: usize,
+    width: WidthNodes,
     rule: OnceLock<Arc<WidthRule>>,
 }
 
 impl ChiangModel {
-    /// `width_nodes` Gauss–Legendre nodes in γ for the width integral (error if out of range).
+    /// The plain rule with `width_nodes` Gauss–Legendre nodes in γ (error if out of range).
     pub fn new(effects: ChiangEffects, width_nodes: usize) -> Result<ChiangModel> {
-        WidthRule::check_nodes(width_nodes)?;
+        ChiangModel::with_width(effects, WidthNodes::Fixed(width_nodes))
+    }
+
+    /// `effects` with the width rule `width` (error if a count is out of range).
+    pub fn with_width(effects: ChiangEffects, width: WidthNodes) -> Result<ChiangModel> {
         Ok(ChiangModel {
             effects,
-            width_nodes,
+            width: width.check()?,
             rule: OnceLock::new(),
         })
     }
 
-    /// Number of width nodes.
-    pub fn width_nodes(&self) -> usize {
-        self.width_nodes
+    /// The width rule.
+    pub fn width(&self) -> WidthNodes {
+        self.width
     }
 
-    /// The width rule (shared by every model with this node count).
-    pub fn rule(&self) -> &WidthRule {
-        self.rule.get_or_init(|| {
-            WidthRule::cached(self.width_nodes).expect("the node count was checked in new")
-        })
+    /// The width nodes of exit direction (`theta_r`, `phi`) at `eta`, `beta_n`: the plain
+    /// rule's for both parts, or the composite rule's for the lobes (written into `scratch`)
+    /// with [`width::RESIDUAL_NODES`] plain nodes for the residual.
+    pub fn width_nodes_for<'a>(
+        &'a self,
+        eta: f64,
+        beta_n: f64,
+        theta_r: f64,
+        phi: f64,
+        scratch: &'a mut WidthScratch,
+    ) -> WidthSet<'a> {
+        // The one plain rule a model uses: its own count, or the residual's under auto.
+        let plain = self.rule.get_or_init(|| {
+            let n = match self.width {
+                WidthNodes::Fixed(n) => n,
+                _ => width::RESIDUAL_NODES,
+            };
+            WidthRule::cached(n).expect("the node count was checked in with_width")
+        });
+        if let WidthNodes::Fixed(_) = self.width {
+            return WidthSet {
+                lobes: &plain.nodes,
+                residual: &plain.nodes,
+            };
+        }
+        let density = self.width.density(beta_n);
+        let (breaks, nodes) = (&mut scratch.breaks, &mut scratch.nodes);
+        width::split_nodes(&self.effects, density, eta, theta_r, phi, breaks, nodes);
+        WidthSet {
+            lobes: nodes,
+            residual: &plain.nodes,
+        }
     }
+}
+
+/// Buffers the composite rule is written into, reused across exit directions.
+#[derive(Debug, Default)]
+pub struct WidthScratch {
+    breaks: Vec<f64>,
+    nodes: Vec<WidthNode>,
 }
 
 impl Default for ChiangModel {
     fn default() -> Self {
-        ChiangModel::new(ChiangEffects::default(), DEFAULT_WIDTH_NODES)
-            .expect("the default node count is in range")
+        ChiangModel::with_width(ChiangEffects::default(), WidthNodes::Auto)
+            .expect("auto needs no count")
     }
 }
 

@@ -12,7 +12,7 @@ pub mod synth;
 
 use clap::Args;
 
-use crate::chiang::{ChiangEffects, ChiangModel, DEFAULT_WIDTH_NODES};
+use crate::chiang::{ChiangEffects, ChiangModel, WidthNodes};
 use crate::error::{Error, Result};
 use crate::family::{ModelFamily, ModelSetup};
 use crate::model::{Effects, Measurement, ModelConfig, RootMode};
@@ -43,9 +43,10 @@ pub struct ModelArgs {
     /// --lobes).
     #[arg(long)]
     pub terms: Option<String>,
-    /// Chiang only: Gauss-Legendre nodes of the width integral [default: 1024].
-    #[arg(long)]
-    pub width_nodes: Option<usize>,
+    /// Chiang only: the width integral's rule, `auto` (default: split at the lobes' kinks,
+    /// nodes chosen by beta_n, S within 1e-7) or N for the plain N-node Gauss-Legendre rule.
+    #[arg(long, value_parser = parse_width_nodes)]
+    pub width_nodes: Option<WidthNodes>,
     /// Root mode of the exit-angle map: `cubic` (Marschner 2003) or `exact`.
     #[arg(long, default_value = "cubic", value_parser = parse_mode)]
     pub mode: RootMode,
@@ -69,6 +70,10 @@ pub struct MeasurementArgs {
 }
 
 fn parse_mode(s: &str) -> std::result::Result<RootMode, String> {
+    s.parse().map_err(|e: crate::error::Error| e.to_string())
+}
+
+fn parse_width_nodes(s: &str) -> std::result::Result<WidthNodes, String> {
     s.parse().map_err(|e: crate::error::Error| e.to_string())
 }
 
@@ -109,7 +114,7 @@ impl ModelArgs {
             (Some(t), ModelFamily::Chiang) => ChiangEffects::parse(t)?,
             _ => ChiangEffects::default(),
         };
-        ChiangModel::new(effects, self.width_nodes.unwrap_or(DEFAULT_WIDTH_NODES))
+        ChiangModel::with_width(effects, self.width_nodes.unwrap_or_default())
             .map_err(|e| Error::Other(format!("--width-nodes: {e}")))
     }
 

@@ -25,10 +25,6 @@ use crate::model::Angles;
 /// Floor of the log residual, relative to the channel's largest source value.
 pub const FLOOR_FRACTION: f64 = 1e-3;
 
-/// Width nodes while fitting: 512 keeps S within 1.2e-3 relative even at β = 0.05
-/// (docs/chiang.md), far below any mapping error; the reported errors use the default 1024.
-pub const FIT_WIDTH_NODES: usize = 512;
-
 /// LM trial steps per start.
 pub const MAX_ITERATIONS: u64 = 60;
 
@@ -130,7 +126,8 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
                 floor: floor.clone(),
                 n,
                 formulation,
-                model: ChiangModel::new(ChiangEffects::default(), FIT_WIDTH_NODES)?,
+                // The default (automatic) rule: S within 1e-7 at any β_n, as the errors use.
+                model: ChiangModel::default(),
             };
             let starts = start_points(&source.model, &formulation);
             let mut best: Option<(f64, DVector<f64>)> = None;

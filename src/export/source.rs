@@ -64,8 +64,8 @@ impl SourceModel {
         match self {
             SourceModel::Chiang { params, effects } => {
                 // The fit's terms (its S), at the default width rule (the renderer's reference).
-                let model = ChiangModel::new(*effects, crate::chiang::DEFAULT_WIDTH_NODES)
-                    .expect("the default node count is in range");
+                let model = ChiangModel::with_width(*effects, crate::chiang::WidthNodes::Auto)
+                    .expect("auto needs no count");
                 crate::chiang::scattering_batch(params, &model, angles, &mut out);
             }
             SourceModel::Marschner { params, config } => {

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::ModelFamily;
-use crate::chiang::{ChiangEffects, ChiangModel};
+use crate::chiang::{ChiangEffects, ChiangModel, WidthNodes};
 use crate::error::Result;
 use crate::model::ModelConfig;
 use crate::table_family::{self, DynTable, TermSet};
@@ -38,7 +38,7 @@ impl ModelSetup {
                 config: crate::chiang::lobes_config(&self.chiang.effects),
                 chiang: Some(ChiangRecord {
                     effects: self.chiang.effects,
-                    width_nodes: self.chiang.width_nodes(),
+                    width_nodes: self.chiang.width(),
                 }),
                 terms: None,
             },
@@ -97,8 +97,8 @@ pub struct ModelRecords {
 pub struct ChiangRecord {
     /// The terms of `S` that were on.
     pub effects: ChiangEffects,
-    /// Gauss–Legendre nodes of the width integral.
-    pub width_nodes: usize,
+    /// The width rule: `"auto"` or the plain rule's Gauss–Legendre node count.
+    pub width_nodes: WidthNodes,
 }
 
 impl ChiangRecord {
@@ -120,6 +120,6 @@ impl ChiangRecord {
 
     /// The model this record describes (an out-of-range node count is an error).
     pub fn model(&self) -> Result<ChiangModel> {
-        ChiangModel::new(self.effects, self.width_nodes)
+        ChiangModel::with_width(self.effects, self.width_nodes)
     }
 }

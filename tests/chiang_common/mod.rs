@@ -47,3 +47,38 @@ pub fn s(params: &ChiangParams<f64>, model: &ChiangModel, deg: [f64; 4]) -> f64 
     );
     out[0]
 }
+
+/// S of channel 0 at (θ_i, φ_i, θ_r, φ_r) in degrees from the composite rule (broken at the
+/// kinks) at `density` nodes per π, the residual over `residual_nodes` plain nodes: a reference
+/// when both are large.
+pub fn composite_s(
+    params: &ChiangParams<f64>,
+    density: usize,
+    residual_nodes: usize,
+    deg: [f64; 4],
+) -> f64 {
+    use hairfit::chiang::{scattering_from_table, AzimuthalTable, WidthRule, WidthSet};
+    let a = Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]);
+    let phi = hairfit::model::angles::wrap(a.phi_r - a.phi_i).abs();
+    let effects = ChiangEffects::default();
+    let (mut breaks, mut nodes) = (Vec::new(), Vec::new());
+    hairfit::chiang::width::split_nodes(
+        &effects,
+        density,
+        params.eta,
+        a.theta_r,
+        phi,
+        &mut breaks,
+        &mut nodes,
+    );
+    let residual = WidthRule::cached(residual_nodes).unwrap();
+    let mut table = AzimuthalTable::zeros(params.sigma_a.len());
+    let set = WidthSet {
+        lobes: &nodes,
+        residual: &residual.nodes,
+    };
+    table.fill(params, &effects, set, a.theta_r, phi);
+    let mut out = vec![0.0; params.sigma_a.len()];
+    scattering_from_table(params, &effects, &table, a.theta_i, a.theta_r, &mut out);
+    out[0]
+}

@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::{Family, FitInput};
 use crate::chiang::{
     all_parameters, lobes_config, reference_params, ChiangEffects, ChiangModel, ChiangParamFile,
-    ChiangParamName, ChiangParams,
+    ChiangParamName, ChiangParams, WidthNodes,
 };
 use crate::error::Result;
 use crate::family::{ChiangRecord, FamilyParams};
@@ -39,10 +39,22 @@ impl Family for Chiang {
     }
 }
 
-/// Width nodes of the multi-start stage (when the fit asks for more): S within 3.5e-2 relative
-/// at the narrowest azimuthal lobes (β_n = 0.05) and to rounding at β_n ≥ 0.3 (docs/chiang.md),
-/// enough to find the basin, a quarter of the default rule's cost.
+/// Width nodes of the multi-start stage (when the fit asks for more): the plain rule's S within
+/// 3.5e-2 relative at the narrowest azimuthal lobes (β_n = 0.05) and to rounding at β_n ≥ 0.3
+/// (docs/chiang.md), enough to find the basin; the automatic rule's density is capped there.
 pub const SCREENING_WIDTH_NODES: usize = 256;
+
+/// The coarser model the multi-start screens with, if the fit's rule can be coarser.
+fn screening_model(model: &ChiangModel) -> Result<Option<ChiangModel>> {
+    let coarser = match model.width() {
+        WidthNodes::Fixed(n) if n > SCREENING_WIDTH_NODES => {
+            WidthNodes::Fixed(SCREENING_WIDTH_NODES)
+        }
+        WidthNodes::Auto => WidthNodes::AutoAtMost(SCREENING_WIDTH_NODES),
+        _ => return Ok(None),
+    };
+    ChiangModel::with_width(model.effects, coarser).map(Some)
+}
 
 /// Why the data cannot determine `p`: the geometry that shows it, then its partners.
 fn why_undetermined(
@@ -93,14 +105,10 @@ pub fn fit_chiang(
     };
     // The multi-start only looks for basins: a coarser width rule there, the polish at the
     // requested one (so the result is the requested model's optimum).
-    let screening = (opts.chiang.width_nodes() > SCREENING_WIDTH_NODES)
-        .then(|| -> Result<ChiangForward> {
-            Ok(ChiangForward {
-                model: ChiangModel::new(effects, SCREENING_WIDTH_NODES)?,
-                measurement: opts.measurement,
-            })
-        })
-        .transpose()?;
+    let screening = screening_model(&opts.chiang)?.map(|model| ChiangForward {
+        model,
+        measurement: opts.measurement,
+    });
     let wanted = |p: &ChiangParamName| !p.fact().on_request || opts.free_eta;
     let wanted_of = |e: &ChiangEffects| e.parameters(nc).into_iter().filter(wanted).collect();
     let set = FreeSet::new(
@@ -122,13 +130,13 @@ pub fn fit_chiang(
     .map(|(_, n)| *n)
     .collect();
     let screened = match &screening {
-        Some(s) => format!("; the multi-start screens with {}", s.model.width_nodes()),
+        Some(s) => format!("; the multi-start screens with {}", s.model.width()),
         None => String::new(),
     };
     let reasons = vec![format!(
-        "Chiang 2016 model, terms {} (--terms), {} width nodes (--width-nodes{screened})",
+        "Chiang 2016 model, terms {} (--terms), width nodes {} (--width-nodes{screened})",
         terms.join("+"),
-        opts.chiang.width_nodes()
+        opts.chiang.width()
     )];
     let options = |sub: usize, explicit: bool, floored: Floored| {
         let choice = crate::fit::stages::ModelChoice {
@@ -156,7 +164,7 @@ pub fn fit_chiang(
                 config: lobes_config(&effects),
                 chiang: Some(ChiangRecord {
                     effects,
-                    width_nodes: opts.chiang.width_nodes(),
+                    width_nodes: opts.chiang.width(),
                 }),
                 terms: None,
             },
