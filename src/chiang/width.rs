@@ -25,12 +25,13 @@ pub const RESIDUAL_NODES: usize = 64;
 /// The width rule of a model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum WidthNodes {
-    /// Composite rule broken at the kinks, density [`auto_density`]`(β_n)`, at most `most`
-    /// nodes per π (the fit's multi-start screens with a cap).
+    /// Composite rule broken at the kinks, density [`auto_density`]`(β_n)`.
     #[default]
     Auto,
-    /// The composite rule with a cap on the density: [`WidthNodes::Auto`] for screening.
-    AutoAtMost(usize),
+    /// The composite rule at half the automatic density, at most this many nodes per π: the
+    /// fit's multi-start, which only looks for basins (S within ~1e-4 relative for β_n ≥ 0.07,
+    /// 7e-2 at 0.05; the plain 256-node rule it replaces had 0.11 there).
+    Coarse(usize),
     /// The plain Gauss–Legendre rule with this many nodes.
     Fixed(usize),
 }
@@ -38,7 +39,7 @@ pub enum WidthNodes {
 impl WidthNodes {
     /// An error unless a fixed count is within the plain rule's range.
     pub fn check(self) -> Result<WidthNodes> {
-        if let WidthNodes::Fixed(n) | WidthNodes::AutoAtMost(n) = self {
+        if let WidthNodes::Fixed(n) | WidthNodes::Coarse(n) = self {
             WidthRule::check_nodes(n)?;
         }
         Ok(self)
@@ -53,7 +54,7 @@ impl WidthNodes {
     pub fn density(self, beta_n: f64) -> usize {
         match self {
             WidthNodes::Auto => auto_density(beta_n),
-            WidthNodes::AutoAtMost(most) => auto_density(beta_n).min(most),
+            WidthNodes::Coarse(most) => (auto_density(beta_n) / 2).min(most),
             WidthNodes::Fixed(n) => n,
         }
     }
@@ -63,7 +64,7 @@ impl fmt::Display for WidthNodes {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             WidthNodes::Auto => f.write_str("auto"),
-            WidthNodes::AutoAtMost(n) => write!(f, "auto, at most {n}"),
+            WidthNodes::Coarse(n) => write!(f, "auto at half density, at most {n}"),
             WidthNodes::Fixed(n) => write!(f, "{n}"),
         }
     }

@@ -41,7 +41,8 @@ impl Family for Chiang {
 
 /// Width nodes of the multi-start stage (when the fit asks for more): the plain rule's S within
 /// 3.5e-2 relative at the narrowest azimuthal lobes (β_n = 0.05) and to rounding at β_n ≥ 0.3
-/// (docs/chiang.md), enough to find the basin; the automatic rule's density is capped there.
+/// (docs/chiang.md), enough to find the basin; under the automatic rule the multi-start uses it
+/// at half density, capped at this many per π (`WidthNodes::Coarse`).
 pub const SCREENING_WIDTH_NODES: usize = 256;
 
 /// The coarser model the multi-start screens with, if the fit's rule can be coarser.
@@ -50,7 +51,7 @@ fn screening_model(model: &ChiangModel) -> Result<Option<ChiangModel>> {
         WidthNodes::Fixed(n) if n > SCREENING_WIDTH_NODES => {
             WidthNodes::Fixed(SCREENING_WIDTH_NODES)
         }
-        WidthNodes::Auto => WidthNodes::AutoAtMost(SCREENING_WIDTH_NODES),
+        WidthNodes::Auto => WidthNodes::Coarse(SCREENING_WIDTH_NODES),
         _ => return Ok(None),
     };
     ChiangModel::with_width(model.effects, coarser).map(Some)
