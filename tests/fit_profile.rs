@@ -17,7 +17,7 @@ mod model_common;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use hairfit::files::{FitStatus, ParamStatus};
+use hairfit::files::{FitStatus, ParamStatus, ProfileMethod};
 use hairfit::fit::bounds::report_factor;
 use hairfit::fit::profile::{self, End, Optimum, Profile};
 use hairfit::fit::{
@@ -234,11 +234,50 @@ fn intervals_bracket_the_value_and_match_the_se_where_the_cost_is_nearly_quadrat
             .any(|(name, n)| name == "sigma_a[0]" && *n == 5),
         "{points:?}"
     );
+    // fit.json says which sides the quadratic settled: exactly those whose profile holds the
+    // two points per side; a side with a bracket and refinement says `refits`.
+    let mut methods = Vec::new();
+    for e in out
+        .json
+        .parameters
+        .iter()
+        .filter(|e| e.status == ParamStatus::Free)
+    {
+        let m = e
+            .profile_method
+            .expect("a profiled parameter records its method");
+        let quadratic = m.iter().filter(|m| **m == ProfileMethod::Quadratic).count();
+        if e.profile.len() == 5 {
+            assert_eq!(quadratic, 2, "{}: {m:?}", e.name);
+        } else {
+            assert!(
+                quadratic < 2,
+                "{}: {m:?} with {} points",
+                e.name,
+                e.profile.len()
+            );
+        }
+        methods.push((e.name.clone(), m));
+    }
+    assert!(
+        methods
+            .iter()
+            .any(|(_, m)| m.contains(&ProfileMethod::Refits)),
+        "{methods:?}"
+    );
     assert!(out
         .json
         .options
         .intervals_reason
         .starts_with("--intervals profile"));
+    assert!(
+        out.json
+            .options
+            .intervals_reason
+            .contains("sides by the local quadratic"),
+        "{}",
+        out.json.options.intervals_reason
+    );
 }
 
 /// The optimum of an l2 fit as profiling sees it.
@@ -362,6 +401,7 @@ fn a_profile_open_inside_the_bounds_makes_the_parameter_undetermined_naming_the_
         ],
         iterations: 0,
         solves: 1,
+        methods: [ProfileMethod::Refits; 2],
     };
     profile::apply(&mut out.json, &[fake]);
     let e = out

@@ -140,6 +140,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
         interval_68: None,
         interval_95: None,
         profile: Vec::new(),
+        profile_method: None,
     };
     let free: Vec<String> = names[1..].iter().map(|s| s.to_string()).collect();
     let n = free.len();

@@ -201,6 +201,21 @@ pub struct ParameterEntry {
     /// draws them without refitting); empty when not profiled.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub profile: Vec<[f64; 2]>,
+    /// How each side's ends (`[below, above]`) were found; absent when not profiled.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub profile_method: Option<[ProfileMethod; 2]>,
+}
+
+/// How one side of a profile found its Δχ² = 1 and 3.84 ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProfileMethod {
+    /// The local quadratic held: the re-fit at the linearised standard error landed on Δχ² ≈ 1
+    /// and the re-fit at the quadratic's 95% point on 3.84, both accepted as they stand.
+    Quadratic,
+    /// The quadratic did not hold (or the side is open): the crossings were bracketed and
+    /// refined by further re-fits.
+    Refits,
 }
 
 /// A profile-likelihood interval in reporting units: `null` on a side where the profile stays

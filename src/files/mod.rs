@@ -30,8 +30,8 @@ pub use curves::{
 pub use fit_json::{
     ChannelCorrelation, ChannelResiduals, Correlation, DataInfo, DownWeighted, EffectsSource,
     FitJson, FitStatus, Floored, GofThresholds, GoodnessOfFit, Interval, OptionsRecord,
-    ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry, ScaleMethod, Suggestion, TraceStage,
-    Verdict,
+    ParamStatus, ParameterEntry, ProfileMethod, ResidualSummary, ScaleEntry, ScaleMethod,
+    Suggestion, TraceStage, Verdict,
 };
 pub use load_report::{LineTally, LoadReport, RejectReason, FIRST_LINES};
 pub use timing::{StageTiming, Timing};

@@ -209,6 +209,7 @@ fn parameter_entries<F: Forward>(
                     interval_68: None,
                     interval_95: None,
                     profile: Vec::new(),
+                    profile_method: None,
                 }
             }
             None => ParameterEntry {
@@ -219,6 +220,7 @@ fn parameter_entries<F: Forward>(
                 interval_68: None,
                 interval_95: None,
                 profile: Vec::new(),
+                profile_method: None,
             },
         };
         if entry.value.is_none() {

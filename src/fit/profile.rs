@@ -28,7 +28,7 @@ use super::solve::{is_cancelled, Cancellable, LocalRun};
 use super::Loss;
 use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
-use crate::files::{FitJson, FitStatus, Interval, ParamStatus, StageTiming};
+use crate::files::{FitJson, FitStatus, Interval, ParamStatus, ProfileMethod, StageTiming};
 use crate::model::ParamName;
 
 /// Δχ² of a 68.27% interval for one parameter.
@@ -184,6 +184,8 @@ pub struct Profile<P = ParamName> {
     pub iterations: u64,
     /// Re-minimisations run.
     pub solves: usize,
+    /// How each side (`[below, above]`) found its ends.
+    pub methods: [ProfileMethod; 2],
 }
 
 /// A solved point at signed distance `h` from the optimum.
@@ -405,6 +407,7 @@ pub fn profile_parameter<F: Forward>(
         Bound::Both(lo, hi) => ((x0 - lo).max(0.0), true, (hi - x0).max(0.0), true),
     };
     let mut ends = [[End::Closed(x0); 2]; 2];
+    let mut methods = [ProfileMethod::Refits; 2];
     let mut points = Vec::new();
     for (side, (dir, room, bounded)) in [(-1.0, lo_room, lo_bounded), (1.0, hi_room, hi_bounded)]
         .into_iter()
@@ -419,6 +422,11 @@ pub fn profile_parameter<F: Forward>(
             };
             ends[t][side] = end;
         }
+        // Two solves, no refinement inserted: the SE's solve at Δχ² ≈ 1 and the quadratic's
+        // 95% point at ≈ 3.84 were taken as they stand.
+        if pts.len() == 3 && near(pts[1].d, CHI2_68) && near(pts[2].d, CHI2_95) {
+            methods[side] = ProfileMethod::Quadratic;
+        }
         points.extend(pts.iter().skip(side).map(|pt| (x0 + pt.h, pt.d)));
     }
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -429,6 +437,7 @@ pub fn profile_parameter<F: Forward>(
         end_95: ends[1],
         iterations: pin.iterations,
         solves: pin.solves,
+        methods,
     }))
 }
 
@@ -468,6 +477,7 @@ pub fn apply<P: FitParam>(json: &mut FitJson, profiles: &[Profile<P>]) {
         entry.interval_68 = Some(interval(&pr.end_68));
         entry.interval_95 = Some(interval(&pr.end_95));
         entry.profile = pr.points.iter().map(|&(v, d)| [v * f, d]).collect();
+        entry.profile_method = Some(pr.methods);
         // A side that starts at the bound the parameter sits on is one-sided by nature (its
         // at-bound warning says so); every other open side is news.
         let open = |ends: &[End; 2], level: &str| -> Vec<String> {
@@ -581,11 +591,17 @@ pub fn intervals<F: Forward, Q>(
             apply(&mut out.json, &profiles);
             let iterations: u64 = profiles.iter().map(|p| p.iterations).sum();
             let solves: usize = profiles.iter().map(|p| p.solves).sum();
+            let quadratic = profiles
+                .iter()
+                .flat_map(|p| p.methods)
+                .filter(|m| *m == ProfileMethod::Quadratic)
+                .count();
+            let sides = 2 * profiles.len();
             record(
                 out,
                 "profile",
                 format!(
-                    "{reason}; ran {solves} solves, {iterations} LM iterations (wall time: timing.json stage `profile`)"
+                    "{reason}; ran {solves} solves, {iterations} LM iterations; {quadratic} of {sides} sides by the local quadratic, the rest by re-fits (fit.json `profile_method`; wall time: timing.json stage `profile`)"
                 ),
             );
         }
