@@ -112,7 +112,7 @@ const AUTO_BETAS: [f64; 13] = [
 ];
 
 /// The automatic rule holds `S` within 1e-7 relative over the domain (its ladder was chosen for
-/// 2.3e-8 at the band edges over 600 cases each, so 1e-7 leaves room for cases this sample
+/// ≤ 4.1e-8 at the band edges over 600 cases each, so 1e-7 leaves room for cases this sample
 /// does not contain), and at wide β_n, where the plain rule converges only algebraically at the
 /// wrap kinks, it beats the plain 1024-node rule it replaced as the default.
 #[test]

@@ -274,7 +274,7 @@ fn intervals_bracket_the_value_and_match_the_se_where_the_cost_is_nearly_quadrat
         out.json
             .options
             .intervals_reason
-            .contains("sides by the local quadratic"),
+            .contains("sides settled by the local quadratic"),
         "{}",
         out.json.options.intervals_reason
     );

@@ -1,5 +1,6 @@
 //! The ledger's Chiang section (`hairfit cost --model chiang`): time per evaluation of the Chiang
-//! `S` against its accuracy, per width-quadrature node count, with and without the cache per exit
+//! `S` against its accuracy, per width rule (the plain node counts and the default automatic
+//! rule), with and without the cache per exit
 //! direction, on random directions and on a rig; and the Marschner model's time on the same
 //! directions as the yardstick ("evaluations per second per core" = 1 / time_s).
 
@@ -90,15 +91,21 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
         let reference_model = ChiangModel::new(ChiangEffects::default(), REFERENCE_NODES)?;
         for (dirs_label, angles) in [("random", &random), ("rig", &rig)] {
             let reference = cached(&p, &reference_model, angles);
+            // The plain rules of the ladder, then the default automatic rule.
+            let mut rules = Vec::new();
             for nodes in NODE_LADDER {
                 let model = ChiangModel::new(ChiangEffects::default(), nodes)?;
+                rules.push((format!("{nodes} nodes"), nodes == 1024, model));
+            }
+            rules.push(("auto".to_string(), true, ChiangModel::default()));
+            for (rule, always, model) in rules {
                 let variants: &[(&str, bool)] = if dirs_label == "rig" {
                     &[("cached", true), ("uncached", false)]
                 } else {
                     &[("uncached", false)]
                 };
                 for &(how, use_cache) in variants {
-                    if quick && !use_cache && dirs_label == "rig" && nodes != 1024 {
+                    if quick && !use_cache && dirs_label == "rig" && !always {
                         continue;
                     }
                     let mut s = Vec::new();
@@ -110,11 +117,7 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
                         }
                     });
                     rows.push(accuracy_row(
-                        (
-                            label,
-                            "width nodes",
-                            format!("{nodes} nodes, {dirs_label}, {how}"),
-                        ),
+                        (label, "width nodes", format!("{rule}, {dirs_label}, {how}")),
                         t / angles.len() as f64,
                         &s,
                         &reference,

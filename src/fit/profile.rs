@@ -601,7 +601,7 @@ pub fn intervals<F: Forward, Q>(
                 out,
                 "profile",
                 format!(
-                    "{reason}; ran {solves} solves, {iterations} LM iterations; {quadratic} of {sides} sides by the local quadratic, the rest by re-fits (fit.json `profile_method`; wall time: timing.json stage `profile`)"
+                    "{reason}; ran {solves} solves, {iterations} LM iterations; {quadratic} of {sides} sides settled by the local quadratic (fit.json `profile_method`; wall time: timing.json stage `profile`)"
                 ),
             );
         }
