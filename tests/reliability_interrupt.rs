@@ -315,9 +315,14 @@ fn sigint_during_eval_leaves_no_temporary_file() {
         // Finished before the signal: the output must then be complete.
         let text = std::fs::read_to_string(&output).unwrap();
         assert_eq!(text.lines().count(), 3_000_001, "complete output");
-    } else {
-        assert!(
-            !output.exists(),
+    } else if output.exists() {
+        // The signal landed after the output was committed (renamed into place) and before the
+        // process ended: exit 130 with the complete file, never a partial one. Seen once in a
+        // full suite run, where the eval finished in about the test's 700 ms.
+        let text = std::fs::read_to_string(&output).unwrap();
+        assert_eq!(
+            text.lines().count(),
+            3_000_001,
             "interrupted eval left a partial {}",
             output.display()
         );
