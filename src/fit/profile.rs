@@ -222,10 +222,11 @@ impl<F: Forward> Pinned<'_, '_, F> {
     }
 
     /// The fit's LM (Cancellable, as `solve::run_local`) with a relative cost tolerance of
-    /// [`SOLVE_CHI2_TOL`] χ² units: `(u, cost, iterations)`, never worse than the start.
+    /// [`SOLVE_CHI2_TOL`] χ² units: `(u, cost, iterations)`, never worse than the start (the
+    /// solver's best point, whose cost it has: no extra passes over the data for the start's
+    /// and the end's cost, which were two of a solve's ~eight).
     fn run(&self, u0: &[f64], max_iters: u64) -> (Vec<f64>, f64, u64) {
         let ev = &self.ev;
-        let start_cost = ev.eval_internal(u0, false).cost();
         let dof = self.opt.dof.max(1);
         let ftol = (SOLVE_CHI2_TOL / dof as f64).clamp(super::solve::FTOL, 1e-4);
         let solver = Cancellable {
@@ -245,34 +246,40 @@ impl<F: Forward> Pinned<'_, '_, F> {
         )
         .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
         .run();
-        let (u, iterations) = match result {
+        let (u, cost, iterations) = match result {
             Ok(res) => {
                 let st = &res.state;
-                let u = st
-                    .get_best_param()
-                    .or(st.get_param())
-                    .map(|p| p.as_slice().to_vec())
-                    .unwrap_or_else(|| u0.to_vec());
-                (u, st.get_iter())
+                let best = st.get_best_param().map(|p| p.as_slice().to_vec());
+                let cost = best
+                    .as_ref()
+                    .map(|_| st.get_best_cost())
+                    .filter(|c| c.is_finite());
+                (best.unwrap_or_else(|| u0.to_vec()), cost, st.get_iter())
             }
-            Err(_) => (u0.to_vec(), 0),
+            Err(_) => (u0.to_vec(), None, 0),
         };
-        let cost = ev.eval_internal(&u, false).cost();
-        if cost.is_finite() && cost <= start_cost || !start_cost.is_finite() {
-            (u, cost, iterations)
-        } else {
-            (u0.to_vec(), start_cost, iterations)
-        }
+        let cost = cost.unwrap_or_else(|| ev.eval_internal(&u, false).cost());
+        (u, cost, iterations)
     }
 
     /// Bracket both thresholds on one side (`dir` = ±1) out to `hmax`; the points, ascending in
     /// |h| and starting at the optimum. `None` when cancelled.
-    fn bracket(&mut self, dir: f64, step: f64, hmax: f64, u0: &[f64]) -> Option<Vec<Pt>> {
+    /// `first_start`: where the first solve starts (the other side's first point mirrored
+    /// through the optimum), else the optimum.
+    fn bracket(
+        &mut self,
+        dir: f64,
+        step: f64,
+        hmax: f64,
+        u0: &[f64],
+        first_start: Option<Vec<f64>>,
+    ) -> Option<Vec<Pt>> {
         let mut pts = vec![Pt {
             h: 0.0,
             d: 0.0,
             u: u0.to_vec(),
         }];
+        let mut first_start = first_start;
         let mut h = step.min(hmax);
         for _ in 0..MAX_BRACKET {
             if h <= 0.0 {
@@ -281,8 +288,14 @@ impl<F: Forward> Pinned<'_, '_, F> {
             if is_cancelled(&self.opt.cancel) {
                 return None;
             }
-            let last = pts.last().map(|p| p.u.clone()).unwrap_or_default();
-            let pt = self.solve(dir * h, &last);
+            // The other parameters move nearly linearly with the pinned one near the optimum:
+            // start where the last two points extrapolate to (the LM then settles in about one
+            // iteration instead of two), the first solve from `first_start`.
+            let start = match pts.len() {
+                1 => first_start.take().unwrap_or_else(|| u0.to_vec()),
+                n => extrapolate(&pts[n - 2], &pts[n - 1], dir * h),
+            };
+            let pt = self.solve(dir * h, &start);
             let d = pt.d;
             pts.push(pt);
             if d >= CHI2_95 || near(d, CHI2_95) || h >= hmax {
@@ -359,6 +372,20 @@ impl<F: Forward> Pinned<'_, '_, F> {
     }
 }
 
+/// The point on the line through `a` and `b` (solved points, in the solver's coordinates) at
+/// pinned offset `h`.
+fn extrapolate(a: &Pt, b: &Pt, h: f64) -> Vec<f64> {
+    let t = if b.h != a.h {
+        (h - b.h) / (b.h - a.h)
+    } else {
+        0.0
+    };
+    a.u.iter()
+        .zip(&b.u)
+        .map(|(ua, ub)| ub + (ub - ua) * t)
+        .collect()
+}
+
 /// Whether a solved Δχ² is close enough to `target` to be its crossing: `√Δχ²` within
 /// [`SQRT_TOL`] of `√target`.
 fn near(d: f64, target: f64) -> bool {
@@ -409,13 +436,19 @@ pub fn profile_parameter<F: Forward>(
     let mut ends = [[End::Closed(x0); 2]; 2];
     let mut methods = [ProfileMethod::Refits; 2];
     let mut points = Vec::new();
+    let mut mirrored = None;
     for (side, (dir, room, bounded)) in [(-1.0, lo_room, lo_bounded), (1.0, hi_room, hi_bounded)]
         .into_iter()
         .enumerate()
     {
-        let Some(mut pts) = pin.bracket(dir, step, room, &u0) else {
+        let Some(mut pts) = pin.bracket(dir, step, room, &u0, mirrored.take()) else {
             return Ok(None);
         };
+        // The upper side's first solve (at +step) starts from the lower side's (at −step)
+        // mirrored through the optimum.
+        if let Some(first) = pts.get(1).filter(|p| p.h == -step) {
+            mirrored = Some(u0.iter().zip(&first.u).map(|(o, f)| 2.0 * o - f).collect());
+        }
         for (t, target) in [CHI2_68, CHI2_95].into_iter().enumerate() {
             let Some(end) = pin.crossing(&mut pts, target, bounded) else {
                 return Ok(None);
