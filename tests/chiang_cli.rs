@@ -190,6 +190,26 @@ fn the_model_tag_must_agree_with_the_option() {
     assert!(e.contains("--width-nodes"), "{e}");
 }
 
+/// `synth --model chiang` of the parameter file `truth` on three azimuthal scans into `dir/d.csv`
+/// (its truth beside it), with `extra` options.
+fn synth_on_the_rig(dir: &Path, truth: &Path, extra: &[&str]) -> std::path::PathBuf {
+    let data = dir.join("d.csv");
+    let mut args = vec![
+        "synth",
+        "--model",
+        "chiang",
+        "--params",
+        p(truth),
+        "--rig",
+        "azimuthal:incidences=15,30,45:steps=36",
+        "--output",
+        p(&data),
+    ];
+    args.extend_from_slice(extra);
+    hairfit_ok(&args);
+    data
+}
+
 /// Noise-free data of `synth --model chiang` is recovered by `fit --model chiang`. The same
 /// width rule makes and fits the data, so the truth is an exact zero of the residual: 1e-6
 /// relative leaves room only for the solver's stopping tolerance.
@@ -201,22 +221,11 @@ fn synth_then_fit_recovers_noise_free_truth() {
         "truth.json",
         r#"{"eta": 1.55, "sigma_a": [0.3, 0.5, 0.9], "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2.5}"#,
     );
-    let data = dir.path().join("d.csv");
-    hairfit_ok(&[
-        "synth",
-        "--model",
-        "chiang",
-        "--width-nodes",
-        "256",
-        "--params",
-        p(&truth),
-        "--rig",
-        "azimuthal:incidences=15,30,45:steps=36",
-        "--scale",
-        "2,1.5,1",
-        "--output",
-        p(&data),
-    ]);
+    let data = synth_on_the_rig(
+        dir.path(),
+        &truth,
+        &["--width-nodes", "256", "--scale", "2,1.5,1"],
+    );
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
     assert!(matches!(t.params, FamilyParams::Chiang(_)));
     assert_eq!(
@@ -373,20 +382,7 @@ fn auto_width_rule_fits_like_the_plain_rule() {
         "truth.json",
         r#"{"eta": 1.55, "sigma_a": [0.3, 0.9], "beta_m": 0.2, "beta_n": 0.5, "alpha_deg": 3}"#,
     );
-    let data = dir.path().join("d.csv");
-    hairfit_ok(&[
-        "synth",
-        "--model",
-        "chiang",
-        "--params",
-        p(&truth),
-        "--rig",
-        "azimuthal:incidences=15,30,45:steps=36",
-        "--noise",
-        "relative:0.02",
-        "--output",
-        p(&data),
-    ]);
+    let data = synth_on_the_rig(dir.path(), &truth, &["--noise", "relative:0.02"]);
     let fit = |rule: &str| {
         let out = dir.path().join(format!("fit-{rule}"));
         hairfit_ok(&[
@@ -422,15 +418,19 @@ fn auto_width_rule_fits_like_the_plain_rule() {
         "{:?}",
         auto.reasons
     );
+    let mut compared = 0;
     for (a, b) in auto.parameters.iter().zip(&plain.parameters) {
         assert_eq!(a.name, b.name);
         let (Some(se), Some(va), Some(vb)) = (b.std_error, a.value, b.value) else {
             continue;
         };
+        compared += 1;
         assert!(
             (va - vb).abs() <= se / 100.0,
             "{}: auto {va} vs plain {vb} (SE {se})",
             a.name
         );
     }
+    // σ_a per channel, β_m, β_n and α: every free parameter was compared.
+    assert_eq!(compared, 5, "{:?}", auto.parameters);
 }

@@ -51,17 +51,18 @@ pub fn scattering_from_table<T: DualNum<f64>>(
     }
 }
 
-/// The width integral of exit direction (`theta_r`, `phi`) over `model`'s width nodes.
+/// The width integral of exit direction (`theta_r`, `phi`) over `model`'s width nodes (a
+/// composite rule's written into `scratch`, reused across directions).
 pub fn fill_table<T: DualNum<f64>>(
     table: &mut AzimuthalTable<T>,
     params: &ChiangParams<T>,
     model: &ChiangModel,
     theta_r: f64,
     phi: f64,
+    scratch: &mut WidthScratch,
 ) {
-    let mut scratch = WidthScratch::default();
     let (eta, beta_n) = (params.eta.re(), params.beta_n.re());
-    let nodes = model.width_nodes_for(eta, beta_n, theta_r, phi, &mut scratch);
+    let nodes = model.width_nodes_for(eta, beta_n, theta_r, phi, scratch);
     table.fill(params, &model.effects, nodes, theta_r, phi);
 }
 
@@ -76,7 +77,14 @@ pub fn scattering<T: DualNum<f64>>(
     let mut table = AzimuthalTable::zeros(params.sigma_a.len());
     // S is even in φ: |φ|, as the batches key their tables.
     let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    fill_table(&mut table, params, model, angles.theta_r, phi);
+    fill_table(
+        &mut table,
+        params,
+        model,
+        angles.theta_r,
+        phi,
+        &mut WidthScratch::default(),
+    );
     scattering_from_table(
         params,
         &model.effects,
@@ -118,12 +126,13 @@ pub fn for_each_with_table<T: DualNum<f64>>(
     );
     let mut index: HashMap<(u64, u64), usize> = HashMap::new();
     let mut tables: Vec<AzimuthalTable<T>> = Vec::new();
+    let mut scratch = WidthScratch::default();
     for (a, row) in angles.iter().zip(out.chunks_mut(n.max(1))) {
         let phi = wrap(a.phi_r - a.phi_i).abs();
         let key = (a.theta_r.to_bits(), phi.to_bits());
         let slot = *index.entry(key).or_insert_with(|| {
             let mut table = AzimuthalTable::zeros(n);
-            fill_table(&mut table, params, model, a.theta_r, phi);
+            fill_table(&mut table, params, model, a.theta_r, phi, &mut scratch);
             tables.push(table);
             tables.len() - 1
         });
@@ -152,7 +161,14 @@ pub fn scattering_by_lobe(
     let n = params.sigma_a.len();
     let mut table = AzimuthalTable::zeros(n);
     let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    fill_table(&mut table, params, model, angles.theta_r, phi);
+    fill_table(
+        &mut table,
+        params,
+        model,
+        angles.theta_r,
+        phi,
+        &mut WidthScratch::default(),
+    );
     let m = longitudinal_terms(params, &model.effects, angles.theta_i, angles.theta_r);
     let cos_i = angles.theta_i.cos();
     for (c, o) in out.iter_mut().enumerate() {

@@ -66,11 +66,8 @@ impl ExitColumn {
         rule: WidthSet,
         key: (u64, u64),
     ) -> Self {
-        let theta_r = f64::from_bits(key.0);
         let n = p.sigma_a.len();
-        let refraction = ExitRefraction::new(&p.eta, theta_r);
-        let inv_eta_prime = refraction.eta_prime.recip();
-        let two_over_cos_tt = refraction.cos_theta_t.recip() * 2.0;
+        let exit = ExitGeometry::new(p.eta, f64::from_bits(key.0));
         let residual = effects.residual && std::ptr::eq(rule.lobes, rule.residual);
         let any_lobe = effects.r || effects.tt || effects.trt;
         let nodes = if any_lobe || residual {
@@ -90,8 +87,7 @@ impl ExitColumn {
             d_residual: vec![0.0; n],
         };
         for node in &rule.lobes[..nodes] {
-            let f = fresnel(&p.eta, refraction.cos_theta_r * node.cos_gamma);
-            let sin_gt = inv_eta_prime * node.h;
+            let (f, sin_gt) = exit.fresnel_and_sin_gamma_t(p.eta, node);
             let gamma_t = sin_gt.asin();
             col.weight.push(node.weight);
             col.fresnel.push(f);
@@ -101,7 +97,7 @@ impl ExitColumn {
             if !transmitted {
                 continue;
             }
-            let chord = (-sin_gt.powi(2) + 1.0).sqrt() * two_over_cos_tt;
+            let chord = exit.chord(sin_gt);
             for c in 0..n {
                 let t = (-(p.sigma_a[c] * chord)).exp();
                 // A₁ = (1−F)²T, A₂ = A₁TF as `attenuations`; A₃ (a division) only when used here.
@@ -110,9 +106,9 @@ impl ExitColumn {
                 col.atten.push([a1, a2]);
                 col.d_atten.push([-chord * a1, -2.0 * chord * a2]);
                 if residual {
-                    let a3 = attenuations(&f, &t)[3];
+                    let (a3, d3) = residual_term(t, f, chord);
                     col.residual[c] += a3 * node.weight;
-                    col.d_residual[c] += residual_slope(t, f, chord, a3) * node.weight;
+                    col.d_residual[c] += d3 * node.weight;
                 }
             }
         }
@@ -123,35 +119,66 @@ impl ExitColumn {
     /// column's θ_r: what a composite rule's columns share across every azimuth.
     fn residual(p: &ChiangParams<f64>, nodes: &[WidthNode], theta_r: f64) -> [Vec<f64>; 2] {
         let n = p.sigma_a.len();
-        let refraction = ExitRefraction::new(&p.eta, theta_r);
-        let inv_eta_prime = refraction.eta_prime.recip();
-        let two_over_cos_tt = refraction.cos_theta_t.recip() * 2.0;
+        let exit = ExitGeometry::new(p.eta, theta_r);
         let (mut value, mut slope) = (vec![0.0; n], vec![0.0; n]);
         for node in nodes {
-            let f = fresnel(&p.eta, refraction.cos_theta_r * node.cos_gamma);
-            let sin_gt = inv_eta_prime * node.h;
-            let chord = (-sin_gt.powi(2) + 1.0).sqrt() * two_over_cos_tt;
+            let (f, sin_gt) = exit.fresnel_and_sin_gamma_t(p.eta, node);
+            let chord = exit.chord(sin_gt);
             for ((sigma, v), d) in p.sigma_a.iter().zip(&mut value).zip(&mut slope) {
-                let t = (-(sigma * chord)).exp();
-                let a3 = attenuations(&f, &t)[3];
+                let (a3, d3) = residual_term((-(sigma * chord)).exp(), f, chord);
                 *v += a3 * node.weight;
-                *d += residual_slope(t, f, chord, a3) * node.weight;
+                *d += d3 * node.weight;
             }
         }
         [value, slope]
     }
 }
 
-/// `∂A₃/∂σ_a`: with T = e^{−σ·chord} and q = TF, `A₃ = A₂q/(1−q)` gives
-/// `∂A₃ = −chord·A₃·(2 + 1/(1−q))` (as `∂A₁ = −chord·A₁`, `∂A₂ = −2chord·A₂`).
+/// What every node of one exit inclination shares (η fixed): `cos θ_r`, `1/η'`, `2/cos θ_t`.
+struct ExitGeometry {
+    cos_theta_r: f64,
+    inv_eta_prime: f64,
+    two_over_cos_tt: f64,
+}
+
+impl ExitGeometry {
+    fn new(eta: f64, theta_r: f64) -> Self {
+        let refraction = ExitRefraction::new(&eta, theta_r);
+        ExitGeometry {
+            cos_theta_r: refraction.cos_theta_r,
+            inv_eta_prime: refraction.eta_prime.recip(),
+            two_over_cos_tt: refraction.cos_theta_t.recip() * 2.0,
+        }
+    }
+
+    /// `(F, sin γ_t)` at `node`.
+    #[inline]
+    fn fresnel_and_sin_gamma_t(&self, eta: f64, node: &WidthNode) -> (f64, f64) {
+        (
+            fresnel(&eta, self.cos_theta_r * node.cos_gamma),
+            self.inv_eta_prime * node.h,
+        )
+    }
+
+    /// The chord `2cos γ_t/cos θ_t`.
+    #[inline]
+    fn chord(&self, sin_gamma_t: f64) -> f64 {
+        (-sin_gamma_t.powi(2) + 1.0).sqrt() * self.two_over_cos_tt
+    }
+}
+
+/// `(A₃, ∂A₃/∂σ_a)` for transmittance `t`: with T = e^{−σ·chord} and q = TF, `A₃ = A₂q/(1−q)`
+/// gives `∂A₃ = −chord·A₃·(2 + 1/(1−q))` (as `∂A₁ = −chord·A₁`, `∂A₂ = −2chord·A₂`).
 #[inline]
-fn residual_slope(t: f64, f: f64, chord: f64, a3: f64) -> f64 {
+fn residual_term(t: f64, f: f64, chord: f64) -> (f64, f64) {
+    let a3 = attenuations(&f, &t)[3];
     let one_minus = 1.0 - t * f;
-    if one_minus == 0.0 {
+    let slope = if one_minus == 0.0 {
         0.0
     } else {
         -chord * a3 * (2.0 + one_minus.recip())
-    }
+    };
+    (a3, slope)
 }
 
 /// The width-averaged lobes of one exit direction per channel with their derivatives:
