@@ -66,6 +66,20 @@ pub fn fill_table<T: DualNum<f64>>(
     table.fill(params, &model.effects, nodes, theta_r, phi);
 }
 
+/// The width integral of one sample's exit direction (θ_r, |φ|: S is even in φ, and the
+/// batches key their tables the same way).
+fn sample_table<T: DualNum<f64>>(
+    params: &ChiangParams<T>,
+    model: &ChiangModel,
+    angles: &Angles,
+) -> AzimuthalTable<T> {
+    let mut table = AzimuthalTable::zeros(params.sigma_a.len());
+    let phi = wrap(angles.phi_r - angles.phi_i).abs();
+    let mut scratch = WidthScratch::default();
+    fill_table(&mut table, params, model, angles.theta_r, phi, &mut scratch);
+    table
+}
+
 /// `S` per channel for one sample, width integral included (no cache). Parameters and angles are
 /// assumed valid ([`ChiangParams::validate`], [`Angles::validate`]).
 pub fn scattering<T: DualNum<f64>>(
@@ -74,17 +88,7 @@ pub fn scattering<T: DualNum<f64>>(
     angles: &Angles,
     out: &mut [T],
 ) {
-    let mut table = AzimuthalTable::zeros(params.sigma_a.len());
-    // S is even in φ: |φ|, as the batches key their tables.
-    let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    fill_table(
-        &mut table,
-        params,
-        model,
-        angles.theta_r,
-        phi,
-        &mut WidthScratch::default(),
-    );
+    let table = sample_table(params, model, angles);
     scattering_from_table(
         params,
         &model.effects,
@@ -158,17 +162,7 @@ pub fn scattering_by_lobe(
     angles: &Angles,
     out: &mut [[f64; 3]],
 ) {
-    let n = params.sigma_a.len();
-    let mut table = AzimuthalTable::zeros(n);
-    let phi = wrap(angles.phi_r - angles.phi_i).abs();
-    fill_table(
-        &mut table,
-        params,
-        model,
-        angles.theta_r,
-        phi,
-        &mut WidthScratch::default(),
-    );
+    let table = sample_table(params, model, angles);
     let m = longitudinal_terms(params, &model.effects, angles.theta_i, angles.theta_r);
     let cos_i = angles.theta_i.cos();
     for (c, o) in out.iter_mut().enumerate() {
