@@ -11,6 +11,8 @@ mod evaluation;
 mod evaluator;
 mod forward;
 mod linearize;
+mod memo;
+mod passes;
 mod projection;
 mod residual;
 

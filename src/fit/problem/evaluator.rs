@@ -4,6 +4,7 @@
 
 use super::evaluation::{Evaluation, ScaleMode};
 use super::forward::{FitParam, Forward, ParamSet};
+use super::memo::PassMemo;
 use super::FitData;
 use crate::fit::bounds::Bound;
 use crate::fit::loss::Loss;
@@ -34,6 +35,8 @@ pub struct Evaluator<'f, F: Forward> {
     pub bounds: Vec<Bound>,
     /// Scale is explicit (robust loss) rather than projected.
     pub explicit_scale: bool,
+    /// The latest value and gradient passes, reused at the same point.
+    pub(super) memo: PassMemo<ParamSet<F>, F::Param>,
 }
 
 /// A reading below this many σ is not significantly positive: its log is not approximately
@@ -126,9 +129,18 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 free,
                 bounds,
                 explicit_scale: loss != Loss::L2,
+                memo: PassMemo::default(),
             },
             floored,
         ))
+    }
+
+    /// At most `bytes` of recent model passes kept for reuse (default
+    /// [`super::memo::MEMO_MAX_BYTES`]; 0 keeps none: every pass runs the model).
+    pub fn with_memo_limit(mut self, bytes: usize) -> Self {
+        self.memo = PassMemo::default();
+        self.memo.max_bytes = bytes;
+        self
     }
 
     /// Number of residuals.

@@ -18,7 +18,8 @@ use crate::model::{
 /// from the family's parameter table.
 pub trait FitParam: Copy + PartialEq + std::fmt::Debug + Send + Sync + 'static {
     /// The family's parameter set in natural units.
-    type Set: Clone + std::fmt::Debug + Send + Sync;
+    /// `PartialEq`: a kept model pass is reused only at an equal parameter set.
+    type Set: Clone + PartialEq + std::fmt::Debug + Send + Sync;
     fn get(self, p: &Self::Set) -> f64;
     fn set(self, p: &mut Self::Set, value: f64);
     /// The fit's bounds (natural units).
@@ -122,6 +123,12 @@ pub trait Forward: Sync {
             dst[..ns].copy_from_slice(&src[..ns]);
             dst[ns] = column[r % nc].map_or(0.0, |j| src[j]);
         }
+    }
+    /// Whether a gradient pass over `free` costs little more than a value pass and gives
+    /// bit-identical values. Then the fit computes the gradients with every value pass (kept
+    /// while small), so the linearisation after an accepted LM step costs no model pass.
+    fn cheap_gradients(&self, _free: &[Self::Param]) -> bool {
+        false
     }
     /// Per-lobe values `[R, TT, TRT]` per channel (for curves.csv); `false` when not available.
     fn by_lobe(&self, _p: &ParamSet<Self>, _angles: &Angles, _out: &mut [[f64; 3]]) -> bool {

@@ -23,14 +23,15 @@
 //! Determinism: chunks of [`CHUNK`] samples are reduced in parallel, in fixed rounds, and merged in
 //! chunk order, so results are bit-identical for any thread count.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 use super::evaluation::{ScaleMode, CHUNK};
 use super::evaluator::{Evaluator, Space};
-use super::forward::{FitParam, Forward, ParamSet};
+use super::forward::{Forward, ParamSet};
+use super::passes::{cancelled, chunk_model, Layout};
 use crate::lm::{Block, BlockSystem, Linearized, ParameterCovariance, System};
 
 /// Model values below this are floored before taking logarithms (as in the residual pass).
@@ -134,58 +135,10 @@ impl Linearization {
     }
 }
 
-/// Which solver columns one channel's rows touch.
-struct Layout<P> {
-    /// Indices into `free` of the shared parameters, and the parameters.
-    shared: Vec<usize>,
-    shared_names: Vec<P>,
-    /// Per channel, the index into `free` of its local parameter, and the parameter, if free.
-    local: Vec<Option<usize>>,
-    local_names: Vec<Option<P>>,
-}
-
-impl<P: FitParam> Layout<P> {
-    fn of(free: &[P], nc: usize) -> Layout<P> {
-        let mut layout = Layout {
-            shared: Vec::new(),
-            shared_names: Vec::new(),
-            local: vec![None; nc],
-            local_names: vec![None; nc],
-        };
-        for (j, &name) in free.iter().enumerate() {
-            match name.channel() {
-                Some(c) if c < nc => {
-                    layout.local[c] = Some(j);
-                    layout.local_names[c] = Some(name);
-                }
-                _ => {
-                    layout.shared.push(j);
-                    layout.shared_names.push(name);
-                }
-            }
-        }
-        layout
-    }
-
-    /// Gradient columns per row: shared, then the channel's local one.
-    fn n_cols(&self) -> usize {
-        self.shared.len() + 1
-    }
-
-    /// The index into `free` of local column `l` for channel `c`.
-    fn free_index(&self, c: usize, l: usize) -> Option<usize> {
-        self.shared.get(l).copied().or(self.local[c])
-    }
-}
-
 /// One chunk's reduction: per channel the R factor of its rows, and the projection sums.
 struct ChunkPart {
     tri: Vec<DMatrix<f64>>,
     sums: Vec<f64>,
-}
-
-fn cancelled(flag: Option<&AtomicBool>) -> bool {
-    flag.is_some_and(|f| f.load(Ordering::Relaxed))
 }
 
 /// The R factor of `[top; bottom]` (at most `ncols` rows).
@@ -209,24 +162,6 @@ fn triangle(a: DMatrix<f64>) -> DMatrix<f64> {
 }
 
 impl<F: Forward> Evaluator<'_, F> {
-    /// Model values of every row (sample-major), in chunks; `None` when cancelled.
-    fn model_values(&self, p: &ParamSet<F>, cancel: Option<&AtomicBool>) -> Option<Vec<f64>> {
-        let nc = self.n_channels;
-        let mut model = vec![0.0; self.angles.len() * nc];
-        let done: Vec<bool> = model
-            .par_chunks_mut(CHUNK * nc)
-            .zip(self.angles.par_chunks(CHUNK))
-            .map(|(m, a)| {
-                if cancelled(cancel) {
-                    return false;
-                }
-                self.forward.values(p, a, m);
-                true
-            })
-            .collect();
-        done.iter().all(|&d| d).then_some(model)
-    }
-
     /// Per-channel scale in the fit space (`s` linear, `ln s` log) for `mode`; the projected one
     /// from the model values `model`, by the same sums in the same order as
     /// [`Evaluator::evaluate`].
@@ -422,6 +357,18 @@ impl<F: Forward> Evaluator<'_, F> {
         let mut sums = vec![0.0; nc * sum_width];
         // Fewer chunks per round with many channels: each part holds a triangle per channel.
         let per_round = (ROUND * ROUND / nc.max(1)).clamp(2, ROUND);
+        // The model's values and gradients: kept from a pass at `p`, or computed now and kept
+        // when small enough; else each chunk computes its own.
+        let kept = match self
+            .memo
+            .gradients_at(&p, &layout.shared_names, &layout.local_names)
+        {
+            Some(g) => Some(g),
+            None if self.memo.fits(self.angles.len() * nc * (nl + 1)) => {
+                Some(self.gradient_pass(&p, &layout, cancel)?)
+            }
+            None => None,
+        };
         for round in (0..n_chunks).step_by(per_round) {
             let parts: Vec<Option<ChunkPart>> = (round..(round + per_round).min(n_chunks))
                 .into_par_iter()
@@ -429,7 +376,16 @@ impl<F: Forward> Evaluator<'_, F> {
                     if cancelled(cancel) {
                         return None;
                     }
-                    Some(self.chunk_part(&p, &layout, ci, (col_factor, extra), mode, (&sq, &s)))
+                    let model = kept.as_deref().map(|g| chunk_model(g, ci, nc, nl));
+                    Some(self.chunk_part(
+                        &p,
+                        &layout,
+                        ci,
+                        (col_factor, extra),
+                        mode,
+                        (&sq, &s),
+                        model,
+                    ))
                 })
                 .collect();
             for part in parts {
@@ -519,7 +475,9 @@ impl<F: Forward> Evaluator<'_, F> {
         })
     }
 
-    /// Rows of chunk `ci`, reduced to one R factor per channel, with the projection sums.
+    /// Rows of chunk `ci`, reduced to one R factor per channel, with the projection sums;
+    /// `kept`: the chunk's model values and gradients from a kept pass at `p`.
+    #[allow(clippy::too_many_arguments)]
     fn chunk_part(
         &self,
         p: &ParamSet<F>,
@@ -528,6 +486,7 @@ impl<F: Forward> Evaluator<'_, F> {
         (col_factor, extra): (&[f64], &[&[f64]]),
         mode: ScaleMode<'_>,
         (sq, s): (&[f64], &[f64]),
+        kept: Option<(&[f64], &[f64])>,
     ) -> ChunkPart {
         let nc = self.n_channels;
         let nl = layout.n_cols();
@@ -536,16 +495,24 @@ impl<F: Forward> Evaluator<'_, F> {
         let lo = ci * CHUNK;
         let hi = (lo + CHUNK).min(self.angles.len());
         let n = hi - lo;
-        let mut out = vec![0.0; n * nc];
-        let mut grad = vec![0.0; n * nc * nl];
-        self.forward.gradients_compressed(
-            p,
-            &layout.shared_names,
-            &layout.local_names,
-            &self.angles[lo..hi],
-            &mut out,
-            &mut grad,
-        );
+        let computed = kept.is_none().then(|| {
+            let mut out = vec![0.0; n * nc];
+            let mut grad = vec![0.0; n * nc * nl];
+            self.forward.gradients_compressed(
+                p,
+                &layout.shared_names,
+                &layout.local_names,
+                &self.angles[lo..hi],
+                &mut out,
+                &mut grad,
+            );
+            (out, grad)
+        });
+        let (out, grad) = match (kept, &computed) {
+            (Some(k), _) => k,
+            (None, Some((o, g))) => (&o[..], &g[..]),
+            (None, None) => unreachable!("computed when not kept"),
+        };
         // Column factors per channel (the solver transform's derivative; 0 for a fixed local).
         let factors: Vec<Vec<f64>> = (0..nc)
             .map(|c| {

@@ -57,10 +57,9 @@ impl<F: Forward> Evaluator<'_, F> {
                     }
                 });
         } else {
-            model
-                .par_chunks_mut(CHUNK * nc)
-                .zip(self.angles.par_chunks(CHUNK))
-                .for_each(|(m, a)| self.forward.values(&p, a, m));
+            model = self
+                .model_values(&p, None)
+                .expect("no cancel flag: the pass runs to the end");
         }
         let q: Vec<f64> = match self.space {
             Space::Linear => model.clone(),
