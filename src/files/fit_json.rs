@@ -213,6 +213,10 @@ pub enum ProfileMethod {
     /// The local quadratic held: the re-fit at the linearised standard error landed on Δχ² ≈ 1
     /// and the re-fit at the quadratic's 95% point on 3.84, both accepted as they stand.
     Quadratic,
+    /// The local quadratic held tightly: the re-fit at the linearised standard error landed on
+    /// Δχ² within 0.2% of 1, so the 95% end is the quadratic's (no re-fit there; its error is
+    /// under the 1% in √Δχ² a re-fitted crossing is accepted at).
+    Extrapolated,
     /// The quadratic did not hold (or the side is open): the crossings were bracketed and
     /// refined by further re-fits.
     Refits,

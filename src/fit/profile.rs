@@ -52,6 +52,11 @@ const MAX_BRACKET: usize = 10;
 const MAX_REFINE: usize = 4;
 /// A crossing is accepted when `√Δχ²` is this close to its target (Δχ² within ~2% at 68%).
 const SQRT_TOL: f64 = 0.01;
+/// A side's 95% end is the local quadratic's, without a re-fit there, when the re-fit at the
+/// linearised SE found `√Δχ²` this close to 1 (Δχ² within 0.2%): a cubic or quartic term that
+/// small at 1 SE moves Δχ² at the 95% point (1.96 SE) by at most ~4× as much, under 1% — inside
+/// the [`SQRT_TOL`] a re-fitted crossing is accepted at.
+const EXTRAPOLATE_TOL: f64 = 1e-3;
 /// A profile solve stops when a step gains less than this many χ² units (the polish's own
 /// tolerance is 10⁻¹²·dof, far finer than a crossing needs).
 const SOLVE_CHI2_TOL: f64 = 1e-3;
@@ -235,7 +240,8 @@ impl<F: Forward> Pinned<'_, '_, F> {
         let solver = Cancellable {
             inner: crate::lm::LevenbergMarquardt::new()
                 .with_tolerances(ftol, crate::lm::DEFAULT_XTOL, 0.0)
-                .unwrap_or_default(),
+                .unwrap_or_default()
+                .with_lazy_final_linearization(),
             flag: self.opt.cancel.clone(),
             dof,
             costs: Vec::new(),
@@ -301,7 +307,8 @@ impl<F: Forward> Pinned<'_, '_, F> {
             let pt = self.solve(dir * h, &start);
             let d = pt.d;
             pts.push(pt);
-            if d >= CHI2_95 || near(d, CHI2_95) || h >= hmax {
+            if d >= CHI2_95 || near(d, CHI2_95) || h >= hmax || quadratic_end(&pts, hmax).is_some()
+            {
                 break;
             }
             // Where the first step (the linearised SE) found Δχ² ≈ 1, the profile is the local
@@ -389,6 +396,17 @@ fn extrapolate(a: &Pt, b: &Pt, h: f64) -> Vec<f64> {
         .collect()
 }
 
+/// The side's 95% offset from the local quadratic, when its only solve (at the linearised SE)
+/// found Δχ² within [`EXTRAPOLATE_TOL`] of 1 and the offset is inside the side's room `hmax`.
+fn quadratic_end(pts: &[Pt], hmax: f64) -> Option<f64> {
+    let [_, first] = pts else {
+        return None;
+    };
+    let h95 = first.h.abs() * (CHI2_95 / first.d).sqrt();
+    ((first.d.sqrt() - 1.0).abs() < EXTRAPOLATE_TOL && h95 <= hmax)
+        .then_some(first.h.signum() * h95)
+}
+
 /// Whether a solved Δχ² is close enough to `target` to be its crossing: `√Δχ²` within
 /// [`SQRT_TOL`] of `√target`.
 fn near(d: f64, target: f64) -> bool {
@@ -452,16 +470,22 @@ pub fn profile_parameter<F: Forward>(
         if let Some(first) = pts.get(1).filter(|p| p.h == -step) {
             mirrored = Some(u0.iter().zip(&first.u).map(|(o, f)| 2.0 * o - f).collect());
         }
-        for (t, target) in [CHI2_68, CHI2_95].into_iter().enumerate() {
-            let Some(end) = pin.crossing(&mut pts, target, bounded) else {
-                return Ok(None);
-            };
-            ends[t][side] = end;
-        }
-        // Two solves, no refinement inserted: the SE's solve at Δχ² ≈ 1 and the quadratic's
-        // 95% point at ≈ 3.84 were taken as they stand.
-        if pts.len() == 3 && near(pts[1].d, CHI2_68) && near(pts[2].d, CHI2_95) {
-            methods[side] = ProfileMethod::Quadratic;
+        if let Some(h95) = quadratic_end(&pts, room) {
+            ends[0][side] = End::Closed(x0 + pts[1].h);
+            ends[1][side] = End::Closed(x0 + h95);
+            methods[side] = ProfileMethod::Extrapolated;
+        } else {
+            for (t, target) in [CHI2_68, CHI2_95].into_iter().enumerate() {
+                let Some(end) = pin.crossing(&mut pts, target, bounded) else {
+                    return Ok(None);
+                };
+                ends[t][side] = end;
+            }
+            // Two solves, no refinement inserted: the SE's solve at Δχ² ≈ 1 and the
+            // quadratic's 95% point at ≈ 3.84 were taken as they stand.
+            if pts.len() == 3 && near(pts[1].d, CHI2_68) && near(pts[2].d, CHI2_95) {
+                methods[side] = ProfileMethod::Quadratic;
+            }
         }
         points.extend(pts.iter().skip(side).map(|pt| (x0 + pt.h, pt.d)));
     }
@@ -557,7 +581,7 @@ pub fn intervals<F: Forward, Q>(
             let quadratic = profiles
                 .iter()
                 .flat_map(|p| p.methods)
-                .filter(|m| *m == ProfileMethod::Quadratic)
+                .filter(|m| *m != ProfileMethod::Refits)
                 .count();
             let sides = 2 * profiles.len();
             record(

@@ -253,7 +253,13 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             }
             j_new = Some(lin);
         }
-        if accepted {
+        let cost_converged = actred.abs() <= self.ftol && prered <= self.ftol && 0.5 * ratio <= 1.0;
+        if accepted && self.lazy_final && j_new.is_none() && cost_converged {
+            // The cost test below ends the run here: no linearisation at the new point.
+            state = state.param(x_new.clone()).cost(0.5 * fnorm1 * fnorm1);
+            state.take_jacobian();
+            state.take_residuals();
+        } else if accepted {
             let lin = match j_new {
                 Some(lin) => lin,
                 None => {
@@ -285,8 +291,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
 
         if self.status.is_none() {
             let eps = f64::EPSILON;
-            self.status = if actred.abs() <= self.ftol && prered <= self.ftol && 0.5 * ratio <= 1.0
-            {
+            self.status = if cost_converged {
                 Some(LmTermination::CostConverged)
             } else if self.delta <= self.xtol * xnorm || self.delta <= f64::MIN_POSITIVE {
                 Some(LmTermination::StepConverged)

@@ -146,6 +146,8 @@ pub struct LevenbergMarquardt {
     /// Statistical stop: degrees of freedom of the residuals and the χ² tolerance (0: off).
     dof: usize,
     chi2_tol: f64,
+    /// Stop at an accepted step that meets the cost tolerance without linearising there.
+    lazy_final: bool,
 }
 
 /// Default `xtol`: a few ulps above `f64::EPSILON`, so the solver iterates until its steps are
@@ -195,6 +197,7 @@ impl LevenbergMarquardt {
             rows: 0,
             dof: 0,
             chi2_tol: 0.0,
+            lazy_final: false,
         }
     }
 
@@ -245,6 +248,15 @@ impl LevenbergMarquardt {
         self.dof = dof;
         self.chi2_tol = chi2;
         Ok(self)
+    }
+
+    /// End a run at an accepted step whose trial already meets the cost tolerance (`ftol`)
+    /// without linearising at its new point: for callers that want the minimum's cost and
+    /// position only (a profile's re-fits), that saves a Jacobian pass per run. The final
+    /// state then carries no Jacobian or residuals.
+    pub fn with_lazy_final_linearization(mut self) -> Self {
+        self.lazy_final = true;
+        self
     }
 
     /// Why the last run stopped, if it converged (None while running or after max iterations).

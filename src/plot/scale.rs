@@ -84,6 +84,35 @@ pub fn fmt_num(v: f64) -> String {
     }
 }
 
+/// A tick label on an axis spanning `span`: enough decimals to tell ticks a fifth of the span
+/// apart (plotters' steps are 1, 2 or 5 × 10ᵏ, about that size) (four significant digits would print `15.00` for every tick of an axis 0.004 wide
+/// around 15).
+pub fn fmt_tick(v: f64, span: f64) -> String {
+    if !v.is_finite() {
+        return "n/a".into();
+    }
+    if !(span.is_finite() && span > 0.0) {
+        return fmt_num(v);
+    }
+    let decimals = (-(span / 5.0).log10()).ceil().max(0.0) as usize;
+    let a = v.abs().max(span);
+    if (1e-3..1e5).contains(&a) && decimals <= 8 {
+        // −0.000 is 0.
+        let s = format!("{v:.decimals$}");
+        if s.trim_start_matches('-')
+            .chars()
+            .all(|c| c == '0' || c == '.')
+        {
+            s.trim_start_matches('-').to_string()
+        } else {
+            s
+        }
+    } else {
+        let sig = ((a / span).log10().ceil().max(0.0) as usize + 1).min(12);
+        format!("{v:.sig$e}")
+    }
+}
+
 /// Two significant digits (tick labels between decades), never NaN text.
 pub fn sig2(v: f64) -> String {
     if !v.is_finite() || v == 0.0 {
@@ -127,6 +156,32 @@ mod tests {
         assert_eq!(fmt_num(1.5), "1.5");
         assert_eq!(fmt_num(123.456789), "123.5");
         assert_eq!(fmt_num(2.5e-5), "2.50e-5");
+    }
+
+    #[test]
+    fn ticks_on_a_narrow_axis_stay_distinct() {
+        // Axes from 0.004 to 4000 wide around 15, ticks at a fifth of the span or a step of
+        // 1, 2 or 5 × 10ᵏ near it: distinct labels that read back as the tick.
+        for span in [0.004f64, 0.02, 0.3, 7.0, 4000.0] {
+            let fifth = span / 5.0;
+            for nice in [1.0, 2.0, 5.0] {
+                let step = nice * 10f64.powf(fifth.log10().floor());
+                let ticks: Vec<f64> = (-2..=2).map(|k| 15.0 + step * k as f64).collect();
+                let labels: Vec<String> = ticks.iter().map(|&t| fmt_tick(t, span)).collect();
+                for (t, l) in ticks.iter().zip(&labels) {
+                    let back: f64 = l.parse().unwrap();
+                    assert!((back - t).abs() < 1e-6 * step, "{span}: {t} → {l}");
+                }
+                let mut unique = labels.clone();
+                unique.dedup();
+                assert_eq!(unique.len(), labels.len(), "{span}: {labels:?}");
+            }
+        }
+        assert_eq!(fmt_tick(0.25, 0.002), "0.2500");
+        assert_eq!(fmt_tick(14.999, 0.004), "14.9990");
+        assert_eq!(fmt_tick(-1e-12, 2.0), "0.0");
+        assert_eq!(fmt_tick(3.0e6, 1.0e5), "3.000e6");
+        assert_eq!(fmt_tick(f64::NAN, 1.0), "n/a");
     }
 
     #[test]

@@ -21,7 +21,7 @@ use plotters::prelude::*;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 use crate::family::FamilyModel;
-use crate::files::{CurveRow, Curves, CurvesMode, FitJson};
+use crate::files::{CurveRow, Curves, CurvesMode, FitJson, ProfileMethod};
 use crate::model::Angles;
 
 use crate::plot::{render, YScale};
@@ -401,10 +401,26 @@ fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
                 value: p.value.unwrap_or(f64::NAN),
                 std_error: p.std_error,
                 points: p.profile.iter().map(|q| (q[0], q[1])).collect(),
+                quadratic_ends: quadratic_ends(p),
             }
         })
         .filter(|p| p.value.is_finite())
         .collect()
+}
+
+/// The 95% ends a profile took from the local quadratic (`profile_method` `extrapolated`),
+/// `[below, above]`.
+fn quadratic_ends(p: &crate::files::fit_json::ParameterEntry) -> [Option<f64>; 2] {
+    let methods = p.profile_method.unwrap_or([ProfileMethod::Refits; 2]);
+    let ends = p
+        .interval_95
+        .map(|i| [i.lower, i.upper])
+        .unwrap_or([None; 2]);
+    std::array::from_fn(|side| {
+        (methods[side] == ProfileMethod::Extrapolated)
+            .then_some(ends[side])
+            .flatten()
+    })
 }
 
 /// Channels in fit.json's order, then any other channel named in curves.csv.

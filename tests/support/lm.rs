@@ -24,6 +24,8 @@ pub struct LmOptions {
     /// Statistical stop: degrees of freedom and predicted-χ² tolerance (0: off).
     pub dof: usize,
     pub chi2: f64,
+    /// End at an accepted step meeting `ftol` without linearising there.
+    pub lazy_final: bool,
 }
 
 impl Default for LmOptions {
@@ -35,6 +37,7 @@ impl Default for LmOptions {
             max_iters: 2000,
             dof: 0,
             chi2: 0.0,
+            lazy_final: false,
         }
     }
 }
@@ -74,6 +77,11 @@ where
     let solver = LevenbergMarquardt::new()
         .with_tolerances(options.ftol, options.xtol, options.gtol)?
         .with_statistical_tolerance(options.dof, options.chi2)?;
+    let solver = if options.lazy_final {
+        solver.with_lazy_final_linearization()
+    } else {
+        solver
+    };
     let res = Executor::new(problem, solver)
         .configure(|s| s.param(x0).max_iters(options.max_iters).counting(true))
         .run()

@@ -8,7 +8,7 @@ use plotters::prelude::*;
 
 use super::HEADER_H;
 use crate::error::Result;
-use crate::plot::{cartesian, de, fmt_num, header, Axes, Figure, Frame, LABEL_PX};
+use crate::plot::{cartesian, de, fmt_tick, header, Axes, Figure, Frame, LABEL_PX};
 
 /// Δχ² of the two thresholds drawn.
 const LEVELS: [f64; 2] = [1.0, crate::fit::profile::CHI2_95];
@@ -27,6 +27,9 @@ pub struct ProfilePanel {
     pub std_error: Option<f64>,
     /// `(value, Δχ²)` ascending in value.
     pub points: Vec<(f64, f64)>,
+    /// `[below, above]`: the 95% end a side took from the local quadratic through its one
+    /// solved point (fit.json `profile_method` `extrapolated`), drawn dashed up to that end.
+    pub quadratic_ends: [Option<f64>; 2],
 }
 
 /// Every profiled parameter, in fit.json's order.
@@ -58,7 +61,7 @@ impl Figure for ProfileFigure {
             root,
             HEADER_H,
             &self.title(),
-            "blue: profile (dots: solved points); dashed grey: Δχ² = 1 (68%) and 3.84 (95%); orange: parabola of the linearised standard error",
+            "blue: profile (dots: solved points; dashed to a ring: the local quadratic's 95% end); grey: Δχ² = 1 (68%), 3.84 (95%); orange: the linearised SE's parabola",
         )?;
         let (cols, rows) = self.grid();
         let areas = body.split_evenly((rows, cols));
@@ -70,7 +73,8 @@ impl Figure for ProfileFigure {
 }
 
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePanel) -> Result<()> {
-    let xs = p.points.iter().map(|q| q.0);
+    let ends = p.quadratic_ends.iter().flatten().copied();
+    let xs = p.points.iter().map(|q| q.0).chain(ends);
     let (mut x0, mut x1) = xs.fold((p.value, p.value), |(a, b), x| (a.min(x), b.max(x)));
     if x1 - x0 <= 0.0 {
         let pad = p.std_error.unwrap_or(1e-3 * p.value.abs().max(1e-3));
@@ -84,7 +88,8 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePane
         y_label_area: 46,
     };
     let mut chart = cartesian(area, frame, (x0 - pad)..(x1 + pad), Y_MIN..Y_MAX)?;
-    let x_fmt = |v: &f64| fmt_num(*v);
+    let span = x1 - x0 + 2.0 * pad;
+    let x_fmt = |v: &f64| fmt_tick(*v, span);
     let y_fmt = |v: &f64| format!("{v:.0}");
     Axes::new("value", "Δχ²", &x_fmt, &y_fmt)
         .ticks(5, 7)
@@ -126,5 +131,33 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePane
     chart
         .draw_series(shown.iter().map(|&q| Circle::new(q, 3, blue.filled())))
         .map_err(de)?;
+    // A side whose 95% end is the local quadratic's: Δχ² = d₁·((v − v̂)/h₁)² from its solved
+    // point (the outermost on that side) to the end.
+    let outer = [p.points.first(), p.points.last()];
+    for (end, solved) in p.quadratic_ends.iter().zip(outer) {
+        let (Some(&end), Some(&(x1, d1))) = (end.as_ref(), solved) else {
+            continue;
+        };
+        let h1 = x1 - p.value;
+        if h1 == 0.0 || d1.is_nan() || d1 <= 0.0 {
+            continue;
+        }
+        let n = 24;
+        let curve: Vec<(f64, f64)> = (0..=n)
+            .map(|i| x1 + (end - x1) * i as f64 / n as f64)
+            .map(|x| (x, (d1 * ((x - p.value) / h1).powi(2)).min(Y_MAX)))
+            .collect();
+        chart
+            .draw_series(DashedLineSeries::new(curve, 5, 4, blue.stroke_width(2)))
+            .map_err(de)?;
+        let top = (d1 * ((end - p.value) / h1).powi(2)).min(Y_MAX);
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (end, top),
+                4,
+                blue.stroke_width(2),
+            )))
+            .map_err(de)?;
+    }
     Ok(())
 }
