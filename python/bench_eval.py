@@ -7,7 +7,8 @@ channels):
   batches, one thread, from radians), into a new result each run as hairfit.eval returns one
   (the rate ``hairfit.eval`` is compared with), and into a buffer already written (the kernel
   alone, warm pages);
-- ``hairfit.eval`` from NumPy arrays, one thread (RAYON_NUM_THREADS=1) and all cores;
+- ``hairfit.eval`` from NumPy arrays, one thread (RAYON_NUM_THREADS=1) and all cores, into a
+  new result, and one thread into a re-used ``out=`` array (compared with the warm buffer);
 - ``hairfit eval`` (the CLI, CSV text in and out: parsing and formatting included) on the same
   angles, one thread and all cores;
 - with ``--rust-bench``, ``cargo bench --bench model -- lanes/`` (the model alone, one thread,
@@ -52,12 +53,14 @@ import hairfit
 sys.path.insert(0, sys.argv[4])
 from bench_eval import angles
 rows, runs, params = int(sys.argv[1]), int(sys.argv[2]), json.loads(sys.argv[3])
+reuse = sys.argv[5] == "out"
 a = angles(rows)
 hairfit.eval(params, *(x[:1000] for x in a))  # warm up
+out = hairfit.eval(params, *a) if reuse else None  # its pages touched once
 wall, cpu = [], []
 for _ in range(runs):
     t, c = time.perf_counter(), time.process_time()
-    s = hairfit.eval(params, *a)
+    s = hairfit.eval(params, *a, out=out)
     wall.append(time.perf_counter() - t)
     cpu.append(time.process_time() - c)
 print(json.dumps({"wall": wall, "cpu": cpu}))
@@ -70,7 +73,8 @@ def params(channels: int) -> dict:
             "w_c_deg": 15, "eccentricity": 0.9}
 
 
-def python_eval(rows: int, runs: int, channels: int, threads: str | None) -> dict:
+def python_eval(rows: int, runs: int, channels: int, threads: str | None,
+                reuse: bool = False) -> dict:
     env = dict(os.environ)
     # NumPy's OpenBLAS keeps worker threads spinning after a call; on 2 cores they take the
     # core hairfit.eval's thread needs (measured: 80% of the model's rate with them, 91%
@@ -79,7 +83,8 @@ def python_eval(rows: int, runs: int, channels: int, threads: str | None) -> dic
     if threads:
         env["RAYON_NUM_THREADS"] = threads
     out = subprocess.run([sys.executable, "-c", CHILD, str(rows), str(runs),
-                          json.dumps(params(channels)), str(Path(__file__).parent)], env=env,
+                          json.dumps(params(channels)), str(Path(__file__).parent),
+                          "out" if reuse else "new"], env=env,
                          check=True,
                          capture_output=True, text=True).stdout
     return json.loads(out)
@@ -168,6 +173,13 @@ def main() -> None:
                          if threads == "1" else "")
                 print(f"{channels} ch, {label:9}: hairfit.eval {py:.3f} s ({py_cpu:.3f} s): "
                       f"{rate(py)} ({rate(py_cpu)}) M samples/s{ratio}")
+                if threads == "1":
+                    pyo, pyo_cpu = median(python_eval(args.rows, args.runs, channels, threads,
+                                                      reuse=True))
+                    print(f"{channels} ch, {label:9}: hairfit.eval(out=) {pyo:.3f} s "
+                          f"({pyo_cpu:.3f} s): {rate(pyo)} ({rate(pyo_cpu)}) M samples/s, "
+                          f"{kernel / pyo:.0%} ({kernel_cpu / pyo_cpu:.0%}) of the model's "
+                          "warm-buffer rate")
                 if not args.no_cli:
                     cli = statistics.median(cli_eval(binary, args.rows, args.runs, channels,
                                                      threads, Path(tmp)))

@@ -37,6 +37,7 @@ def eval(
     phi_r: np.ndarray,
     model_args: List[str],
     angles: str,
+    out: Optional[np.ndarray] = None,
 ) -> np.ndarray: ...
 def eval_columns(
     params_json: Optional[str], params_path: Optional[str], model_args: List[str]

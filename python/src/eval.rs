@@ -9,7 +9,7 @@ use std::mem::MaybeUninit;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1};
+use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
@@ -158,9 +158,10 @@ fn family_params(
     Ok(file)
 }
 
-/// S (n, channels) at the given angles: what `hairfit eval` appends to each row.
+/// S (n, channels) at the given angles: what `hairfit eval` appends to each row; into `out`
+/// when given (C-contiguous, (n, channels), writeable, not overlapping the angles).
 #[pyfunction]
-#[pyo3(signature = (params_json, params_path, theta_i, phi_i, theta_r, phi_r, model_args, angles))]
+#[pyo3(signature = (params_json, params_path, theta_i, phi_i, theta_r, phi_r, model_args, angles, out=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn eval<'py>(
     py: Python<'py>,
@@ -172,6 +173,7 @@ pub(crate) fn eval<'py>(
     phi_r: PyReadonlyArray1<'py, f64>,
     model_args: Vec<String>,
     angles: &str,
+    out: Option<Bound<'py, PyArray2<f64>>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let unit = angle_unit(angles)?;
     let cli: ModelCli = parse(model_args)?;
@@ -188,14 +190,31 @@ pub(crate) fn eval<'py>(
     let a: [&[f64]; 4] = [&inputs[0], &inputs[1], &inputs[2], &inputs[3]];
     let n = common_length(a).map_err(HairfitError::new_err)?;
     let nc = model.n_channels().max(1);
-    // Not zeroed: a pass over the whole array that `eval_rows` overwrites anyway (every value
-    // when it succeeds; on a fault the array is dropped, never returned).
-    // SAFETY: f64 has no invalid bit patterns, so reading an unwritten value would give garbage
-    // but not undefined behaviour, and none is read before it is written.
-    let result = unsafe { PyArray2::<f64>::new(py, [n, nc], false) };
-    // SAFETY: the array was just created here and no other reference to it exists until it is
-    // returned; it is C-contiguous (n, nc), the layout `eval_rows` writes.
-    let out = unsafe { result.as_slice_mut() }
+    let result = match out {
+        Some(given) => {
+            let shape = given.shape().to_vec();
+            if shape != [n, nc] || !given.is_c_contiguous() {
+                return Err(HairfitError::new_err(format!(
+                    "out has shape {shape:?}{}; eval writes {n} samples × {nc} channels: pass a C-contiguous np.empty(({n}, {nc}))",
+                    if given.is_c_contiguous() { "" } else { " and is not C-contiguous" }
+                )));
+            }
+            given
+        }
+        // Not zeroed: a pass over the whole array that `eval_rows` overwrites anyway (every
+        // value when it succeeds; on a fault the array is dropped, never returned).
+        // SAFETY: f64 has no invalid bit patterns, so reading an unwritten value would give
+        // garbage but not undefined behaviour, and none is read before it is written.
+        None => unsafe { PyArray2::<f64>::new(py, [n, nc], false) },
+    };
+    // A writeable borrow: refused for a read-only `out` or one overlapping an angle array.
+    let mut borrow = result.try_readwrite().map_err(|e| {
+        HairfitError::new_err(format!(
+            "out cannot be written ({e}): pass a writeable array that does not share memory with the angles"
+        ))
+    })?;
+    let out = borrow
+        .as_slice_mut()
         .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
     py.allow_threads(|| match eval_rows(&model, a, unit, out) {
         Fault::None => Ok(()),
@@ -217,6 +236,7 @@ pub(crate) fn eval<'py>(
         }
     })
     .map_err(HairfitError::new_err)?;
+    drop(borrow);
     Ok(result)
 }
 

@@ -149,3 +149,41 @@ def test_table_families_bit_identical(cli, tmp_path, family):
     got = hairfit.eval(params, *angles, model=family)
     assert got.shape == (200, 3)
     assert_bits(got, expected)
+
+
+def test_out_receives_the_same_bits_and_is_returned():
+    angles = random_angles(5000, seed=23)
+    fresh = hairfit.eval(PARAMS, *angles)
+    buf = np.full((5000, 3), np.nan)
+    got = hairfit.eval(PARAMS, *angles, out=buf)
+    assert got is buf
+    assert_bits(buf, fresh)
+    # Re-used: every value is overwritten.
+    buf[:] = -1.0
+    hairfit.eval(PARAMS, *angles, out=buf)
+    assert_bits(buf, fresh)
+    # Chiang through the same path.
+    c = hairfit.eval(CHIANG, *(a[:300] for a in angles), model="chiang")
+    cbuf = np.empty((300, 3))
+    assert_bits(hairfit.eval(CHIANG, *(a[:300] for a in angles), model="chiang", out=cbuf), c)
+
+
+def test_a_wrong_out_is_refused_naming_what_to_pass():
+    angles = random_angles(100, seed=5)
+    with pytest.raises(hairfit.HairfitError, match=r"out has shape \[100, 1\]; eval writes 100 samples × 3 channels: pass a C-contiguous np.empty\(\(100, 3\)\)"):
+        hairfit.eval(PARAMS, *angles, out=np.empty((100, 1)))
+    with pytest.raises(hairfit.HairfitError, match=r"not C-contiguous"):
+        hairfit.eval(PARAMS, *angles, out=np.empty((3, 100)).T)
+    with pytest.raises(hairfit.HairfitError, match=r"out must be a 2-D float64 NumPy array"):
+        hairfit.eval(PARAMS, *angles, out=np.empty((100, 3), dtype=np.float32))
+    with pytest.raises(hairfit.HairfitError, match=r"out must be a 2-D float64 NumPy array"):
+        hairfit.eval(PARAMS, *angles, out=[[0.0] * 3] * 100)
+    frozen = np.empty((100, 3))
+    frozen.flags.writeable = False
+    with pytest.raises(hairfit.HairfitError, match=r"out cannot be written"):
+        hairfit.eval(PARAMS, *angles, out=frozen)
+    # An out that shares memory with an angle array would overwrite angles not yet read.
+    mem = np.empty(300)
+    mem[:100] = angles[0]
+    with pytest.raises(hairfit.HairfitError, match=r"out cannot be written"):
+        hairfit.eval(PARAMS, mem[:100], *angles[1:], out=mem.reshape(100, 3))
