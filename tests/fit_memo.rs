@@ -145,6 +145,22 @@ fn assert_same(a: &Passes, b: &Passes, what: &str) {
 /// 700 samples: three chunks, the last one partial.
 const N: usize = 700;
 
+/// A log-space least-squares evaluator over `d`; `limit`: its memo's budget in bytes (None: the
+/// default).
+fn evaluator<'a, F: Forward>(
+    forward: &'a F,
+    d: &'a FitData,
+    base: ParamSet<F>,
+    free: Vec<F::Param>,
+    limit: Option<usize>,
+) -> Evaluator<'a, F> {
+    let (ev, _) = Evaluator::new(forward, d, Space::Log, Loss::L2, 1.0, base, free).unwrap();
+    match limit {
+        Some(bytes) => ev.with_memo_limit(bytes),
+        None => ev,
+    }
+}
+
 #[test]
 fn chiang_passes_at_one_point_run_the_model_once() {
     let nc = 2;
@@ -168,23 +184,7 @@ fn chiang_passes_at_one_point_run_the_model_once() {
         ChiangParamName::Alpha,
     ];
     let x: Vec<f64> = free.iter().map(|&p| p.get(&truth) * 1.02).collect();
-    let new = |limit: Option<usize>| {
-        let (ev, _) = Evaluator::new(
-            &forward,
-            &d,
-            Space::Log,
-            Loss::L2,
-            1.0,
-            truth.clone(),
-            free.clone(),
-        )
-        .unwrap();
-        match limit {
-            Some(bytes) => ev.with_memo_limit(bytes),
-            None => ev,
-        }
-    };
-
+    let new = |limit| evaluator(&forward, &d, truth.clone(), free.clone(), limit);
     let kept = passes(&new(None), &x);
     // η fixed: the trial's value pass computes the gradients too, and nothing after it runs
     // the model again.
@@ -212,16 +212,7 @@ fn marschner_passes_reuse_the_gradient_and_value_passes() {
     let d = data(&forward.inner, &truth, nc, N);
     let free = free_parameters(&Effects::default(), nc, true);
     let x: Vec<f64> = free.iter().map(|&p| p.get(&truth) * 1.01 + 1e-3).collect();
-    let (ev, _) = Evaluator::new(
-        &forward,
-        &d,
-        Space::Log,
-        Loss::L2,
-        1.0,
-        reference_params(nc),
-        free.clone(),
-    )
-    .unwrap();
+    let ev = evaluator(&forward, &d, reference_params(nc), free.clone(), None);
     let kept = passes(&ev, &x);
     // Gradients are not cheap here: one value pass (the trial) and one gradient pass (the
     // solver's linearisation); the residual pass and the fixed-scale linearisation reuse them.
@@ -238,16 +229,7 @@ fn marschner_passes_reuse_the_gradient_and_value_passes() {
         "no pass is read at another point"
     );
 
-    let (ev0, _) = Evaluator::new(
-        &forward,
-        &d,
-        Space::Log,
-        Loss::L2,
-        1.0,
-        reference_params(nc),
-        free,
-    )
-    .unwrap();
-    let plain = passes(&ev0.with_memo_limit(0), &x);
+    let ev0 = evaluator(&forward, &d, reference_params(nc), free, Some(0));
+    let plain = passes(&ev0, &x);
     assert_same(&kept, &plain, "marschner");
 }
