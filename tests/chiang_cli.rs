@@ -190,16 +190,17 @@ fn the_model_tag_must_agree_with_the_option() {
     assert!(e.contains("--width-nodes"), "{e}");
 }
 
-/// `synth --model chiang` of the parameter file `truth` on three azimuthal scans into `dir/d.csv`
-/// (its truth beside it), with `extra` options.
-fn synth_on_the_rig(dir: &Path, truth: &Path, extra: &[&str]) -> std::path::PathBuf {
+/// `synth --model chiang` of the parameters `truth` (JSON, written to `dir/truth.json`) on three
+/// azimuthal scans into `dir/d.csv` (its truth beside it), with `extra` options.
+fn synth_on_the_rig(dir: &Path, truth: &str, extra: &[&str]) -> std::path::PathBuf {
+    let truth = write(dir, "truth.json", truth);
     let data = dir.join("d.csv");
     let mut args = vec![
         "synth",
         "--model",
         "chiang",
         "--params",
-        p(truth),
+        p(&truth),
         "--rig",
         "azimuthal:incidences=15,30,45:steps=36",
         "--output",
@@ -216,14 +217,10 @@ fn synth_on_the_rig(dir: &Path, truth: &Path, extra: &[&str]) -> std::path::Path
 #[test]
 fn synth_then_fit_recovers_noise_free_truth() {
     let dir = tempfile::tempdir().unwrap();
-    let truth = write(
-        dir.path(),
-        "truth.json",
-        r#"{"eta": 1.55, "sigma_a": [0.3, 0.5, 0.9], "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2.5}"#,
-    );
+    let truth = r#"{"eta": 1.55, "sigma_a": [0.3, 0.5, 0.9], "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2.5}"#;
     let data = synth_on_the_rig(
         dir.path(),
-        &truth,
+        truth,
         &["--width-nodes", "256", "--scale", "2,1.5,1"],
     );
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
@@ -377,12 +374,9 @@ fn cost_ledger_has_the_chiang_section() {
 #[test]
 fn auto_width_rule_fits_like_the_plain_rule() {
     let dir = tempfile::tempdir().unwrap();
-    let truth = write(
-        dir.path(),
-        "truth.json",
-        r#"{"eta": 1.55, "sigma_a": [0.3, 0.9], "beta_m": 0.2, "beta_n": 0.5, "alpha_deg": 3}"#,
-    );
-    let data = synth_on_the_rig(dir.path(), &truth, &["--noise", "relative:0.02"]);
+    let truth =
+        r#"{"eta": 1.55, "sigma_a": [0.3, 0.9], "beta_m": 0.2, "beta_n": 0.5, "alpha_deg": 3}"#;
+    let data = synth_on_the_rig(dir.path(), truth, &["--noise", "relative:0.02"]);
     let fit = |rule: &str| {
         let out = dir.path().join(format!("fit-{rule}"));
         hairfit_ok(&[

@@ -84,9 +84,9 @@ pub fn fmt_num(v: f64) -> String {
     }
 }
 
-/// A tick label on an axis spanning `span`: enough decimals to tell ticks a fifth of the span
-/// apart (plotters' steps are 1, 2 or 5 × 10ᵏ, about that size) (four significant digits would print `15.00` for every tick of an axis 0.004 wide
-/// around 15).
+/// A tick label on an axis spanning `span`: enough decimals to tell apart ticks a fifth of the
+/// span apart (plotters' steps are 1, 2 or 5 × 10ᵏ, about that size). [`fmt_num`]'s four
+/// significant digits print `15.00` for every tick of an axis 0.004 wide around 15.
 pub fn fmt_tick(v: f64, span: f64) -> String {
     if !v.is_finite() {
         return "n/a".into();

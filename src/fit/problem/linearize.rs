@@ -359,16 +359,7 @@ impl<F: Forward> Evaluator<'_, F> {
         let per_round = (ROUND * ROUND / nc.max(1)).clamp(2, ROUND);
         // The model's values and gradients: kept from a pass at `p`, or computed now and kept
         // when small enough; else each chunk computes its own.
-        let kept = match self
-            .memo
-            .gradients_at(&p, &layout.shared_names, &layout.local_names)
-        {
-            Some(g) => Some(g),
-            None if self.memo.fits(self.angles.len() * nc * (nl + 1)) => {
-                Some(self.gradient_pass(&p, &layout, cancel)?)
-            }
-            None => None,
-        };
+        let kept = self.kept_gradients(&p, &layout, cancel)?;
         for round in (0..n_chunks).step_by(per_round) {
             let parts: Vec<Option<ChunkPart>> = (round..(round + per_round).min(n_chunks))
                 .into_par_iter()
@@ -495,23 +486,22 @@ impl<F: Forward> Evaluator<'_, F> {
         let lo = ci * CHUNK;
         let hi = (lo + CHUNK).min(self.angles.len());
         let n = hi - lo;
-        let computed = kept.is_none().then(|| {
-            let mut out = vec![0.0; n * nc];
-            let mut grad = vec![0.0; n * nc * nl];
-            self.forward.gradients_compressed(
-                p,
-                &layout.shared_names,
-                &layout.local_names,
-                &self.angles[lo..hi],
-                &mut out,
-                &mut grad,
-            );
-            (out, grad)
-        });
-        let (out, grad) = match (kept, &computed) {
-            (Some(k), _) => k,
-            (None, Some((o, g))) => (&o[..], &g[..]),
-            (None, None) => unreachable!("computed when not kept"),
+        let (mut own_out, mut own_grad);
+        let (out, grad): (&[f64], &[f64]) = match kept {
+            Some(k) => k,
+            None => {
+                own_out = vec![0.0; n * nc];
+                own_grad = vec![0.0; n * nc * nl];
+                self.forward.gradients_compressed(
+                    p,
+                    &layout.shared_names,
+                    &layout.local_names,
+                    &self.angles[lo..hi],
+                    &mut own_out,
+                    &mut own_grad,
+                );
+                (&own_out, &own_grad)
+            }
         };
         // Column factors per channel (the solver transform's derivative; 0 for a fixed local).
         let factors: Vec<Vec<f64>> = (0..nc)

@@ -12,6 +12,9 @@ use super::evaluator::Evaluator;
 use super::forward::{FitParam, Forward, ParamSet};
 use super::memo::Gradients;
 
+/// A kept gradient pass of an evaluator over family `F`.
+type Kept<F> = Arc<Gradients<ParamSet<F>, <F as Forward>::Param>>;
+
 /// Which solver columns one channel's rows touch.
 pub(super) struct Layout<P> {
     /// Indices into `free` of the shared parameters, and the parameters.
@@ -87,17 +90,7 @@ impl<F: Forward> Evaluator<'_, F> {
         // computes them with every value pass: the linearisation at an accepted step is then free.
         if !self.free.is_empty() && self.forward.cheap_gradients(&self.free) {
             let layout = Layout::of(&self.free, nc);
-            if self
-                .memo
-                .fits(self.angles.len() * nc * (layout.n_cols() + 1))
-            {
-                let kept = self
-                    .memo
-                    .gradients_at(p, &layout.shared_names, &layout.local_names);
-                let pass = match kept {
-                    Some(g) => g,
-                    None => self.gradient_pass(p, &layout, cancel)?,
-                };
+            if let Some(pass) = self.kept_gradients(p, &layout, cancel)? {
                 return Some(pass.values.clone());
             }
         }
@@ -120,14 +113,34 @@ impl<F: Forward> Evaluator<'_, F> {
         Some(model)
     }
 
-    /// Every chunk's values and compressed gradients at `p` for `layout`'s columns, computed in
-    /// parallel and kept in the memo; `None` when cancelled.
-    pub(super) fn gradient_pass(
+    /// The gradient pass at `p` for `layout`'s columns: the kept one, or computed now and kept;
+    /// `Some(None)` when it is too large to keep (each chunk then computes its own), `None`
+    /// when cancelled.
+    pub(super) fn kept_gradients(
         &self,
         p: &ParamSet<F>,
         layout: &Layout<F::Param>,
         cancel: Option<&AtomicBool>,
-    ) -> Option<Arc<Gradients<ParamSet<F>, F::Param>>> {
+    ) -> Option<Option<Kept<F>>> {
+        let (shared, local) = (&layout.shared_names, &layout.local_names);
+        if let Some(kept) = self.memo.gradients_at(p, shared, local) {
+            return Some(Some(kept));
+        }
+        let entries = self.angles.len() * self.n_channels * (layout.n_cols() + 1);
+        if !self.memo.fits(entries) {
+            return Some(None);
+        }
+        self.gradient_pass(p, layout, cancel).map(Some)
+    }
+
+    /// Every chunk's values and compressed gradients at `p` for `layout`'s columns, computed in
+    /// parallel and kept in the memo; `None` when cancelled.
+    fn gradient_pass(
+        &self,
+        p: &ParamSet<F>,
+        layout: &Layout<F::Param>,
+        cancel: Option<&AtomicBool>,
+    ) -> Option<Kept<F>> {
         let nc = self.n_channels;
         let nl = layout.n_cols();
         let rows = self.angles.len() * nc;

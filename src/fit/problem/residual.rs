@@ -31,13 +31,14 @@ impl<F: Forward> Evaluator<'_, F> {
         let p = self.params_at(x);
 
         // Model pass: q = S (linear) or ln S (log), dq = ∂q/∂u (row (i,c), column j).
-        let mut model = vec![0.0; n * nc];
+        let mut model: Vec<f64>;
         let mut dq = if jac {
             vec![0.0; n * nc * nf]
         } else {
             Vec::new()
         };
         if jac && nf > 0 {
+            model = vec![0.0; n * nc];
             model
                 .par_chunks_mut(CHUNK * nc)
                 .zip(dq.par_chunks_mut(CHUNK * nc * nf))
