@@ -196,6 +196,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
                 channel: CHANNELS[c].into(),
                 value: Some(SCALE[c]),
                 std_error: Some(0.01),
+                linear_noise_value: None,
             })
             .collect(),
         correlation: Correlation {

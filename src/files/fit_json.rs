@@ -256,6 +256,11 @@ pub struct ScaleEntry {
     /// `null` when unknown (exact, or not determined by the data).
     #[serde(default)]
     pub std_error: Option<f64>,
+    /// Log-space fits: the scale a linear noise model (weights 1/σ, or relative weights without
+    /// σ) puts at the same shape, for comparison only; `value` is the minimiser of the cost the
+    /// fit minimised. Absent for linear-space fits and in truth files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub linear_noise_value: Option<f64>,
 }
 
 /// `fit.json` → `correlation`: `matrix[i][j]` between `names[i]` and `names[j]` (`null` where

@@ -15,6 +15,8 @@ pub struct Evidence<'a, 'e, 'f, F: Forward> {
     pub data: &'a FitData,
     pub ev: &'e Evaluator<'f, F>,
     pub e: &'a Evaluation,
+    /// The worst row's relative misfit (see [`super::EXACT_MISFIT`]).
+    pub worst_row_misfit: f64,
     pub config: &'a ModelConfig,
     /// Every parameter at the optimum (natural units).
     pub params: &'a ParamSet<F>,

@@ -187,6 +187,13 @@ pub use crate::model::parameters::all_parameters;
 /// The model's parameters that a fit under `effects` varies before `--fix` (from the table).
 pub use crate::model::parameters::fitted_parameters as free_parameters;
 
+/// A fit whose every row lies within this relative distance of the data (below 1e-9 of the
+/// channel's peak, within this share of 1e-9·peak) reproduces them to rounding, not noise: float32
+/// text rounds at 6e-8, Chiang's width quadrature at 1e-7 (so a fit with η free lands ~1e-9 from
+/// data its own defaults made), while no camera or Monte Carlo estimate comes within 1e-5. The
+/// verdict is then `good` and there is no statistical interval.
+pub const EXACT_MISFIT: f64 = 1e-6;
+
 /// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,
 /// or a parameter file of either family from [`fit_family`]), the curves curves.csv gets (all
 /// rows, the summary's, or none, as fit.json's `options.curves` says) and the run's wall-clock
@@ -200,6 +207,9 @@ pub struct FitOutcome<P = Params<f64>> {
     /// ‖fit − data‖ / ‖data‖ over every row (NaN when a value is missing): near rounding for
     /// noise-free data.
     pub relative_misfit: f64,
+    /// The largest row's |fit − data| / max(|data|, 1e-9 · its channel's peak) (NaN when a
+    /// value is missing): at most [`EXACT_MISFIT`] when the model reproduces the data.
+    pub worst_row_misfit: f64,
 }
 
 impl<P> FitOutcome<P> {
@@ -211,6 +221,7 @@ impl<P> FitOutcome<P> {
             curves: self.curves,
             timing: self.timing,
             relative_misfit: self.relative_misfit,
+            worst_row_misfit: self.worst_row_misfit,
         }
     }
 }

@@ -547,8 +547,8 @@ pub fn intervals<F: Forward, Q>(
         return Ok(());
     }
     // Noise-free data: the cost is rounding, so Δχ² (and every interval) would be rounding noise.
-    let relative = out.relative_misfit;
-    if relative.is_finite() && relative <= 1e-9 {
+    let relative = out.worst_row_misfit;
+    if relative.is_finite() && relative <= super::EXACT_MISFIT {
         record(out, "linear", format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile"));
         return Ok(());
     }

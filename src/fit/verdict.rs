@@ -67,7 +67,9 @@ pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
     let failed = failures(x);
     let slices = scan_slices(x.data);
     let g = goodness_of_fit(x, &slices);
-    let poor = if failed.is_empty() {
+    // Residuals at rounding level carry no noise for the tests to judge: the model is the data.
+    let exact = x.worst_row_misfit.is_finite() && x.worst_row_misfit <= super::EXACT_MISFIT;
+    let poor = if failed.is_empty() && !exact {
         poor_fit_reasons(&g, x.ev.loss, x.e.raw.len())
     } else {
         Vec::new()
@@ -97,7 +99,13 @@ pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
     }
     reasons.extend(failed.iter().cloned());
     reasons.extend(poor.iter().cloned());
-    if failed.is_empty() && poor.is_empty() {
+    if failed.is_empty() && exact {
+        reasons.push(format!(
+            "the model reproduces the data to rounding: every row within {:.1e} of its value (relative; <= {:e}), so there is no noise for the goodness-of-fit tests to judge",
+            x.worst_row_misfit,
+            super::EXACT_MISFIT
+        ));
+    } else if failed.is_empty() && poor.is_empty() {
         reasons.extend(good_fit_reasons(&g));
     }
     if verdict == Verdict::PoorFit && g.sigma_given {

@@ -195,6 +195,7 @@ pub fn synthesize_model(source: &Source<'_>, how: &Acquisition<'_>) -> Result<(D
                 channel: c.clone(),
                 value: Some(v),
                 std_error: None,
+                linear_noise_value: None,
             })
             .collect(),
         measurement: how.measurement,

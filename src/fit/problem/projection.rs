@@ -7,8 +7,9 @@
 //!
 //! The log-space optimum of the scale is a weighted *geometric* mean of `y/S`, biased for noise
 //! that is Gaussian in `y` (and more so when the log weights `y/σ` grow with the noise itself:
-//! +1.5σ_rel², 1.5% at 10% relative noise). [`Evaluator::noise_space_scale`] re-estimates the
-//! scale after the shape fit in the space of the noise model, where the estimate is unbiased.
+//! +1.5σ_rel², 1.5% at 10% relative noise). It is still the scale reported: every reported number
+//! comes from the cost the fit minimised. [`Evaluator::linear_noise_scale`] gives the linear
+//! noise model's estimate beside it (fit.json `scale[].linear_noise_value`).
 
 use rayon::prelude::*;
 
@@ -100,17 +101,16 @@ impl<F: Forward> Evaluator<'_, F> {
         (sq, ds)
     }
 
-    /// A log-space evaluation `e` at natural shape values `x`, with each channel's scale
-    /// re-estimated in the noise model's own (linear) space, the weighted least-squares scale
-    /// `s = Σ λ²ρ′·y·S / Σ λ²ρ′·S²` with linear weights `λ = 1/σ` (a `sigma` column), else
-    /// `λ ∝ √weight / S` (a log fit without σ assumes constant relative errors: `s` is then the
-    /// weighted mean of `y/S`). `ρ′` are the robust-loss weights of `e`, so outliers the loss
-    /// discounted stay discounted. The estimate is unbiased because `λ` does not depend on the
-    /// noise of `y`. Linear-space evaluations are returned unchanged (their projection is this
-    /// estimate already).
-    pub fn noise_space_scale(&self, x: &[f64], e: Evaluation, has_sigma: bool) -> Evaluation {
+    /// For a log-space evaluation `e`: each channel's scale under a linear noise model at the
+    /// same shape, the weighted least-squares `s = Σ λ²ρ′·y·S / Σ λ²ρ′·S²` with linear weights
+    /// `λ = 1/σ` (a `sigma` column), else `λ ∝ √weight / S` (a log fit without σ assumes constant
+    /// relative errors: `s` is then the weighted mean of `y/S`). `ρ′` are the robust-loss weights
+    /// of `e`. Reported beside the fit's own scale, never instead of it: it minimises another cost
+    /// (on data no model made, one that a few over-predicted dim rows can decide). `None` for
+    /// linear-space evaluations, whose scale is this estimate already.
+    pub fn linear_noise_scale(&self, e: &Evaluation, has_sigma: bool) -> Option<Vec<f64>> {
         if self.space != Space::Log {
-            return e;
+            return None;
         }
         let nc = self.n_channels;
         // Per channel [Σ λ²ρ′yS, Σ λ²ρ′S²], chunked in order (deterministic).
@@ -152,21 +152,7 @@ impl<F: Forward> Evaluator<'_, F> {
                 *t += v;
             }
         }
-        let scale: Vec<f64> = (0..nc)
-            .map(|c| {
-                let s = tot[2 * c] / tot[2 * c + 1];
-                if s.is_finite() && s > 0.0 {
-                    s
-                } else {
-                    e.scale[c]
-                }
-            })
-            .collect();
-        if scale == e.scale {
-            return e;
-        }
-        let ones = vec![1.0; x.len()];
-        self.evaluate(x, &ones, ScaleMode::FixedNatural(&scale), false)
+        Some((0..nc).map(|c| tot[2 * c] / tot[2 * c + 1]).collect())
     }
 
     /// Start values `ln s_c` for an explicit (robust-loss) scale at natural shape values `x`: the
