@@ -152,6 +152,22 @@ fn mismatched_fits_report_their_own_costs_scale_and_chi2() {
         );
         chi2_of.push((family, chi2));
     }
+    // Asked for, they are computed all the same.
+    let out = dir.path().join("profiled");
+    hairfit_ok(&[
+        "fit",
+        &data,
+        "--model",
+        "kajiya-kay",
+        "--intervals",
+        "profile",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(
+        json(&out.join("fit.json"))["options"]["intervals"],
+        "profile"
+    );
     let cmp = dir.path().join("cmp");
     hairfit_ok(&[
         "compare",

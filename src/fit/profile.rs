@@ -30,7 +30,7 @@ use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
 
 mod record;
-use crate::files::{FitStatus, ProfileMethod, StageTiming};
+use crate::files::{FitStatus, ProfileMethod, StageTiming, Verdict};
 use crate::model::ParamName;
 pub use record::apply;
 
@@ -550,6 +550,14 @@ pub fn intervals<F: Forward, Q>(
     let relative = out.worst_row_misfit;
     if relative.is_finite() && relative <= super::EXACT_MISFIT {
         record(out, "linear", format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile"));
+        return Ok(());
+    }
+    // A profile interval is where Δχ² of a model that describes the data crosses a quantile; on
+    // a poor fit the misfit, not the noise, shapes χ², so its intervals mean no more than the
+    // linearised errors (already scaled by √(reduced χ²)) and cost most of the run (re-fits of a
+    // mismatched model settle slowly). `--intervals profile` still computes them.
+    if opts.intervals == Intervals::Auto && out.json.verdict == Verdict::PoorFit {
+        record(out, "linear", "auto: the fit is poor_fit, so the model does not describe the data and profile intervals (which assume it does) are no more meaningful than the linearised standard errors; pass --intervals profile to compute them anyway".into());
         return Ok(());
     }
     let n_cols = opt.u.len();
