@@ -1,14 +1,19 @@
 #!/usr/bin/env bash
-# Install the real tools the export tests load hairfit's files in:
-# - MaterialX's Python package (tests/export_materialx.rs, default suite: validate() with the
-#   standard library);
+# Install the real tools the export tests load hairfit's files in, into target/test-venv (the
+# venv scripts/test uses; nothing is installed outside the repository):
+# - MaterialX's Python package (tests/export_materialx.rs, default suite; scripts/test installs
+#   it too);
 # - with --with-bpy, Blender as a Python module (tests/export_blender.rs, ignored by default:
-#   runs the exported script and renders with Cycles; a ~400 MB download).
+#   runs the exported script and renders with Cycles; a ~400 MB download). Then run
+#   `PATH=$PWD/target/test-venv/bin:$PATH cargo test --release --test export_blender -- --ignored`.
 # Both need Python 3.11 (the wheels pinned here are built for it).
 set -euo pipefail
-python=${PYTHON:-python3}
-"$python" -m pip install --user materialx==1.39.5
+cd "$(dirname "$0")/.."
+venv=target/test-venv
+export PYTHONNOUSERSITE=1
+[[ -x "$venv/bin/python3" ]] || python3 -m venv "$venv"
+"$venv/bin/python3" -m pip install --quiet --disable-pip-version-check materialx==1.39.5
 if [[ "${1:-}" == "--with-bpy" ]]; then
-    "$python" -m pip install --user bpy==5.0.1
+    "$venv/bin/python3" -m pip install --quiet --disable-pip-version-check bpy==5.0.1
 fi
-"$python" -c "import MaterialX as mx; print('MaterialX', mx.getVersionString())"
+"$venv/bin/python3" -c "import MaterialX as mx; print('MaterialX', mx.getVersionString())"

@@ -3,15 +3,16 @@
 //! with Cycles to fits/export/demo_blender.png. Ignored by default (bpy is a ~400 MB install
 //! and the render takes a minute): `cargo test --release --test export_blender -- --ignored`.
 
+mod export_support;
+
 use std::path::Path;
-use std::process::Command;
 
 use hairfit::export::{export, write_export, Renderer};
 
 #[test]
 #[ignore = "needs bpy (scripts/install-test-tools.sh --with-bpy); renders with Cycles"]
 fn blender_runs_the_export_and_renders_it() {
-    let probe = Command::new("python3").args(["-c", "import bpy"]).output();
+    let probe = export_support::test_python().args(["-c", "import bpy"]).output();
     match probe {
         Ok(o) if o.status.success() => {}
         _ => panic!("bpy is missing: run scripts/install-test-tools.sh --with-bpy"),
@@ -21,7 +22,7 @@ fn blender_runs_the_export_and_renders_it() {
     let script = root.path().join("demo_blender.py");
     write_export(&script, &out).unwrap();
     let png = Path::new("fits/export/demo_blender.png");
-    let run = Command::new("python3")
+    let run = export_support::test_python()
         .arg("tests/export_blender_render.py")
         .arg(&script)
         .arg(png)

@@ -5,7 +5,6 @@
 mod export_support;
 
 use std::path::Path;
-use std::process::Command;
 
 use hairfit::export::{export, write_export, Renderer};
 
@@ -28,19 +27,19 @@ elif node.getNodeDef() is None:
     ok, message = False, "the bsdf node has no standard-library nodedef"
 print("VALID" if ok else "INVALID: " + message)
 "#;
-    let out = Command::new("python3")
+    let out = export_support::test_python()
         .arg("-c")
         .arg(script)
         .arg(path)
         .arg(bsdf_name(path))
         .output()
         .unwrap_or_else(|e| {
-            panic!("python3 is not runnable ({e}): run scripts/install-test-tools.sh")
+            panic!("python3 is not runnable ({e}): run scripts/test (or scripts/install-test-tools.sh), which installs it into target/test-venv")
         });
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     if stderr.contains("No module named 'MaterialX'") {
-        panic!("the MaterialX Python package is missing: run scripts/install-test-tools.sh");
+        panic!("the MaterialX Python package is missing: run scripts/test (or scripts/install-test-tools.sh), which installs it into target/test-venv");
     }
     assert!(out.status.success(), "python3 failed: {stderr}");
     match stdout.trim() {

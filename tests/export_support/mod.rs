@@ -63,3 +63,14 @@ pub fn marschner_fit_dir(root: &Path, name: &str) -> PathBuf {
     std::fs::write(dir.join("fit.json"), fit_json(&["s"])).unwrap();
     dir
 }
+
+/// The Python the export tests run the real tools in: target/test-venv's (where scripts/test and
+/// scripts/install-test-tools.sh install them), else `python3` on PATH.
+pub fn test_python() -> std::process::Command {
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-venv/bin/python3");
+    std::process::Command::new(if venv.exists() {
+        venv.as_os_str()
+    } else {
+        std::ffi::OsStr::new("python3")
+    })
+}
