@@ -66,8 +66,9 @@ enum Command {
         /// Replace an output directory that holds files other than a hairfit result.
         #[arg(long)]
         force: bool,
-        /// Output directory.
-        #[arg(long, default_value = "fits/cost")]
+        /// Output directory (the committed ledger in fits/cost is regenerated only on purpose:
+        /// `--out fits/cost`).
+        #[arg(long, default_value = "hairfit-cost")]
         out: PathBuf,
         /// `marschner`: its accuracy knobs; `chiang`: its width rule; another family: no knobs of
         /// its own. Every run ends with every family's cost (samples/s/core) side by side.
