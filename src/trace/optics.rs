@@ -41,9 +41,10 @@ pub fn reflect(d: V3, n: V3) -> V3 {
 }
 
 /// `d` refracted through the plane with unit normal `n` facing the incoming side
-/// (`dot(d, n) = −cos_i < 0`), index ratio `e = n1/n2`, refracted cosine `cos_t`.
+/// (`dot(d, n) = −cos_i < 0`), index ratio `e = n1/n2`, refracted cosine `cos_t`; unit when
+/// `d` and `n` are (Snell's law in vector form).
 pub fn refract(d: V3, n: V3, e: f64, cos_i: f64, cos_t: f64) -> V3 {
-    normalize(add(scale(d, e), scale(n, e * cos_i - cos_t)))
+    add(scale(d, e), scale(n, e * cos_i - cos_t))
 }
 
 /// Inclination θ and azimuth φ (radians) of a unit direction, docs/model.md's angles.

@@ -7,7 +7,7 @@ use rand_chacha::rand_core::RngCore;
 use super::fiber::Fiber;
 use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
-use crate::synth::random::{normal, uniform};
+use crate::synth::random::uniform;
 
 /// Most colour channels a traced fibre may have.
 pub const MAX_CHANNELS: usize = 8;
@@ -15,7 +15,7 @@ pub const MAX_CHANNELS: usize = 8;
 pub const ORDERS: usize = 4;
 /// A path whose largest channel weight falls below this is stopped and its weight counted
 /// as still inside (it could add at most this much per ray to any tally).
-pub const WEIGHT_CUTOFF: f64 = 1e-12;
+pub const WEIGHT_CUTOFF: f64 = 1e-6;
 /// Tries at drawing a rough normal the ray can see before falling back to the tilted one.
 const NORMAL_TRIES: u32 = 64;
 
@@ -62,6 +62,11 @@ fn add_w(a: &mut Weights, b: &Weights) {
 pub struct Sampler {
     fiber: Fiber,
     nc: usize,
+    /// tan α, tan β, tan β_φ and whether either roughness is on.
+    slope: f64,
+    slope_sd: f64,
+    slope_sd_az: f64,
+    rough: bool,
 }
 
 impl Sampler {
@@ -71,6 +76,10 @@ impl Sampler {
         Sampler {
             nc: fiber.sigma_a.len(),
             fiber: fiber.clone(),
+            slope: fiber.tilt.tan(),
+            slope_sd: fiber.roughness.tan(),
+            slope_sd_az: fiber.azimuthal_roughness.tan(),
+            rough: fiber.roughness > 0.0 || fiber.azimuthal_roughness > 0.0,
         }
     }
 
@@ -92,6 +101,7 @@ impl Sampler {
         let dir = [d[1] / len, d[2] / len];
         let section = match self.fiber.rotation {
             Some(psi) => Section::new(self.fiber.eccentricity, psi),
+            None if self.fiber.eccentricity == 1.0 => Section::new(1.0, 0.0),
             // Orientations weighted by the width they present: a uniform beam on a random
             // fibre meets a wide one more often (the major half-width, 1, bounds it).
             None => loop {
@@ -188,9 +198,11 @@ impl Sampler {
     }
 
     /// The outward shading normal at an interface with geometric normal `ng`, for a ray `d`
-    /// arriving from outside (`outside`) or inside: the cuticle tilt plus, on a rough fibre, a
-    /// fresh Gaussian perturbation, drawn among the normals `d` can see with probability
-    /// proportional to the cosine it sees them at (a facet's projected area).
+    /// arriving from outside (`outside`) or inside: the facet `ng + s_l·u + s_a·(u × ng)`
+    /// (normalised) with longitudinal slope `s_l = tan α + tan β·ξ₁` and azimuthal slope
+    /// `s_a = tan β_φ·ξ₂` (ξ standard normal, fresh at every interface), drawn among the facets
+    /// `d` can see with probability proportional to the cosine it sees them at (a facet's
+    /// projected area).
     fn shading_normal(
         &self,
         ng: V3,
@@ -200,20 +212,10 @@ impl Sampler {
         balance: &mut Balance,
     ) -> V3 {
         let sees = |m: V3| if outside { -dot(d, m) } else { dot(d, m) };
-        let fib = &self.fiber;
-        if fib.roughness > 0.0 || fib.azimuthal_roughness > 0.0 {
+        if self.rough {
             for _ in 0..NORMAL_TRIES {
-                let el = if fib.roughness > 0.0 {
-                    fib.roughness * normal(rng)
-                } else {
-                    0.0
-                };
-                let ea = if fib.azimuthal_roughness > 0.0 {
-                    fib.azimuthal_roughness * normal(rng)
-                } else {
-                    0.0
-                };
-                let m = tilted(ng, fib.tilt + el, ea);
+                let (x1, x2) = normal_pair(rng);
+                let m = facet(ng, self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
                 let c = sees(m);
                 if c > 0.0 && uniform(rng) < c {
                     return m;
@@ -221,28 +223,35 @@ impl Sampler {
             }
             balance.fallbacks += 1;
         }
-        let m = tilted(ng, fib.tilt, 0.0);
+        let m = facet(ng, self.slope, 0.0);
         if sees(m) > 0.0 {
             return m;
         }
-        if fib.roughness == 0.0 && fib.azimuthal_roughness == 0.0 {
+        if !self.rough {
             balance.fallbacks += 1;
         }
         ng
     }
 }
 
-/// The normal `ng` (no axial part) turned by `ea` about the axis, then tilted by `t` toward
-/// the tip `u`.
-pub fn tilted(ng: V3, t: f64, ea: f64) -> V3 {
-    let g = if ea == 0.0 {
-        ng
-    } else {
-        let (s, c) = ea.sin_cos();
-        [0.0, c * ng[1] - s * ng[2], c * ng[2] + s * ng[1]]
-    };
-    let (s, c) = t.sin_cos();
-    [s, c * g[1], c * g[2]]
+/// The unit facet normal `ng + s_l·u + s_a·(u × ng)` normalised (`ng` unit with no axial part):
+/// tilted toward the tip by atan(s_l / √(1 + s_a²)) and turned about the axis by atan(s_a).
+pub fn facet(ng: V3, s_l: f64, s_a: f64) -> V3 {
+    let k = 1.0 / (1.0 + s_l * s_l + s_a * s_a).sqrt();
+    [s_l * k, (ng[1] - s_a * ng[2]) * k, (ng[2] + s_a * ng[1]) * k]
+}
+
+/// Two independent standard normals (Marsaglia's polar method: no trigonometry).
+pub fn normal_pair(rng: &mut impl RngCore) -> (f64, f64) {
+    loop {
+        let u = 2.0 * uniform(rng) - 1.0;
+        let v = 2.0 * uniform(rng) - 1.0;
+        let s = u * u + v * v;
+        if s > 0.0 && s < 1.0 {
+            let f = (-2.0 * s.ln() / s).sqrt();
+            return (u * f, v * f);
+        }
+    }
 }
 
 /// `d` on the side of the geometric surface it should leave toward (`out`: along `ng`),

@@ -6,6 +6,8 @@
 pub struct Section {
     /// Minor semi-axis (the major is 1).
     a: f64,
+    /// 1/a².
+    ia2: f64,
     /// cos ψ, sin ψ of the major axis' angle from `v`.
     c: f64,
     s: f64,
@@ -13,8 +15,13 @@ pub struct Section {
 
 impl Section {
     pub fn new(a: f64, psi: f64) -> Section {
-        let (s, c) = psi.sin_cos();
-        Section { a, c, s }
+        let (s, c) = if a == 1.0 { (0.0, 1.0) } else { psi.sin_cos() };
+        Section {
+            a,
+            ia2: 1.0 / (a * a),
+            c,
+            s,
+        }
     }
 
     /// A 2-D vector in the ellipse's own axes.
@@ -32,7 +39,7 @@ impl Section {
     /// components `p`, `d` (`d` need not be unit: its length is the 3-D direction's).
     fn quadratic(&self, p: [f64; 2], d: [f64; 2]) -> (f64, f64, f64) {
         let (p, d) = (self.local(p), self.local(d));
-        let ia2 = 1.0 / (self.a * self.a);
+        let ia2 = self.ia2;
         let qa = d[0] * d[0] + d[1] * d[1] * ia2;
         let qb = 2.0 * (p[0] * d[0] + p[1] * d[1] * ia2);
         let qc = p[0] * p[0] + p[1] * p[1] * ia2 - 1.0;
@@ -63,7 +70,7 @@ impl Section {
     /// Outward unit normal at boundary point `p`, in `(v, w)`.
     pub fn normal(&self, p: [f64; 2]) -> [f64; 2] {
         let l = self.local(p);
-        let g = [l[0], l[1] / (self.a * self.a)];
+        let g = [l[0], l[1] * self.ia2];
         let n = (g[0] * g[0] + g[1] * g[1]).sqrt();
         let g = [g[0] / n, g[1] / n];
         [self.c * g[0] - self.s * g[1], self.s * g[0] + self.c * g[1]]
