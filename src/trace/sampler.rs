@@ -149,7 +149,8 @@ impl Sampler {
         };
         let mut p = [p0[0] + t * d[1], p0[1] + t * d[2]];
         let ng = self.geometric_normal(section, p);
-        let m = self.shading_normal(ng, d, true, rng, balance);
+        let mut spare = None;
+        let m = self.shading_normal(ng, d, true, rng, &mut spare, balance);
         let cos_i = -dot(d, m);
         let (f, cos_t) = fresnel(cos_i, 1.0, eta);
         let r = keep_side(reflect(d, m), ng, true, balance);
@@ -172,7 +173,7 @@ impl Sampler {
             }
             p = [p[0] + l * d[1], p[1] + l * d[2]];
             let ng = self.geometric_normal(section, p);
-            let m = self.shading_normal(ng, d, false, rng, balance);
+            let m = self.shading_normal(ng, d, false, rng, &mut spare, balance);
             let cos_i = dot(d, m);
             let (f, cos_t) = fresnel(cos_i, eta, 1.0);
             if f < 1.0 {
@@ -209,12 +210,25 @@ impl Sampler {
         d: V3,
         outside: bool,
         rng: &mut impl RngCore,
+        spare: &mut Option<f64>,
         balance: &mut Balance,
     ) -> V3 {
         let sees = |m: V3| if outside { -dot(d, m) } else { dot(d, m) };
         if self.rough {
             for _ in 0..NORMAL_TRIES {
-                let (x1, x2) = normal_pair(rng);
+                let (x1, x2) = if self.slope_sd_az == 0.0 {
+                    // One normal per try: the pair's second waits for the next.
+                    match spare.take() {
+                        Some(x) => (x, 0.0),
+                        None => {
+                            let (a, b) = normal_pair(rng);
+                            *spare = Some(b);
+                            (a, 0.0)
+                        }
+                    }
+                } else {
+                    normal_pair(rng)
+                };
                 let m = facet(ng, self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
                 let c = sees(m);
                 if c > 0.0 && uniform(rng) < c {

@@ -69,6 +69,9 @@ impl Section {
 
     /// Outward unit normal at boundary point `p`, in `(v, w)`.
     pub fn normal(&self, p: [f64; 2]) -> [f64; 2] {
+        if self.a == 1.0 {
+            return p; // on the unit circle
+        }
         let l = self.local(p);
         let g = [l[0], l[1] * self.ia2];
         let n = (g[0] * g[0] + g[1] * g[1]).sqrt();
