@@ -31,6 +31,7 @@
 //! - [`fit`]: least squares with exact Jacobians and uncertainties; a model family is one type
 //!   behind `fit::family::Family`.
 //! - [`synth`]: synthetic datasets with known truth.
+//! - [`trace`]: `hairfit trace`, a Monte Carlo ray tracer of one fibre: data no model made.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
 //! - [`export`]: `hairfit export`, renderer files (pbrt-v4, Blender, MaterialX) fitted to a fit's S.
 //!
@@ -71,5 +72,6 @@ pub mod rng;
 pub mod slices;
 pub mod synth;
 pub mod table_family;
+pub mod trace;
 
 pub use error::{Error, Result};

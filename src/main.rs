@@ -48,6 +48,9 @@ enum Command {
     Demo(DemoArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
     Synth(hairfit::cli::synth::SynthArgs),
+    /// Trace a physical fibre (Monte Carlo light transport) at a rig's directions: data that
+    /// no model made, written like `synth`'s (docs/trace.md).
+    Trace(hairfit::cli::trace::TraceArgs),
     /// Plot a fit: SVG/PNG figures and an offline index.html in the fit's directory.
     Report {
         /// The fit's directory (holds fit.json and curves.csv, written by `hairfit fit`).
@@ -265,6 +268,36 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             );
             for note in &summary.notes {
                 tell!("hairfit: note: {note}");
+            }
+        }
+        Command::Trace(args) => {
+            remove_partial_output_on_interrupt();
+            let argv = std::iter::once("hairfit".to_string()).chain(std::env::args().skip(1));
+            let command_line = hairfit::cli::synth::command_line_string(argv);
+            let summary = hairfit::cli::trace::run(&args, Some(command_line))?;
+            let r = &summary.record;
+            tell!(
+                "hairfit: traced {} rays per incidence × {} incidences in {:.1} s; wrote {} \
+                 samples to {} and the sidecar to {}",
+                r.rays_per_incidence,
+                r.incidences,
+                summary.seconds,
+                r.n_samples,
+                summary.csv.display(),
+                summary.sidecar.display()
+            );
+            for e in &r.energy {
+                tell!(
+                    "hairfit: {}: R {:.4}, TT {:.4}, TRT {:.4}, higher {:.4}, absorbed {:.4}, \
+                     inside {:.2e}",
+                    e.channel,
+                    e.tallied[0],
+                    e.tallied[1],
+                    e.tallied[2],
+                    e.tallied[3],
+                    e.absorbed,
+                    e.inside
+                );
             }
         }
         Command::Report { dir, linear } => {

@@ -9,6 +9,7 @@ pub mod export;
 pub mod fit;
 pub mod summary;
 pub mod synth;
+pub mod trace;
 
 use clap::Args;
 

@@ -339,6 +339,23 @@ fn channel_column(prefix: &str, channels: &[String], c: usize) -> String {
 /// as degrees, e.g. everything the synthesizer makes), else within 1 ulp; the other values
 /// come back bit for bit.
 pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
+    write_csv_with(dataset, &[], path)
+}
+
+/// [`write_csv`] with `extra` columns after the dataset's own: (name, one value per sample).
+/// The loader ignores them (and says so); `hairfit trace` writes its per-order values there.
+pub fn write_csv_with(
+    dataset: &Dataset,
+    extra_columns: &[(String, Vec<f64>)],
+    path: &Path,
+) -> Result<()> {
+    if let Some((name, col)) = extra_columns.iter().find(|(_, col)| col.len() != dataset.len()) {
+        return Err(Error::Other(format!(
+            "column `{name}` has {} values for {} samples",
+            col.len(),
+            dataset.len()
+        )));
+    }
     if let Some(bad) = dataset
         .channels
         .iter()
@@ -362,6 +379,7 @@ pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
     if dataset.weight.is_some() {
         header.extend(extra("weight"));
     }
+    header.extend(extra_columns.iter().map(|(name, _)| name.clone()));
     write_atomically(path, |w| {
         let io = |e| Error::io(path, e);
         writeln!(w, "# written by hairfit; angles in degrees").map_err(io)?;
@@ -382,6 +400,9 @@ pub fn write_csv(dataset: &Dataset, path: &Path) -> Result<()> {
                 for v in &arr[row.clone()] {
                     let _ = write!(line, ",{v}");
                 }
+            }
+            for (_, col) in extra_columns {
+                let _ = write!(line, ",{}", col[i]);
             }
             line.push('\n');
             w.write_all(line.as_bytes()).map_err(io)?;

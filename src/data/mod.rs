@@ -25,7 +25,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-pub use self::csv::write_csv;
+pub use self::csv::{write_csv, write_csv_with};
 pub use self::dataset::{round_trip_degrees, Dataset, ANGLE_COLUMNS};
 pub use self::expr::Linear;
 pub use self::json::write_json;
