@@ -173,6 +173,32 @@ where
     out.flush().map_err(|e| Error::io(path, e))
 }
 
+/// Write `files` (target, content) together: every target is replaced, or none is (e.g. an
+/// export's JSON and the script beside it must come from the same fit). Errors name the target,
+/// not its temporary file.
+pub fn write_together(files: &[(&Path, &[u8])]) -> Result<()> {
+    let mut staged = StagedFiles::new();
+    for (target, content) in files {
+        let tmp = staged.stage(target)?;
+        let named = |e: std::io::Error| {
+            Error::Other(format!(
+                "{}: {e}; none of {} was written",
+                target.display(),
+                files
+                    .iter()
+                    .map(|(t, _)| t.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            ))
+        };
+        let mut file = std::fs::File::create(&tmp).map_err(named)?;
+        file.write_all(content)
+            .and_then(|()| file.sync_all())
+            .map_err(named)?;
+    }
+    staged.publish()
+}
+
 /// Files written under temporary names beside their targets, then published together by
 /// [`StagedFiles::publish`]: every target is replaced, or (on an error) none is. For files that
 /// must agree, e.g. a synthesized CSV and its truth sidecar.

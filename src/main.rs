@@ -305,7 +305,6 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let cancel = Some(stop.flag.clone());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
-            outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,
                 a.fit.strict,
@@ -335,7 +334,6 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let outcome = hairfit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
             say(hairfit::demo::truth_line(&a.out, opts.family))?;
-            outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,
                 a.fit.strict,

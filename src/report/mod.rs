@@ -120,7 +120,8 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
         Err(e) => return Err(Error::io(&curves_path, e)),
     };
     set.keep_all_but(publish::is_report_file)?;
-    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)?;
+    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)
+        .map_err(|e| set.explain(e))?;
     set.publish()?;
     Ok(summary)
 }
