@@ -179,6 +179,9 @@ where
 pub fn write_together(files: &[(&Path, &[u8])]) -> Result<()> {
     let mut staged = StagedFiles::new();
     for (target, content) in files {
+        if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
         let tmp = staged.stage(target)?;
         let named = |e: std::io::Error| {
             Error::Other(format!(

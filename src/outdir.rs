@@ -555,7 +555,9 @@ impl OutputSet {
             Some(_) => {}
             None => {
                 let found = foreign_entries(&abs, None)?;
-                if !found.is_empty() && !force {
+                // A report deletes nothing there: every file is carried over, and a figure
+                // of the user's that the report would redraw is refused at publishing.
+                if !found.is_empty() && !force && command != "hairfit report" {
                     return Err(Error::Other(format!(
                         "--out {}: the directory holds files that are not a hairfit result ({}), and it has no {MARKER} marker. Choose an empty or new directory, or pass --force to write the result there (those files are kept)",
                         dir.display(),
