@@ -43,10 +43,27 @@ fn refuse_when_stopping(path: &Path) -> Result<()> {
 
 /// Remove every temporary file still being written (for a signal handler that then exits).
 pub fn remove_in_flight() {
-    let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(list) = lock_briefly(&IN_FLIGHT) else {
+        return;
+    };
     for p in list.iter() {
         let _ = std::fs::remove_file(p);
     }
+}
+
+/// `m` locked, waiting at most about 100 ms: the thread that ends the run (a signal, an
+/// allocation refused) may have interrupted the holder, which then never releases it.
+pub fn lock_briefly<T>(m: &Mutex<T>) -> Option<std::sync::MutexGuard<'_, T>> {
+    for _ in 0..100 {
+        match m.try_lock() {
+            Ok(g) => return Some(g),
+            Err(std::sync::TryLockError::Poisoned(p)) => return Some(p.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => {
+                std::thread::sleep(std::time::Duration::from_millis(1))
+            }
+        }
+    }
+    None
 }
 
 /// Registers a temporary file in [`IN_FLIGHT`] for as long as it lives.

@@ -156,8 +156,17 @@ struct LoadArgs {
     json: bool,
 }
 
+/// An allocation the system refuses ends the run as an error (exit 1), not an abort.
+#[global_allocator]
+static ALLOCATOR: hairfit::cli::oom::ExitOnOom = hairfit::cli::oom::ExitOnOom;
+
 fn main() -> ExitCode {
+    hairfit::cli::oom::set_aside();
     let cli = Cli::parse();
+    if let Err(e) = start_worker_threads() {
+        tell!("hairfit: error: {e}");
+        return ExitCode::FAILURE;
+    }
     let result = run(cli);
     hairfit::cli::exit::wait_for_signal_exit();
     match result {
@@ -170,6 +179,24 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Start the worker threads now: rayon would panic at their first use when the system refuses
+/// them (a memory limit leaves no room for their stacks). One thread is tried before giving up.
+fn start_worker_threads() -> Result<(), String> {
+    let first = match rayon::ThreadPoolBuilder::new().build_global() {
+        Ok(()) => return Ok(()),
+        Err(e) => e,
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .map_err(|_| {
+            format!(
+                "cannot start a worker thread ({first}): a memory limit (ulimit -v, prlimit --as \
+                 or a cgroup's) leaves no room for its stack; run with a higher limit"
+            )
+        })
 }
 
 /// Write `text` to stdout. `print!` would panic when the reader has gone (`hairfit fit … | true`);

@@ -31,8 +31,8 @@ static LOCKS_HELD: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 /// Remove every staging directory still being written and the locks held (for a signal
 /// handler that then exits).
 pub fn remove_in_flight() {
-    let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
-    for p in list.iter() {
+    let list = crate::atomic::lock_briefly(&IN_FLIGHT);
+    for p in list.iter().flat_map(|l| l.iter()) {
         // The run's other threads may still be creating a file in it (remove_dir_all then
         // fails with "directory not empty"), or, having started an output just before
         // `atomic::stop_writing`, create the directory again behind the removal: remove until
@@ -50,7 +50,10 @@ pub fn remove_in_flight() {
         }
     }
     // Still held by this process (it exits next), so no other run has it.
-    for p in LOCKS_HELD.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+    for p in crate::atomic::lock_briefly(&LOCKS_HELD)
+        .iter()
+        .flat_map(|l| l.iter())
+    {
         let _ = std::fs::remove_file(p);
     }
 }
