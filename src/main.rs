@@ -63,7 +63,7 @@ enum Command {
         /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
         #[arg(long)]
         quick: bool,
-        /// Replace an output directory that holds files other than a hairfit result.
+        /// Write into a directory hairfit did not mark that holds other files (they are kept).
         #[arg(long)]
         force: bool,
         /// Output directory.

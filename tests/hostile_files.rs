@@ -367,3 +367,89 @@ fn the_next_run_removes_what_killed_runs_left() {
     assert_eq!(o.status.code(), Some(1));
     assert_eq!(names(tmp.path()), ["F"]);
 }
+
+/// Under a memory cap (`prlimit --as`) on 100,000 samples, fit, eval and compare aborted with
+/// exit 134 and a backtrace, leaving a staging directory. Every cap from "cannot start" to
+/// "enough" now ends with 0 or 1, an error that says to raise the limit, and nothing left.
+#[test]
+fn a_memory_cap_is_an_error_never_an_abort() {
+    if Command::new("prlimit").arg("--version").output().is_err() {
+        eprintln!("skipped: no prlimit");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("big.csv");
+    hairfit_ok(&[
+        "synth",
+        "--params",
+        s(&shipped("example_params.json")),
+        "--rig",
+        "sphere:n=100000",
+        "--output",
+        s(&data),
+    ]);
+    let params = shipped("example_params.json");
+    let (ev, fo, co) = (
+        tmp.path().join("ev.csv"),
+        tmp.path().join("F"),
+        tmp.path().join("C"),
+    );
+    let commands: [(&str, Vec<&str>); 3] = [
+        (
+            "eval",
+            vec![
+                "eval",
+                "--params",
+                s(&params),
+                "--input",
+                s(&data),
+                "--output",
+                s(&ev),
+            ],
+        ),
+        (
+            "fit",
+            vec!["fit", s(&data), "--out", s(&fo), "--no-progress"],
+        ),
+        (
+            "compare",
+            vec![
+                "compare",
+                s(&data),
+                "--out",
+                s(&co),
+                "--models",
+                "karis,kajiya-kay",
+            ],
+        ),
+    ];
+    // From a cap the binary barely starts under (below ~20 MB it cannot load at all) to one
+    // every command fits in.
+    for mb in [25, 40, 60, 100, 150, 250, 400] {
+        for (what, args) in &commands {
+            let mut cmd = Command::new("prlimit");
+            cmd.arg(format!("--as={}", mb * 1_000_000))
+                .arg(env!("CARGO_BIN_EXE_hairfit"))
+                .args(args);
+            let (o, _) = cli::run_within(cmd, cli::DEFAULT_LIMIT);
+            let err = stderr(&o);
+            match o.status.code() {
+                Some(0) => {}
+                Some(1) => assert!(
+                    err.contains("out of memory") || err.contains("cannot start a worker thread"),
+                    "{what} under {mb} MB: {err}"
+                ),
+                other => panic!("{what} under {mb} MB: exit {other:?}: {err}"),
+            }
+            assert!(
+                !err.contains("panicked") && !err.contains("backtrace"),
+                "{what}: {err}"
+            );
+            assert_eq!(
+                leftovers(tmp.path()),
+                Vec::<String>::new(),
+                "{what} under {mb} MB"
+            );
+        }
+    }
+}
