@@ -43,10 +43,27 @@ fn refuse_when_stopping(path: &Path) -> Result<()> {
 
 /// Remove every temporary file still being written (for a signal handler that then exits).
 pub fn remove_in_flight() {
-    let list = IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(list) = lock_briefly(&IN_FLIGHT) else {
+        return;
+    };
     for p in list.iter() {
         let _ = std::fs::remove_file(p);
     }
+}
+
+/// `m` locked, waiting at most about 100 ms: the thread that ends the run (a signal, an
+/// allocation refused) may have interrupted the holder, which then never releases it.
+pub fn lock_briefly<T>(m: &Mutex<T>) -> Option<std::sync::MutexGuard<'_, T>> {
+    for _ in 0..100 {
+        match m.try_lock() {
+            Ok(g) => return Some(g),
+            Err(std::sync::TryLockError::Poisoned(p)) => return Some(p.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => {
+                std::thread::sleep(std::time::Duration::from_millis(1))
+            }
+        }
+    }
+    None
 }
 
 /// Registers a temporary file in [`IN_FLIGHT`] for as long as it lives.
@@ -171,6 +188,35 @@ where
     let mut out = BufWriter::new(file);
     fill(&mut out)?;
     out.flush().map_err(|e| Error::io(path, e))
+}
+
+/// Write `files` (target, content) together: every target is replaced, or none is (e.g. an
+/// export's JSON and the script beside it must come from the same fit). Errors name the target,
+/// not its temporary file.
+pub fn write_together(files: &[(&Path, &[u8])]) -> Result<()> {
+    let mut staged = StagedFiles::new();
+    for (target, content) in files {
+        if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        let tmp = staged.stage(target)?;
+        let named = |e: std::io::Error| {
+            Error::Other(format!(
+                "{}: {e}; none of {} was written",
+                target.display(),
+                files
+                    .iter()
+                    .map(|(t, _)| t.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            ))
+        };
+        let mut file = std::fs::File::create(&tmp).map_err(named)?;
+        file.write_all(content)
+            .and_then(|()| file.sync_all())
+            .map_err(named)?;
+    }
+    staged.publish()
 }
 
 /// Files written under temporary names beside their targets, then published together by

@@ -381,7 +381,7 @@ impl FamilyParams {
     /// name `family` (the error names the file and `--model`); a Marschner file may carry
     /// `"model": "marschner"`, which is checked and dropped.
     pub fn load(path: &Path, family: ModelFamily) -> Result<FamilyParams> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::json_file::read_text(path)?;
         Self::from_json_text(text, path, family)
     }
 
@@ -394,20 +394,29 @@ impl FamilyParams {
         }
         let tag = value.as_ref().and_then(|v| v.get("model").cloned());
         if let Some(tag) = &tag {
-            let named = tag.as_str().unwrap_or_default();
-            if named != family.as_str() {
+            // Spelled as `--model` takes it: in any case.
+            let named = tag.as_str().and_then(|n| ModelFamily::parse(n).ok());
+            if named != Some(family) {
                 return Err(Error::Other(format!(
                     "{}: the file says \"model\": {tag}, but --model is {family}: pass --model {} \
                      (or use a {family} parameter file)",
                     path.display(),
-                    if named.is_empty() {
-                        ModelFamily::ALL.map(ModelFamily::as_str).join("|")
-                    } else {
-                        named.to_string()
+                    match named {
+                        Some(f) => f.as_str().to_string(),
+                        None => ModelFamily::ALL.map(ModelFamily::as_str).join("|"),
                     }
                 )));
             }
         }
+        // `"KARIS"` read as `"karis"`, the spelling the family's own reader checks.
+        let text = match (&value, &tag) {
+            (Some(v), Some(t)) if t.as_str() != Some(family.as_str()) => {
+                let mut v = v.clone();
+                v["model"] = serde_json::Value::from(family.as_str());
+                serde_json::to_string(&v).unwrap_or(text)
+            }
+            _ => text,
+        };
         let located = |e: Error| match e {
             Error::Parameter { .. } => Error::Other(format!("{}: {e}", path.display())),
             other => other,

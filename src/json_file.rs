@@ -11,10 +11,40 @@ use serde::Serialize;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 
+/// The text of `path`, which must be a regular file (or a link to one): a FIFO or device is
+/// refused before it is opened, since reading one would wait forever or never end. A UTF-8
+/// byte-order mark, which some editors write, is dropped.
+pub fn read_text(path: &Path) -> Result<String> {
+    check_regular_file(path)?;
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
+/// An error unless `path` is a regular file (links followed): a FIFO, socket or device would
+/// block or never end, and a directory is no file.
+pub fn check_regular_file(path: &Path) -> Result<()> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_file() {
+        return Ok(());
+    }
+    let what = if meta.is_dir() {
+        "a directory"
+    } else {
+        "a FIFO, socket or device"
+    };
+    Err(Error::Other(format!(
+        "{}: is {what}, not a regular file; hairfit reads this file whole, so give it a file (copy the content to one)",
+        path.display()
+    )))
+}
+
 /// Read a JSON file as `T`; a syntax or schema error names line and column, followed by `hint`
 /// (what the file is and how to regenerate it).
 pub fn read_json<T: DeserializeOwned>(path: &Path, hint: &str) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text(path)?;
     serde_json::from_str(&text).map_err(|e| json_error(path, e, hint))
 }
 
@@ -47,7 +77,7 @@ pub trait ParameterFile: DeserializeOwned {
     /// Read and validate `path`.
     fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         Self::from_json_str(&text, path)
     }
 

@@ -66,7 +66,7 @@ enum Command {
         /// Fewer angles, shorter timings, fewer fit variants (under a minute on 2 cores).
         #[arg(long)]
         quick: bool,
-        /// Replace an output directory that holds files other than a hairfit result.
+        /// Write into a directory hairfit did not mark that holds other files (they are kept).
         #[arg(long)]
         force: bool,
         /// Output directory (the committed ledger in fits/cost is regenerated only on purpose:
@@ -160,8 +160,17 @@ struct LoadArgs {
     json: bool,
 }
 
+/// An allocation the system refuses ends the run as an error (exit 1), not an abort.
+#[global_allocator]
+static ALLOCATOR: hairfit::cli::oom::ExitOnOom = hairfit::cli::oom::ExitOnOom;
+
 fn main() -> ExitCode {
+    hairfit::cli::oom::set_aside();
     let cli = Cli::parse();
+    if let Err(e) = start_worker_threads() {
+        tell!("hairfit: error: {e}");
+        return ExitCode::FAILURE;
+    }
     let result = run(cli);
     hairfit::cli::exit::wait_for_signal_exit();
     match result {
@@ -174,6 +183,24 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Start the worker threads now: rayon would panic at their first use when the system refuses
+/// them (a memory limit leaves no room for their stacks). One thread is tried before giving up.
+fn start_worker_threads() -> Result<(), String> {
+    let first = match rayon::ThreadPoolBuilder::new().build_global() {
+        Ok(()) => return Ok(()),
+        Err(e) => e,
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .map_err(|_| {
+            format!(
+                "cannot start a worker thread ({first}): a memory limit (ulimit -v, prlimit --as \
+                 or a cgroup's) leaves no room for its stack; run with a higher limit"
+            )
+        })
 }
 
 /// Write `text` to stdout. `print!` would panic when the reader has gone (`hairfit fit … | true`);
@@ -339,7 +366,6 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let cancel = Some(stop.flag.clone());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
-            outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,
                 a.fit.strict,
@@ -369,7 +395,6 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let outcome = hairfit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
             say(hairfit::demo::truth_line(&a.out, opts.family))?;
-            outcome.report_result(&a.out)?;
             return Ok(exit_code(
                 outcome.outcome.json.verdict,
                 a.fit.strict,

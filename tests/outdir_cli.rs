@@ -159,8 +159,8 @@ fn a_new_fit_removes_the_stale_figures_of_an_earlier_one() {
         );
     }
     assert_eq!(channels_of_set(&out), 1);
-    // Nothing beside the set but its lock file.
-    assert_eq!(names(tmp.path()), [".fit.hairfit-lock", "fit"]);
+    // Nothing beside the set: the lock went with the run.
+    assert_eq!(names(tmp.path()), ["fit"]);
 }
 
 #[test]
@@ -185,7 +185,8 @@ fn the_current_directory_and_foreign_directories_are_refused_without_force() {
         "mine"
     );
 
-    // A directory of the user's files: refused, named, untouched; --force replaces it.
+    // A directory of the user's files: refused, named, untouched; --force writes the result
+    // there and keeps them, but refuses to overwrite one of them.
     let mine = tmp.path().join("mine");
     std::fs::create_dir(&mine).unwrap();
     std::fs::write(mine.join("params.json"), "hand-written").unwrap();
@@ -199,13 +200,23 @@ fn the_current_directory_and_foreign_directories_are_refused_without_force() {
     );
     assert!(f.stderr.contains("--force"), "{}", f.stderr);
     assert_eq!(names(&mine), ["params.json"]);
-    let f = run_hairfit(
-        &fit_args(&one, mine_s, &["--force"]),
-        &[],
-        Duration::from_secs(120),
+    let forced = fit_args(&one, mine_s, &["--force"]);
+    let f = run_hairfit(&forced, &[], Duration::from_secs(120));
+    assert_eq!(f.status.code(), Some(1), "{}", f.stderr);
+    assert!(
+        f.stderr.contains("not written by hairfit") && f.stderr.contains("params.json"),
+        "{}",
+        f.stderr
     );
+    assert_eq!(names(&mine), ["params.json"]);
+    std::fs::rename(mine.join("params.json"), mine.join("notes.txt")).unwrap();
+    let f = run_hairfit(&forced, &[], Duration::from_secs(120));
     assert!(f.status.success(), "{}", f.stderr);
     check_fit_dir(&mine, "forced");
+    assert_eq!(
+        std::fs::read_to_string(mine.join("notes.txt")).unwrap(),
+        "hand-written"
+    );
     // Once it holds a hairfit result, later runs replace it without --force.
     let f = run_hairfit(&fit_args(&one, mine_s, &[]), &[], Duration::from_secs(120));
     assert!(f.status.success(), "{}", f.stderr);
@@ -247,7 +258,12 @@ fn report_redraws_its_figures_and_keeps_the_fit() {
     );
     assert!(f.status.success(), "{}", f.stderr);
     let fit_json = std::fs::read(out.join("fit.json")).unwrap();
+    // A figure an earlier hairfit drew (its marker lists it), and the user's notes folder.
     std::fs::write(out.join("stale.png"), "an old figure").unwrap();
+    let marker = std::fs::read_to_string(out.join(".hairfit")).unwrap();
+    std::fs::write(out.join(".hairfit"), marker + "name: stale.png\n").unwrap();
+    std::fs::create_dir(out.join("notes")).unwrap();
+    std::fs::write(out.join("notes/lab.txt"), "mine").unwrap();
     let f = run_hairfit(
         &["report", out_s, "--linear"],
         &[],
@@ -255,6 +271,11 @@ fn report_redraws_its_figures_and_keeps_the_fit() {
     );
     assert!(f.status.success(), "{}", f.stderr);
     assert!(!out.join("stale.png").exists());
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes/lab.txt")).unwrap(),
+        "mine",
+        "report dropped the user's folder"
+    );
     assert!(out.join("index.html").is_file() && out.join("polar.png").is_file());
     assert_eq!(std::fs::read(out.join("fit.json")).unwrap(), fit_json);
     check_fit_dir(&out, "after report");
@@ -438,8 +459,5 @@ fn an_out_that_is_a_link_publishes_into_the_linked_directory() {
     assert!(f.status.success(), "{}", f.stderr);
     assert!(is_link(&link), "report replaced the link");
     check_fit_dir(&real, "report through a link");
-    assert_eq!(
-        names(tmp.path()),
-        [".run-1.hairfit-lock", "latest", "run-1"]
-    );
+    assert_eq!(names(tmp.path()), ["latest", "run-1"]);
 }

@@ -104,7 +104,7 @@ impl Manifest {
     /// line and column (JSON: item and key) and what to write instead. Every item's options
     /// are checked here, before anything runs.
     pub fn load(path: &Path) -> Result<Manifest> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::json_file::read_text(path)?;
         let json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));

@@ -37,9 +37,10 @@ it; to fix it, fit that family alone with `hairfit fit DATA --model FAMILY --fix
 
 \
 --out DIR is published as one set, as `hairfit fit` publishes its --out: DIR is locked (the lock file \
-.DIR.hairfit-lock sits beside it), written into a staging directory beside it and swapped in whole, so a \
-finished run leaves no lock or staging directory inside DIR. --out must be a directory (new, empty, or an \
-earlier hairfit result; --force replaces one holding other files)."
+.DIR.hairfit-lock sits beside it while the run lasts), written into a staging directory beside it and \
+swapped in whole, so a finished run leaves no lock or staging directory. --out must be new, empty, or an \
+earlier compare's DIR (marked by its .hairfit file; never a fit's or a batch's); --force writes into a \
+directory of other files, keeping them. Files and folders you add to DIR are kept by later runs."
 )]
 pub struct CompareArgs {
     /// Data file (.csv with a header, .json, or a headerless scan with --columns).

@@ -62,6 +62,7 @@ pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
             inputs.iter().map(|p| ("the fit", p.as_path())).collect();
         for out in &written {
             crate::atomic::refuse_replacing_inputs("--output", out, &inputs)?;
+            refuse_inside_a_set(path, out)?;
         }
     }
     match args.to {
@@ -69,6 +70,25 @@ pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
         Target::Unreal => unreal_command(args),
         Target::Unity => unity_command(args).map(|summary| (summary, None)),
     }
+}
+
+/// An export written into a hairfit output set would be lost when the set is replaced (the next
+/// `hairfit fit --out` there), or would overwrite one of its files: refused.
+fn refuse_inside_a_set(output: &Path, written: &Path) -> Result<()> {
+    let Some((dir, marker)) = crate::outdir::enclosing_set(written) else {
+        return Ok(());
+    };
+    let name = written
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    Err(Error::Other(format!(
+        "--output {}: {} lies inside {}, an output directory written by {}, which hairfit replaces as a whole; write the export outside it, e.g. --output exports/{name}",
+        output.display(),
+        written.display(),
+        dir.display(),
+        marker.command,
+    )))
 }
 
 /// `--to pbrt|blender|materialx`: one file.
@@ -155,14 +175,11 @@ fn unity_command(args: &ExportArgs) -> Result<String> {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let result = export_unity(&args.dir, &script_name)?;
-    for (path, text) in [
-        (&script, &result.script),
-        (&json.to_path_buf(), &result.json),
-    ] {
-        crate::atomic::write_atomically(path, |w| {
-            w.write_all(text.as_bytes()).map_err(|e| Error::io(path, e))
-        })?;
-    }
+    // Both or neither: a pair from two different fits would load without complaint.
+    crate::atomic::write_together(&[
+        (json, result.json.as_bytes()),
+        (&script, result.script.as_bytes()),
+    ])?;
     Ok(format!(
         "{}{}; wrote {} and {}",
         warning_lines(&result.warnings),

@@ -79,8 +79,9 @@ pub struct FitArgs {
     /// Never show a progress bar.
     #[arg(long)]
     pub no_progress: bool,
-    /// Replace an output directory that holds files other than a hairfit result (the run's own
-    /// input data file is never replaced).
+    /// Write into an output directory hairfit did not mark (no .hairfit file) that holds other
+    /// files: they are kept, and a name the result also writes is refused. A batch or compare
+    /// directory is never replaced, nor the run's own input data.
     #[arg(long)]
     pub force: bool,
     /// Exit 3 when the verdict is poor_fit or undetermined (0 without --strict).
@@ -292,7 +293,8 @@ pub struct FitCommandArgs {
     pub load: LoadOptions,
     #[command(flatten)]
     pub fit: FitArgs,
-    /// Output directory (e.g. fits/NAME), replaced as a whole by the new result (see --force).
+    /// Output directory (e.g. fits/NAME): the new result replaces what hairfit wrote there as a
+    /// whole; files and folders hairfit did not write are kept (see --force).
     #[arg(long)]
     pub out: std::path::PathBuf,
 }

@@ -7,6 +7,7 @@ pub mod compare;
 pub mod exit;
 pub mod export;
 pub mod fit;
+pub mod oom;
 pub mod summary;
 pub mod synth;
 pub mod trace;

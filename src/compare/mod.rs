@@ -190,13 +190,16 @@ pub fn compare_command(
         .collect();
     let comparison = compare(&file, &data, &written)?;
     let staging = set.staging();
-    comparison.save(&staging.join("compare.json"))?;
+    comparison
+        .save(&staging.join("compare.json"))
+        .map_err(|e| set.explain(e))?;
     let curves: Vec<(ModelFamily, Vec<CurveRow>)> = written
         .iter()
         .map(|w| (w.family, w.outcome.curves.to_rows()))
         .collect();
-    let info = crate::plot::render(staging, &figure::overlay(&curves))?;
-    html::write_index(staging, &comparison, &info)?;
+    let info =
+        crate::plot::render(staging, &figure::overlay(&curves)).map_err(|e| set.explain(e))?;
+    html::write_index(staging, &comparison, &info).map_err(|e| set.explain(e))?;
     set.publish()?;
     Ok(CompareOutcome {
         comparison,

@@ -37,7 +37,7 @@ pub const COST_SEED: u64 = 20_03;
 pub struct CostOptions {
     /// Fewer angles, shorter timings, fewer fit variants: under a minute on 2 cores.
     pub quick: bool,
-    /// Replace an output directory that holds files other than a hairfit result.
+    /// Write into a directory hairfit did not mark that holds other files (they are kept).
     pub force: bool,
     /// `chiang`: the Chiang section instead (width nodes × cache against accuracy, with the
     /// Marschner model's time as the yardstick).

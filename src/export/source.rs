@@ -103,7 +103,7 @@ impl SourceFit {
     /// Read `dir/params.json`, `dir/fit.json` and (if present) `dir/curves.csv`.
     pub fn load(dir: &Path) -> Result<SourceFit> {
         let params_path = dir.join("params.json");
-        let text = std::fs::read_to_string(&params_path).map_err(|e| Error::io(&params_path, e))?;
+        let text = crate::json_file::read_text(&params_path)?;
         let tag = serde_json::from_str::<Value>(&text)
             .ok()
             .and_then(|v| v.get("model").and_then(Value::as_str).map(str::to_owned));

@@ -229,6 +229,7 @@ impl Curves {
 
     /// Read `curves.csv` with byte records, checking the header; errors name line and column.
     pub fn read_csv(path: &Path) -> Result<Curves> {
+        crate::json_file::check_regular_file(path)?;
         let mut reader = csv::Reader::from_path(path).map_err(|e| csv_error(path, e))?;
         let header = reader.headers().map_err(|e| csv_error(path, e))?.clone();
         for (col, expected) in CURVES_HEADER.iter().enumerate() {

@@ -111,8 +111,9 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
     // A missing directory is reported as such before any lock is taken beside it.
     let meta = std::fs::metadata(dir).map_err(|e| crate::Error::io(dir, e))?;
     check_fit_dir(dir, meta.is_dir())?;
-    let set = crate::outdir::OutputSet::begin(dir, "hairfit report", false, &[])?;
+    // Read first: a malformed fit.json is reported as such, before any lock is taken.
     let fit = FitJson::load(&dir.join("fit.json"))?;
+    let set = crate::outdir::OutputSet::begin(dir, "hairfit report", false, &[])?;
     let curves_path = dir.join("curves.csv");
     let curves = match std::fs::metadata(&curves_path) {
         Ok(_) => Some(Curves::read_csv(&curves_path)?),
@@ -120,7 +121,8 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
         Err(e) => return Err(Error::io(&curves_path, e)),
     };
     set.keep_all_but(publish::is_report_file)?;
-    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)?;
+    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)
+        .map_err(|e| set.explain(e))?;
     set.publish()?;
     Ok(summary)
 }

@@ -45,8 +45,10 @@ pub const ENGINE_SHIFT: f64 = 0.035;
 /// The engine's refractive index (Schlick's `F₀` from it).
 pub const ENGINE_ETA: f64 = 1.55;
 
-/// The engine's smallest roughness (it clamps to [1/255, 1]).
-pub const MIN_ROUGHNESS: f64 = 1.0 / 255.0;
+/// The smallest roughness: the engine clamps to [1/255, 1]; the bound is 1/255 rounded down to
+/// the digits the docs and messages print (0.00392), so the value they name is accepted (the
+/// engine raises it by 0.04%).
+pub const MIN_ROUGHNESS: f64 = 0.00392;
 
 /// `[lo, hi]`.
 const fn closed(lo: f64, hi: f64) -> Interval {

@@ -41,7 +41,7 @@ pub fn json(
 ) -> String {
     let i = &m.inputs;
     let params_path = source.dir.join("params.json");
-    let source_params = std::fs::read_to_string(&params_path)
+    let source_params = crate::json_file::read_text(&params_path)
         .ok()
         .and_then(|t| serde_json::from_str::<Value>(&t).ok())
         .unwrap_or(Value::Null);

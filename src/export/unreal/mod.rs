@@ -112,17 +112,13 @@ pub fn warnings(m: &EngineMapping) -> Vec<String> {
     out
 }
 
-/// Write `export` to `path` (the JSON) and the script beside it ([`script_path`]), each
-/// atomically.
+/// Write `export` to `path` (the JSON) and the script beside it ([`script_path`]): both or
+/// neither, so the pair always comes from one fit.
 pub fn write_files(path: &Path, export: &UnrealExport) -> Result<()> {
-    let write = |p: &Path, text: &str| {
-        crate::atomic::write_atomically(p, |w| {
-            w.write_all(text.as_bytes())
-                .map_err(|e| crate::error::Error::io(p, e))
-        })
-    };
-    write(path, &export.json)?;
-    write(&script_path(path), &export.script)
+    crate::atomic::write_together(&[
+        (path, export.json.as_bytes()),
+        (&script_path(path), export.script.as_bytes()),
+    ])
 }
 
 /// The script written beside the JSON `path`: the same name with `.py`.
