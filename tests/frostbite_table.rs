@@ -7,7 +7,13 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use hairfit::chiang::quadrature::GaussLegendre;
-use hairfit::table_family::frostbite::azimuthal::{inverse_modified_index, lobe, Logistic};
+use hairfit::table_family::frostbite::azimuthal::{
+    exit_azimuth_at, integrate_directly, inverse_modified_index, lobe, Logistic,
+};
+
+/// Plain Gauss–Legendre nodes in γ for the HDRP comparison: the narrowest logistic there
+/// (β_N = 0.3) spans dozens of them.
+const DIRECT_NODES: usize = 8192;
 
 fn logistic_scale(beta: f64) -> f64 {
     (PI / 8.0).sqrt() * (0.265 * beta + 1.194 * beta.powi(2) + 5.372 * beta.powi(22))
@@ -153,4 +159,49 @@ fn lobes_integrate_to_one() {
             }
         }
     }
+}
+
+/// HDRP's generator: at its texel centres, `½ Σ D_s(φ − Φ_p(h)) · 0.1` over the 20 offsets
+/// h = −1, −0.9, …, 0.9 (its loop `for (h = −1; h < 1; h += 0.1)`), with exact arcsines.
+fn hdrp_texel(p: usize, phi: f64, c: f64, beta_n: f64) -> f64 {
+    let s = hairfit::chiang::azimuthal::logistic_scale(&beta_n);
+    let norm = hairfit::chiang::azimuthal::trimmed_logistic_norm(&s);
+    let x = inverse_modified_index(c);
+    (0..20)
+        .map(|k| {
+            let h = -1.0 + 0.1 * k as f64;
+            let d = wrap(phi - exit_azimuth_at(p, h, x));
+            0.5 * 0.1 * hairfit::chiang::azimuthal::trimmed_logistic(&d, &(1.0 / s), &norm)
+        })
+        .sum()
+}
+
+/// What HDRP's own table holds, against the integral: its 20-sample sum in h is within 5% of
+/// the integral (relative to the lobe's peak) at its texels with β_N ≥ 0.5, but at HDRP's
+/// default β_N = 0.3 it is off by more than 10% somewhere — so Unity renders with azimuthal
+/// lobes that differ from this family's (and from Chiang's) by that much. Printed for the docs.
+#[test]
+fn hdrp_texels_differ_from_the_integral_by_the_documented_amount() {
+    let texel = |i: usize| (i as f64 + 0.5) / 64.0;
+    let mut report = Vec::new();
+    for (k, beta_n) in [(19usize, texel(19)), (44, texel(44))] {
+        let mut worst = 0.0f64;
+        for j in [8usize, 32, 60] {
+            let c = texel(j);
+            for p in 0..3 {
+                let peak = (0..=90)
+                    .map(|q| integrate_directly(p, PI * q as f64 / 90.0, c, beta_n, 2048))
+                    .fold(0.0, f64::max);
+                for i in 32..48 {
+                    let phi = 4.0 * PI * texel(i) - 2.0 * PI;
+                    let direct = integrate_directly(p, phi, c, beta_n, DIRECT_NODES);
+                    worst = worst.max((hdrp_texel(p, phi, c, beta_n) - direct).abs() / peak);
+                }
+            }
+        }
+        println!("HDRP texel beta_N {beta_n:.3} (texel {k}): worst deviation / peak {worst:.3}");
+        report.push(worst);
+    }
+    assert!(report[0] > 0.1, "beta_N 0.30: {}", report[0]);
+    assert!(report[1] < 0.05, "beta_N 0.70: {}", report[1]);
 }
