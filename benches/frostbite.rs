@@ -1,16 +1,12 @@
 //! The frostbite family's evaluation rate on one thread, beside Marschner's on the same
 //! directions (the cost ledger's seeded spread): S for one and three channels, and S with its
-//! exact Jacobian in the six inputs a three-channel fit varies. The azimuthal table's build
-//! (first use in a process) is timed once at start-up, outside the timed loops.
-
-use std::time::Instant;
+//! exact Jacobian in the six inputs a three-channel fit varies.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use hairfit::fit::family::table::{TableForward, TableParam};
 use hairfit::fit::problem::Forward;
 use hairfit::model::{scattering as marschner_s, Angles, Measurement, ModelConfig};
 use hairfit::params::ParameterFile as _;
-use hairfit::table_family::frostbite::azimuthal::AzimuthalLut;
 use hairfit::table_family::frostbite::{
     Frostbite, BASE_COLOR, CUTICLE_ANGLE, RADIAL_SMOOTHNESS, SMOOTHNESS,
 };
@@ -32,12 +28,6 @@ fn params(nc: usize) -> TableParams<f64> {
 }
 
 fn bench(c: &mut Criterion) {
-    let start = Instant::now();
-    AzimuthalLut::shared();
-    eprintln!(
-        "azimuthal table built in {:.3} s (first use)",
-        start.elapsed().as_secs_f64()
-    );
     let angles: Vec<Angles> = hairfit::cost::representative_angles(N, 0x9E37_79B9);
     let table = Table::<Frostbite>::NEW;
     let on = TermSet::all(3);

@@ -115,6 +115,37 @@ fn demo_recovers_the_truth_within_its_standard_errors() {
             e.name
         );
     }
+    // Its fit exports to Unity (S is non-negative everywhere, which the export checks).
+    let unity = dir.path().join("other").join("u.json");
+    std::fs::create_dir_all(unity.parent().unwrap()).unwrap();
+    hairfit_ok(&["export", p(&out), "--to", "unity", "--output", p(&unity)]);
+    assert!(unity.is_file());
+}
+
+/// The family's defaults (docs/frostbite.md's table) synthesise on a dense sphere rig: synth
+/// refuses negative or non-finite S, which a tabulated N_p produced in its tails.
+#[test]
+fn synth_takes_the_defaults_on_a_dense_sphere() {
+    let dir = tempfile::tempdir().unwrap();
+    let params = write(
+        dir.path(),
+        "defaults.json",
+        r#"{"model": "frostbite", "base_color": 0.5, "smoothness": 0.85,
+            "radial_smoothness": 0.7, "cuticle_angle_deg": 3}"#,
+    );
+    let csv = dir.path().join("d.csv");
+    frostbite(
+        "synth",
+        &[
+            "--params",
+            p(&params),
+            "--rig",
+            "sphere:n=400:max=85",
+            "--output",
+            p(&csv),
+        ],
+    );
+    assert!(csv.is_file());
 }
 
 /// `--terms R` evaluates R alone (TT and TRT columns zero) and its fit does not vary Base
@@ -191,16 +222,16 @@ fn bad_input_is_refused_with_the_reason() {
         dir.path(),
         "rs.json",
         r#"{"model": "frostbite", "base_color": 0.3, "smoothness": 0.9,
-            "radial_smoothness": 0.95, "cuticle_angle_deg": 3}"#,
+            "radial_smoothness": 0.97, "cuticle_angle_deg": 3}"#,
     );
     let e = eval(&[], &rough);
-    assert!(e.contains("radial_smoothness") && e.contains("0.9"), "{e}");
-    // The same file evaluates once the value is inside the table's domain.
+    assert!(e.contains("radial_smoothness") && e.contains("0.95"), "{e}");
+    // The same file evaluates once the value is inside the domain.
     let ok = write(
         dir.path(),
         "ok.json",
         r#"{"model": "frostbite", "base_color": 0.3, "smoothness": 0.9,
-            "radial_smoothness": 0.9, "cuticle_angle_deg": 3}"#,
+            "radial_smoothness": 0.95, "cuticle_angle_deg": 3}"#,
     );
     hairfit_ok(&[
         "eval",

@@ -8,7 +8,7 @@
 //!
 //! a Gaussian in θ_h (Marschner's shifts and widths from Cuticle Angle and Smoothness), an
 //! attenuation at one offset h per lobe (Schlick Fresnel, Beer's law along the chord), and the
-//! pre-integrated azimuthal distribution ([`azimuthal`]). HDRP's shader value is `S·cos θ_i`
+//! azimuthal distribution integrated over the fibre width ([`azimuthal`]). HDRP's shader value is `S·cos θ_i`
 //! (the light-facing cosine is applied after the lobes), so the lobes' sum is hairfit's `S`.
 //! The parameters are the Unity artist's: Base Color (linear, per channel; absorption by
 //! Chiang 2016 eq. 9 with β_N), Smoothness, Radial Smoothness, Cuticle Angle in degrees, and
@@ -24,7 +24,7 @@ use super::{Fact, LobeColumn, TableFamily, TableParams, Term, TermSet, Terms};
 use crate::model::angles::wrap;
 use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
-use azimuthal::{AzimuthalLut, BETA_N_MIN};
+use azimuthal::{Logistic, BETA_N_MIN};
 
 /// The Frostbite/HDRP family.
 pub struct Frostbite;
@@ -43,7 +43,7 @@ const TRT: usize = 2;
 
 /// HDRP's largest Smoothness (it clamps above, "to prevent NaNs").
 pub const SMOOTHNESS_MAX: f64 = 0.99;
-/// The largest Radial Smoothness the azimuthal table covers (β_N ≥ [`BETA_N_MIN`]).
+/// The largest Radial Smoothness accepted (β_N ≥ [`BETA_N_MIN`]).
 pub const RADIAL_SMOOTHNESS_MAX: f64 = 1.0 - BETA_N_MIN;
 /// HDRP's smallest Base Color (it clamps below before taking the logarithm).
 pub const BASE_COLOR_MIN: f64 = 1e-3;
@@ -81,11 +81,15 @@ pub fn schlick<T: DualNum<f64>>(f0: &T, cos: f64) -> T {
 }
 
 /// `cos(angle(L, V)/2) = √(½ + ½ L·V)`, with `L·V = cos θ_i cos θ_r cos φ + sin θ_i sin θ_r`:
-/// where R's Fresnel is taken (d'Eon 2011's half angle, as HDRP writes it).
+/// where R's Fresnel is taken (d'Eon 2011's half angle, as HDRP writes it). Computed as
+/// `√(sin²θ_h + cos θ_i cos θ_r cos²(φ/2))`, which does not cancel as L → −V.
 pub fn half_angle_cosine(a: &Angles) -> f64 {
-    let l_dot_v = a.theta_i.cos() * a.theta_r.cos() * (a.phi_r - a.phi_i).cos()
-        + a.theta_i.sin() * a.theta_r.sin();
-    (0.5 + 0.5 * l_dot_v).max(0.0).sqrt()
+    use crate::table_family::karis;
+    karis::half_angle_cosine(
+        a.theta_i,
+        a.theta_r,
+        karis::half_phi_cosine(a.phi_r - a.phi_i),
+    )
 }
 
 /// Chiang 2016 eq. 9's denominator `D(β) = 5.969 − 0.215β + 2.532β² − 10.73β³ + 5.574β⁴ + 0.245β⁵`.
@@ -251,11 +255,12 @@ impl TableFamily for Frostbite {
         let f0 = normal_reflectance(&eta);
         let sigmas = lobe_widths(&width);
         let shifts = lobe_shifts(&p.get(CUTICLE_ANGLE, 0));
-        let lut = AzimuthalLut::shared();
-        let at = lut.locate(phi, cos_theta_d, &beta_n);
+        let logistic = Logistic::new(&beta_n);
+        let x = azimuthal::inverse_modified_index(cos_theta_d);
         // M_p · N_p: what every channel shares.
         let shape = |lobe: usize| {
-            gaussian(&(-shifts[lobe].clone() + theta_h), &sigmas[lobe]) * lut.value(lobe, &at)
+            gaussian(&(-shifts[lobe].clone() + theta_h), &sigmas[lobe])
+                * azimuthal::lobe(lobe, phi, x, &logistic)
         };
         let cos_theta_r = a.theta_r.cos();
         let cos_theta_t = refracted_cosine(a.theta_r.sin(), &eta);

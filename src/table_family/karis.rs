@@ -18,6 +18,7 @@ use std::f64::consts::PI;
 use num_dual::DualNum;
 
 use super::{Fact, LobeColumn, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::model::angles::wrap;
 use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
@@ -73,17 +74,23 @@ pub struct Geometry {
     /// `cos θ_d`, `θ_d = (θ_r − θ_i)/2`.
     pub cos_theta_d: f64,
     pub cos_phi: f64,
-    /// `cos(φ/2) = √(½ + ½ cos φ)` (≥ 0: only `cos φ` enters, so the model is even in φ).
+    /// `cos(φ/2)` of φ wrapped to [−π, π] (≥ 0: the model is even in φ), from the half angle
+    /// itself: `√(½ + ½ cos φ)` cancels to nothing as φ → π.
     pub cos_half_phi: f64,
     /// `ω_i·ω_r = cos θ_i cos θ_r cos φ + sin θ_i sin θ_r`.
     pub v_dot_l: f64,
+    /// `cos(∠(ω_i, ω_r)/2) = √(½ + ½ ω_i·ω_r)`, as `√(sin²θ_h + cos θ_i cos θ_r cos²(φ/2))`
+    /// (`|ω_i + ω_r|/2` by half-angle identities): no cancellation as the directions oppose.
+    pub half_angle_cos: f64,
 }
 
 impl Geometry {
     pub fn new(a: &Angles) -> Geometry {
         let (sin_theta_i, cos_theta_i) = a.theta_i.sin_cos();
         let (sin_theta_r, cos_theta_r) = a.theta_r.sin_cos();
-        let cos_phi = (a.phi_r - a.phi_i).cos();
+        let phi = a.phi_r - a.phi_i;
+        let cos_phi = phi.cos();
+        let cos_half_phi = half_phi_cosine(phi);
         Geometry {
             sin_sum: sin_theta_i + sin_theta_r,
             sin_theta_i,
@@ -92,8 +99,9 @@ impl Geometry {
             cos_theta_r,
             cos_theta_d: (0.5 * (a.theta_r - a.theta_i)).cos(),
             cos_phi,
-            cos_half_phi: (0.5 + 0.5 * cos_phi).max(0.0).sqrt(),
+            cos_half_phi,
             v_dot_l: cos_theta_i * cos_theta_r * cos_phi + sin_theta_i * sin_theta_r,
+            half_angle_cos: half_angle_cosine(a.theta_i, a.theta_r, cos_half_phi),
         }
     }
 }
@@ -147,9 +155,31 @@ pub fn r_lobe<T: DualNum<f64>>(y: &T, b_r: &T, cos_half_phi: f64) -> T {
     (z.clone() * z * -0.25).exp() * (b_r.clone() * (8.0 * PI.sqrt())).recip()
 }
 
-/// R's attenuation `F(√(½ + ½ ω_i·ω_r))`: Fresnel at the half angle between the directions.
-pub fn r_attenuation<T: DualNum<f64>>(f0: &T, v_dot_l: f64) -> T {
-    schlick(f0, (0.5 + 0.5 * v_dot_l).clamp(0.0, 1.0).sqrt())
+/// `cos(φ/2)` of φ taken to [−π, π] (≥ 0), from the half angle itself (no cancellation as
+/// φ → π); even in φ to the bit.
+pub fn half_phi_cosine(phi: f64) -> f64 {
+    let folded = if phi.abs() <= PI {
+        phi.abs()
+    } else {
+        wrap(phi).abs()
+    };
+    (0.5 * folded).cos().max(0.0)
+}
+
+/// `cos(∠(ω_i, ω_r)/2) = √(½ + ½ ω_i·ω_r) = √(sin²θ_h + cos θ_i cos θ_r cos²(φ/2))`: the
+/// right-hand form has no cancellation where ω_i ≈ −ω_r (θ_i ≈ −θ_r, φ ≈ π).
+pub fn half_angle_cosine(theta_i: f64, theta_r: f64, cos_half_phi: f64) -> f64 {
+    let sin_h = (0.5 * (theta_i + theta_r)).sin();
+    let c = cos_half_phi;
+    (sin_h * sin_h + theta_i.cos() * theta_r.cos() * c * c)
+        .clamp(0.0, 1.0)
+        .sqrt()
+}
+
+/// R's attenuation `F(cos(∠(ω_i, ω_r)/2))`: Fresnel at the half angle between the directions
+/// ([`Geometry::half_angle_cos`]).
+pub fn r_attenuation<T: DualNum<f64>>(f0: &T, half_angle_cos: f64) -> T {
+    schlick(f0, half_angle_cos)
 }
 
 /// Backlit's fade of R: `1 + (b − 1)·clamp(−ω_i·ω_r, 0, 1)` (lerp(1, b, sat(−V·L))).
@@ -161,7 +191,7 @@ pub fn backlit_fade<T: DualNum<f64>>(backlit: &T, v_dot_l: f64) -> T {
 pub fn f_r<T: DualNum<f64>>(p: &KarisShared<T>, g: &Geometry) -> T {
     let y = -r_centre(&p.shifts[0], g) + g.sin_sum;
     r_lobe(&y, &p.widths[0], g.cos_half_phi)
-        * r_attenuation(&p.f0, g.v_dot_l)
+        * r_attenuation(&p.f0, g.half_angle_cos)
         * p.specular.clone()
         * 2.0
         * backlit_fade(&p.backlit, g.v_dot_l)

@@ -1,53 +1,48 @@
-//! The pre-integrated azimuthal distributions of the Frostbite/HDRP hair model: for each lobe
-//! p = 0 (R), 1 (TT), 2 (TRT), the trimmed logistic of Chiang 2016 (eq. 8) averaged over the
-//! fibre width,
+//! The azimuthal distributions of the Frostbite/HDRP hair model: for each lobe p = 0 (R),
+//! 1 (TT), 2 (TRT), the trimmed logistic of Chiang 2016 (eq. 8) averaged over the fibre width,
 //!
 //! `N_p(φ, θ_d; β_N) = ½ ∫₋₁¹ D_s(φ − Φ_p(h)) dh`,  `Φ_p = 2p·asin(h/η′) − 2·asin h + pπ`,
 //!
 //! with Karis's fit of the modified index `η′ = 1.19/cos θ_d + 0.36 cos θ_d` (η = 1.55) and the
-//! logistic scale `s(β_N)` of Chiang eq. 8. HDRP tabulates the same integral on a 64³ texture;
-//! hairfit computes its own table once per process ([`AzimuthalLut::shared`]) and reads it
-//! with Catmull–Rom interpolation in all three axes (C¹, so the derivative in β_N that a fit
-//! takes is continuous). The table's error against [`integrate_directly`] is measured in
-//! tests/frostbite_table.rs and docs/frostbite.md.
+//! logistic scale `s(β_N)` of Chiang eq. 8. HDRP tabulates the integral on a 64³ texture;
+//! hairfit evaluates it per direction ([`lobe`]) with a Gauss–Legendre rule fitted to the
+//! integrand, so `S` keeps its relative accuracy far into the lobes' tails (a table's error
+//! relative to the peak is 10²–10³ times the value there).
 //!
-//! How the table is built: N_p is the circular convolution of the distribution of exit
-//! azimuths `Φ_p(h)` (h uniform) with the trimmed logistic, so its Fourier coefficients are the
-//! products `μ̂_k · D̂_k(s)`. `μ̂_k = ½∫cos(kΦ_p) dh` is integrated once per (p, θ_d) by
-//! Gauss–Legendre in γ = asin h; `D̂_k(s)` of the logistic trimmed to [−π, π] has a closed form
-//! ([`trimmed_logistic_cosine`]). That costs a fraction of a second where sampling the integral
-//! at every node would take minutes.
+//! The rule, in γ = asin h: the integrand `D_s(u(γ)) cos γ`, `u = φ − Φ_p(γ)`, is split where
+//! u is not monotone (TRT's caustics) and where the trimmed logistic wraps (u ≡ π mod 2π, a
+//! kink). On each segment it is largest at its anchor γ*: the root of u ≡ 0 if the segment has
+//! one, else the end nearest to it. The map `γ = γ* + ℓ sinh v`, with ℓ the γ-distance over
+//! which u moves by s at γ*, spreads the logistic's peak and its exponential tail evenly over
+//! v; Gauss–Legendre pieces in v (each at most [`GAMMA_PIECE`] long in γ) then converge
+//! geometrically. The tail beyond `REACH·s` of u from the anchor (below e⁻²⁸ of the anchor's
+//! value) is left out, as are whole segments below 1e-14 of the largest anchor's.
 
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::OnceLock;
 
 use num_dual::DualNum;
-use rayon::prelude::*;
 
-use crate::chiang::azimuthal::{
-    exit_azimuth, logistic_scale, trimmed_logistic, trimmed_logistic_norm,
-};
-use crate::chiang::quadrature::WidthRule;
+use crate::chiang::azimuthal::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
+use crate::chiang::quadrature::{GaussLegendre, WidthRule};
 use crate::model::angles::wrap;
 
-/// Smallest azimuthal roughness β_N the table covers (radial smoothness 0.9): below it the TRT
-/// caustics are narrower than the table's 1° azimuth step (docs/frostbite.md, "The table").
-pub const BETA_N_MIN: f64 = 0.1;
+/// Smallest azimuthal roughness β_N the family accepts (radial smoothness 0.95): the accuracy
+/// of [`lobe`] is tested down to here (tests/frostbite_table.rs).
+pub const BETA_N_MIN: f64 = 0.05;
 /// Largest β_N (radial smoothness 0).
 pub const BETA_N_MAX: f64 = 1.0;
 
-/// Azimuth step of the table: 1°.
-const PHI_STEPS: usize = 180;
-/// Steps in x = 1/η′ over [0, 1/1.55].
-const X_STEPS: usize = 96;
-/// Steps in u = ln s(β_N) over [ln s(0.1), ln s(1)].
-const U_STEPS: usize = 36;
-/// Fourier terms at most, and at least (the logistic trimmed to [−π, π] has a kink where the
-/// periodic extension joins, so its coefficients fall only as 1/k² at large s).
-const K_MAX: usize = 256;
-const K_MIN: usize = 48;
-/// Gauss–Legendre nodes in γ for μ̂_k: k·Φ_p turns through at most ~1200 periods at K_MAX.
-const MU_NODES: usize = 2048;
+/// Gauss–Legendre nodes per piece of the rule in v.
+const NODES: usize = 8;
+/// Longest piece in v (the logistic in v is analytic within ±π/2 of the real axis).
+const V_PIECE: f64 = 1.5;
+/// Longest piece in γ (where ℓ is large the smooth factors, not the logistic, set the scale).
+const GAMMA_PIECE: f64 = 0.7;
+/// How far from its anchor a segment is integrated, in units of s of u.
+const REACH: f64 = 28.0;
+/// Segments whose anchor value is below this fraction of the largest are left out.
+const NEGLIGIBLE: f64 = 1e-14;
 
 /// Karis 2016's fit of Bravais' modified index for η = 1.55: `η′ = 1.19/cos θ_d + 0.36 cos θ_d`.
 #[inline]
@@ -55,7 +50,7 @@ pub fn modified_index(cos_theta_d: f64) -> f64 {
     1.19 / cos_theta_d + 0.36 * cos_theta_d
 }
 
-/// `1/η′` without dividing by cos θ_d (finite as cos θ_d → 0): the table's second axis.
+/// `1/η′` without dividing by cos θ_d (finite as cos θ_d → 0).
 #[inline]
 pub fn inverse_modified_index(cos_theta_d: f64) -> f64 {
     cos_theta_d / (1.19 + 0.36 * cos_theta_d * cos_theta_d)
@@ -64,10 +59,11 @@ pub fn inverse_modified_index(cos_theta_d: f64) -> f64 {
 /// `Φ_p(h)` for `x = 1/η′` (Marschner 2003 eq. 3 with γ_t = asin(h x)).
 #[inline]
 pub fn exit_azimuth_at(p: usize, h: f64, x: f64) -> f64 {
-    exit_azimuth(p, h.asin(), &(h * x).asin())
+    2.0 * p as f64 * (h * x).asin() - 2.0 * h.asin() + p as f64 * PI
 }
 
-/// `N_p(φ, θ_d; β_N)` by Gauss–Legendre in γ with `nodes` nodes: the integral the table holds.
+/// `N_p(φ, θ_d; β_N)` by a plain Gauss–Legendre rule in γ with `nodes` nodes (a cross-check
+/// that needs thousands of nodes at small β_N).
 pub fn integrate_directly(p: usize, phi: f64, cos_theta_d: f64, beta_n: f64, nodes: usize) -> f64 {
     let rule = WidthRule::cached(nodes).expect("node count in range");
     let s = logistic_scale(&beta_n);
@@ -82,280 +78,221 @@ pub fn integrate_directly(p: usize, phi: f64, cos_theta_d: f64, beta_n: f64, nod
         .sum()
 }
 
-/// `∫_{−π}^{π} D_s(x) cos(kx) dx` for the logistic of scale `s` trimmed to [−π, π]: the whole
-/// line's `πsk/sinh(πsk)` less both tails `∫_π^∞`, summed from the series
-/// `L(x) = (1/s)Σ_n (−1)^{n+1} n e^{−nx/s}`, over the trimmed mass `tanh(π/2s)`.
-pub fn trimmed_logistic_cosine(k: usize, s: f64) -> f64 {
-    let kf = k as f64;
-    let a = PI * s * kf;
-    let whole = if k == 0 {
-        1.0
-    } else {
-        // πsk/sinh(πsk) without overflow.
-        2.0 * a * (-a).exp() / (1.0 - (-2.0 * a).exp())
+/// The trimmed logistic of one β_N, shared by the lobes of a direction pair: `s` (its value
+/// places the rule's nodes), `1/s` and the normalisation in the number type.
+pub struct Logistic<T> {
+    s: f64,
+    inv_s: T,
+    norm: T,
+}
+
+impl<T: DualNum<f64>> Logistic<T> {
+    pub fn new(beta_n: &T) -> Logistic<T> {
+        let s = logistic_scale(beta_n);
+        Logistic {
+            s: s.re(),
+            inv_s: s.recip(),
+            norm: trimmed_logistic_norm(&s),
+        }
+    }
+
+    /// `D_s(d)` for d in [−π, π].
+    #[inline]
+    fn at(&self, d: f64) -> T {
+        let e = (-self.inv_s.clone() * d.abs()).exp();
+        let q = e.clone() + 1.0;
+        e * self.norm.clone() / (q.clone() * q)
+    }
+
+    /// `D_s(d)·s/norm` in f64: the size that decides which segments matter.
+    #[inline]
+    fn shape(&self, d: f64) -> f64 {
+        let e = (-d.abs() / self.s).exp();
+        e / ((1.0 + e) * (1.0 + e))
+    }
+}
+
+/// One lobe's exit geometry at `x = 1/η′`: `u(γ) = φ − Φ_p(γ)` and its derivatives.
+#[derive(Clone, Copy)]
+struct Lobe {
+    p: f64,
+    phi: f64,
+    x: f64,
+}
+
+impl Lobe {
+    #[inline]
+    fn u(self, g: f64) -> f64 {
+        self.phi - 2.0 * self.p * (self.x * g.sin()).asin() + 2.0 * g - self.p * PI
+    }
+
+    /// `du/dγ = 2 − 2p x cos γ/√(1 − x² sin²γ)`.
+    #[inline]
+    fn slope(self, g: f64) -> f64 {
+        let (s, c) = g.sin_cos();
+        2.0 - 2.0 * self.p * self.x * c / (1.0 - self.x * self.x * s * s).sqrt()
+    }
+
+    /// `d²u/dγ² = 2p x (1 − x²) sin γ/(1 − x² sin²γ)^{3/2}`.
+    #[inline]
+    fn curvature(self, g: f64) -> f64 {
+        let s = g.sin();
+        let q = 1.0 - self.x * self.x * s * s;
+        2.0 * self.p * self.x * (1.0 - self.x * self.x) * s / (q * q.sqrt())
+    }
+
+    /// γ in `[a, b]` where u = `target`, u monotone on `[a, b]` with `u(a) = ua`, `u(b) = ub`:
+    /// Newton steps kept inside the bracket (bisection otherwise), to ~1 ulp.
+    fn solve(self, target: f64, (a, ua): (f64, f64), (b, ub): (f64, f64)) -> f64 {
+        if self.p == 0.0 {
+            return ((target - self.phi) * 0.5).clamp(a, b);
+        }
+        let rising = ub > ua;
+        let (mut lo, mut hi) = (a, b);
+        let mut g = a + (target - ua) / (ub - ua) * (b - a);
+        for _ in 0..100 {
+            let f = self.u(g) - target;
+            if f == 0.0 {
+                return g;
+            }
+            if (f < 0.0) == rising {
+                lo = g;
+            } else {
+                hi = g;
+            }
+            let d = self.slope(g);
+            let newton = g - f / d;
+            let next = if d != 0.0 && newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+            if (next - g).abs() <= 4.0 * f64::EPSILON || hi - lo <= 4.0 * f64::EPSILON {
+                return next;
+            }
+            g = next;
+        }
+        g
+    }
+}
+
+/// A stretch of γ on which u is monotone and within π of the centre `c` (a multiple of 2π), with
+/// its anchor `g0` (where `|u − c|` is least).
+struct Segment {
+    a: f64,
+    b: f64,
+    g0: f64,
+    size: f64,
+}
+
+fn gauss_legendre() -> &'static GaussLegendre {
+    static RULE: OnceLock<GaussLegendre> = OnceLock::new();
+    RULE.get_or_init(|| GaussLegendre::new(NODES))
+}
+
+/// `N_p(φ, θ_d; β_N)` (p = 0, 1, 2 for R, TT, TRT) for `x = 1/η′`
+/// ([`inverse_modified_index`]), φ in radians (N_p is even in φ).
+pub fn lobe<T: DualNum<f64>>(p: usize, phi: f64, x: f64, logistic: &Logistic<T>) -> T {
+    let lobe = Lobe {
+        p: p as f64,
+        phi: wrap(phi).abs(),
+        x: x.clamp(0.0, 1.0),
     };
-    let q = (-PI / s).exp();
-    let mut tail = 0.0;
-    let mut qn = 1.0;
-    for n in 1..=400 {
-        qn *= q;
-        let nf = n as f64;
-        let term = qn * nf * nf / (nf * nf + kf * kf * s * s);
-        tail += if n % 2 == 1 { term } else { -term };
-        if qn * nf * nf < 1e-18 {
-            break;
-        }
+    let s = logistic.s;
+    // Monotone pieces of u: TRT turns at its caustics, sin²γ_c = (4x² − 1)/3x², when x > ½.
+    let mut ends = [-FRAC_PI_2, 0.0, 0.0, FRAC_PI_2];
+    let mut n_ends = 2;
+    if p == 2 && lobe.x > 0.5 {
+        let gc = ((4.0 * lobe.x * lobe.x - 1.0) / (3.0 * lobe.x * lobe.x))
+            .sqrt()
+            .asin();
+        ends = [-FRAC_PI_2, -gc, gc, FRAC_PI_2];
+        n_ends = 4;
+    } else {
+        ends[1] = FRAC_PI_2;
     }
-    if k % 2 == 1 {
-        tail = -tail;
-    }
-    (whole - 2.0 * tail) / (PI / (2.0 * s)).tanh()
-}
-
-/// `μ̂_k = ½∫₋₁¹ cos(kΦ_p(h)) dh` for k = 0..=k_max (e^{ikΦ} by repeated rotation). The
-/// integrand is even in h (`Φ_p(−h) = 2pπ − Φ_p(h)`), so the nodes with h ≥ 0 carry it twice.
-fn exit_azimuth_cosines(p: usize, x: f64, k_max: usize) -> Vec<f64> {
-    let rule = WidthRule::cached(MU_NODES).expect("node count in range");
-    let mut mu = vec![0.0; k_max + 1];
-    for n in rule.nodes.iter().filter(|n| n.h >= 0.0) {
-        let w = if n.h == 0.0 { n.weight } else { 2.0 * n.weight };
-        let (sin_phi, cos_phi) = exit_azimuth_at(p, n.h, x).sin_cos();
-        let (mut c, mut s) = (1.0, 0.0);
-        for m in mu.iter_mut() {
-            *m += w * c;
-            (c, s) = (c * cos_phi - s * sin_phi, s * cos_phi + c * sin_phi);
-        }
-    }
-    mu
-}
-
-/// Fourier terms kept at scale `s`: until `D̂_k ≈ e^{−πsk}` falls below 1e-6, within
-/// [`K_MIN`, `K_MAX`].
-fn terms_at(s: f64) -> usize {
-    ((14.0 / (PI * s)).ceil() as usize).clamp(K_MIN, K_MAX)
-}
-
-/// The table's axes: node `i` of an axis is `start + i·step`, for i = −1 ..= steps + 1 (one
-/// ghost node past each end so that every cell has the four nodes Catmull–Rom reads).
-#[derive(Debug, Clone, Copy)]
-struct Axis {
-    start: f64,
-    step: f64,
-    steps: usize,
-}
-
-impl Axis {
-    const fn new(start: f64, end: f64, steps: usize) -> Axis {
-        Axis {
-            start,
-            step: (end - start) / steps as f64,
-            steps,
-        }
-    }
-
-    /// Stored nodes, ghosts included.
-    fn len(self) -> usize {
-        self.steps + 3
-    }
-
-    /// The value at stored node `j` (j = 0 is the ghost before `start`).
-    fn at(self, j: usize) -> f64 {
-        self.start + (j as f64 - 1.0) * self.step
-    }
-
-    /// The cell holding `v` (clamped to the axis) and the position in it, as the stored index
-    /// of the cell's first node and t ∈ [0, 1].
-    fn cell(self, v: f64) -> (usize, f64) {
-        let f = ((v - self.start) / self.step).clamp(0.0, self.steps as f64);
-        let i = (f.floor() as usize).min(self.steps - 1);
-        (i + 1, f - i as f64)
-    }
-}
-
-/// Catmull–Rom weights of the nodes −1, 0, 1, 2 around a point at `t` ∈ [0, 1] of its cell.
-#[inline]
-fn catmull_rom<T: DualNum<f64>>(t: &T) -> [T; 4] {
-    let t2 = t.clone() * t.clone();
-    let t3 = t2.clone() * t.clone();
-    [
-        (-t3.clone() + t2.clone() * 2.0 - t.clone()) * 0.5,
-        (t3.clone() * 3.0 - t2.clone() * 5.0 + 2.0) * 0.5,
-        (-t3.clone() * 3.0 + t2.clone() * 4.0 + t.clone()) * 0.5,
-        (t3 - t2) * 0.5,
-    ]
-}
-
-/// `N_R, N_TT, N_TRT` on the grid (φ, x = 1/η′, u = ln s), built once per process.
-pub struct AzimuthalLut {
-    phi: Axis,
-    x: Axis,
-    u: Axis,
-    /// `values[((p·U + u)·X + x)·Φ + φ]` over the stored nodes.
-    values: Vec<f32>,
-}
-
-/// Where one direction pair reads the table: the φ and x cells with their (plain) weights,
-/// the u cell with weights in the number type (β_N is a fitted parameter).
-pub struct LutPoint<T> {
-    phi_cell: usize,
-    x_cell: usize,
-    u_cell: usize,
-    phi_w: [f64; 4],
-    x_w: [f64; 4],
-    u_w: [T; 4],
-}
-
-impl AzimuthalLut {
-    /// The process's table (built on first use: 0.35 s of CPU, split over the cores by rayon).
-    pub fn shared() -> &'static AzimuthalLut {
-        static TABLE: OnceLock<AzimuthalLut> = OnceLock::new();
-        TABLE.get_or_init(AzimuthalLut::build)
-    }
-
-    fn build() -> AzimuthalLut {
-        let phi = Axis::new(0.0, PI, PHI_STEPS);
-        let x = Axis::new(0.0, inverse_modified_index(1.0), X_STEPS);
-        let u = Axis::new(
-            logistic_scale(&BETA_N_MIN).ln(),
-            logistic_scale(&BETA_N_MAX).ln(),
-            U_STEPS,
-        );
-        // cos(kφ_i) for φ_i = (i − 1)·1°: an exact lookup by (k·(i − 1)) mod 360.
-        let cos_deg: Vec<f64> = (0..360).map(|d| (d as f64).to_radians().cos()).collect();
-        let scales: Vec<f64> = (0..u.len()).map(|j| u.at(j).exp()).collect();
-        let kernel: Vec<Vec<f64>> = scales
-            .iter()
-            .map(|&s| {
-                (0..=terms_at(s))
-                    .map(|k| trimmed_logistic_cosine(k, s))
-                    .collect()
-            })
+    let mut segments: Vec<Segment> = Vec::with_capacity(8);
+    for w in ends[..n_ends].windows(2) {
+        let (ga, gb) = (w[0], w[1]);
+        let (ua, ub) = (lobe.u(ga), lobe.u(gb));
+        let (lo, hi) = (ua.min(ub), ua.max(ub));
+        // The kinks u = π + 2πk inside the piece, in γ order.
+        let mut cuts = vec![(ga, ua)];
+        let first = ((lo - PI) / TAU).ceil() as i64;
+        let last = ((hi - PI) / TAU).floor() as i64;
+        let mut kinks: Vec<(f64, f64)> = (first..=last)
+            .map(|k| PI + TAU * k as f64)
+            .filter(|&t| t > lo && t < hi)
+            .map(|t| (lobe.solve(t, (ga, ua), (gb, ub)), t))
             .collect();
-        let slabs: Vec<(usize, usize)> = (0..3)
-            .flat_map(|p| (0..x.len()).map(move |j| (p, j)))
-            .collect();
-        // One slab per (lobe, x): μ̂_k once, then every (u, φ) node from it.
-        let built: Vec<Vec<f32>> = slabs
-            .par_iter()
-            .map(|&(p, j)| {
-                let mu = exit_azimuth_cosines(p, x.at(j), K_MAX);
-                let mut out = vec![0.0f32; u.len() * phi.len()];
-                for (l, d_hat) in kernel.iter().enumerate() {
-                    let coeff: Vec<f64> = d_hat
-                        .iter()
-                        .zip(&mu)
-                        .enumerate()
-                        .map(|(k, (d, m))| d * m * if k == 0 { 0.5 } else { 1.0 } / PI)
-                        .collect();
-                    for i in 0..phi.len() {
-                        // cos(k·d°) for d = i − 1: the index steps by d (mod 360) with k.
-                        let step = (i as i64 - 1).rem_euclid(360) as usize;
-                        let mut at = 0;
-                        let mut n = 0.0;
-                        for c in &coeff {
-                            n += c * cos_deg[at];
-                            at += step;
-                            if at >= 360 {
-                                at -= 360;
-                            }
-                        }
-                        out[l * phi.len() + i] = n as f32;
+        kinks.sort_by(|l, r| l.0.total_cmp(&r.0));
+        cuts.extend(kinks);
+        cuts.push((gb, ub));
+        for c in cuts.windows(2) {
+            let ((a, u_a), (b, u_b)) = (c[0], c[1]);
+            if b - a <= 4.0 * f64::EPSILON {
+                continue;
+            }
+            let centre = TAU * (0.5 * (u_a + u_b) / TAU).round();
+            let (l, h) = (u_a.min(u_b), u_a.max(u_b));
+            let g0 = if centre > l && centre < h {
+                lobe.solve(centre, (a, u_a), (b, u_b))
+            } else if (u_a - centre).abs() <= (u_b - centre).abs() {
+                a
+            } else {
+                b
+            };
+            let size = logistic.shape(wrap(lobe.u(g0) - centre));
+            segments.push(Segment { a, b, g0, size });
+        }
+    }
+    let largest = segments.iter().map(|s| s.size).fold(0.0, f64::max);
+    let rule = gauss_legendre();
+    let mut total = T::zero();
+    for seg in segments.iter().filter(|s| s.size >= NEGLIGIBLE * largest) {
+        let (a, b, g0) = (seg.a, seg.b, seg.g0);
+        // ℓ: the γ-distance over which u moves by s at the anchor, ½|u''|ℓ² + |u'|ℓ = s.
+        let d1 = lobe.slope(g0).abs();
+        let d2 = lobe.curvature(g0).abs();
+        let ell = 2.0 * s / (d1 + (d1 * d1 + 2.0 * s * d2).sqrt());
+        // Beyond REACH·s of u at the segment's slowest |u'| the integrand is negligible; |u'|
+        // is monotone in |γ| on each side of 0 (and of TRT's caustics, which end segments).
+        let mut slowest = lobe.slope(a).abs().min(lobe.slope(b).abs());
+        if a < 0.0 && b > 0.0 {
+            slowest = slowest.min(lobe.slope(0.0).abs());
+        }
+        let reach = if slowest > 0.0 {
+            REACH * s / slowest
+        } else {
+            f64::INFINITY
+        };
+        let va = -((g0 - a).min(reach) / ell).asinh();
+        let vb = ((b - g0).min(reach) / ell).asinh();
+        let pieces = ((vb - va) / V_PIECE).ceil().max(1.0) as usize;
+        let step = (vb - va) / pieces as f64;
+        for i in 0..pieces {
+            let w1 = va + step * i as f64;
+            let w2 = w1 + step;
+            let extent = ell * (w2.sinh() - w1.sinh());
+            let parts = (extent / GAMMA_PIECE).ceil().max(1.0) as usize;
+            let sub = (w2 - w1) / parts as f64;
+            for j in 0..parts {
+                let mid = w1 + sub * (j as f64 + 0.5);
+                let half = 0.5 * sub;
+                for (&xn, &wn) in rule.nodes.iter().zip(&rule.weights) {
+                    let v = mid + half * xn;
+                    let ev = v.exp();
+                    let (sinh, cosh) = (0.5 * (ev - ev.recip()), 0.5 * (ev + ev.recip()));
+                    let g = g0 + ell * sinh;
+                    if g <= -FRAC_PI_2 || g >= FRAC_PI_2 {
+                        continue;
                     }
+                    // ½∫ … cos γ dγ, dγ = ℓ cosh v dv.
+                    let weight = 0.5 * half * wn * ell * cosh * g.cos();
+                    total += logistic.at(wrap(lobe.u(g))) * weight;
                 }
-                out
-            })
-            .collect();
-        let (nu, nx, nphi) = (u.len(), x.len(), phi.len());
-        let mut values = vec![0.0f32; 3 * nu * nx * nphi];
-        for (&(p, j), slab) in slabs.iter().zip(&built) {
-            for l in 0..nu {
-                let dst = ((p * nu + l) * nx + j) * nphi;
-                values[dst..dst + nphi].copy_from_slice(&slab[l * nphi..(l + 1) * nphi]);
-            }
-        }
-        AzimuthalLut { phi, x, u, values }
-    }
-
-    /// Where `(φ, cos θ_d, β_N)` reads the table (φ by its magnitude: N_p is even in φ).
-    pub fn locate<T: DualNum<f64>>(&self, phi: f64, cos_theta_d: f64, beta_n: &T) -> LutPoint<T> {
-        let (phi_cell, tp) = self.phi.cell(wrap(phi).abs());
-        let (x_cell, tx) = self.x.cell(inverse_modified_index(cos_theta_d));
-        let u = logistic_scale(beta_n).ln();
-        let (u_cell, _) = self.u.cell(u.re());
-        // The position in the u cell carries β_N's derivative (the cell is fixed by its value).
-        let tu = (u - self.u.at(u_cell)) / self.u.step;
-        LutPoint {
-            phi_cell,
-            x_cell,
-            u_cell,
-            phi_w: catmull_rom(&tp),
-            x_w: catmull_rom(&tx),
-            u_w: catmull_rom(&tu),
-        }
-    }
-
-    /// `N_p` at `at` (p = 0, 1, 2 for R, TT, TRT).
-    pub fn value<T: DualNum<f64>>(&self, p: usize, at: &LutPoint<T>) -> T {
-        let (nu, nx, nphi) = (self.u.len(), self.x.len(), self.phi.len());
-        let mut out = T::zero();
-        for (a, wu) in at.u_w.iter().enumerate() {
-            let mut slice = 0.0;
-            for (b, wx) in at.x_w.iter().enumerate() {
-                let row = ((p * nu + at.u_cell + a - 1) * nx + at.x_cell + b - 1) * nphi;
-                let v = &self.values[row + at.phi_cell - 1..row + at.phi_cell + 3];
-                let along: f64 = v.iter().zip(&at.phi_w).map(|(v, w)| *v as f64 * w).sum();
-                slice += wx * along;
-            }
-            out += wu.clone() * slice;
-        }
-        out
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The closed-form D̂_k against Gauss–Legendre on [−π, π], at a narrow and a wide logistic
-    /// (the wide one is where trimming matters): agreement to 1e-12 absolute.
-    #[test]
-    fn trimmed_logistic_cosine_matches_quadrature() {
-        let rule = WidthRule::cached(4000).unwrap();
-        for s in [0.03, 0.3, 1.5, 4.28] {
-            let (inv_s, norm) = (1.0 / s, trimmed_logistic_norm(&s));
-            for k in [0, 1, 2, 7, 40] {
-                // x = 2γ over γ ∈ [−π/2, π/2]: dx = 2dγ; the rule's weights carry cos γ, undo it.
-                let q: f64 = rule
-                    .nodes
-                    .iter()
-                    .map(|n| {
-                        let xv = 2.0 * n.gamma;
-                        (n.weight / n.cos_gamma)
-                            * 4.0
-                            * trimmed_logistic(&xv, &inv_s, &norm)
-                            * (k as f64 * xv).cos()
-                    })
-                    .sum();
-                let c = trimmed_logistic_cosine(k, s);
-                assert!((q - c).abs() < 1e-12, "s {s} k {k}: {q} vs {c}");
             }
         }
     }
-
-    /// μ̂_k is converged at MU_NODES: doubling the nodes moves no coefficient by 1e-12.
-    #[test]
-    fn exit_azimuth_cosines_are_converged() {
-        for p in 0..3 {
-            let a = exit_azimuth_cosines(p, 0.5, K_MAX);
-            let rule = WidthRule::cached(2 * MU_NODES).unwrap();
-            for k in [0, 1, 50, K_MAX] {
-                let b: f64 = rule
-                    .nodes
-                    .iter()
-                    .map(|n| n.weight * (k as f64 * exit_azimuth_at(p, n.h, 0.5)).cos())
-                    .sum();
-                assert!((a[k] - b).abs() < 1e-12, "p {p} k {k}: {} vs {b}", a[k]);
-            }
-        }
-    }
+    total
 }
