@@ -366,7 +366,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let cancel = Some(stop.flag.clone());
             let outcome = hairfit::cli::fit::fit_command(&a.data, &a.load, &a.fit, &a.out, cancel)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
-            return Ok(exit_code(
+            return Ok(finished(
                 outcome.outcome.json.verdict,
                 a.fit.strict,
                 stop.received(),
@@ -376,11 +376,36 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
         Command::Compare(a) => {
             let stop = ctrl_c_flag();
             let cancel = Some(stop.flag.clone());
-            let done = hairfit::cli::compare::compare_command(&a, cancel)?;
+            let done = match hairfit::cli::compare::compare_command(&a, cancel)? {
+                hairfit::compare::CompareEnd::Published(done) => done,
+                hairfit::compare::CompareEnd::Interrupted(why) => {
+                    tell!("hairfit: {why}");
+                    return Ok(exit_code(
+                        Verdict::Interrupted,
+                        a.fit.strict,
+                        stop.received(),
+                    ));
+                }
+            };
             for line in &done.report_lines {
                 say(line)?;
             }
             say(hairfit::compare::summary_text(&done.comparison, &a.out))?;
+            if let Some(sig) = stop.received() {
+                tell!(
+                    "hairfit: note: {} came after the comparison was published: its outputs are complete, so the exit code is theirs",
+                    hairfit::cli::exit::signal_name(sig)
+                );
+            }
+            if let Some(e) = done.no_fit_succeeded(&a.out) {
+                return Err(e.into());
+            }
+            if a.fit.strict {
+                if let Some(why) = done.strict_refusal() {
+                    tell!("hairfit: {why}");
+                    return Ok(hairfit::cli::exit::STRICT_EXIT);
+                }
+            }
         }
         Command::Export(a) => {
             remove_partial_output_on_interrupt();
@@ -395,7 +420,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let outcome = hairfit::demo::demo_command(&opts, &a.out, a.fit.force)?;
             say(fit_summary_and_report(&outcome, &a.out))?;
             say(hairfit::demo::truth_line(&a.out, opts.family))?;
-            return Ok(exit_code(
+            return Ok(finished(
                 outcome.outcome.json.verdict,
                 a.fit.strict,
                 stop.received(),
@@ -462,8 +487,14 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
         },
     )?;
     tell!("hairfit: {}", run.summary_line());
-    if run.interrupted() || stop.received().is_some() {
+    if run.interrupted() {
         return Ok(exit_code(Verdict::Interrupted, a.strict, stop.received()));
+    }
+    if let Some(sig) = stop.received() {
+        tell!(
+            "hairfit: note: {} came after the shard's last item had finished: every result is complete and published, so the exit code is theirs",
+            hairfit::cli::exit::signal_name(sig)
+        );
     }
     let failed = run.failed_names();
     if !failed.is_empty() {
@@ -475,6 +506,15 @@ fn batch(a: BatchArgs) -> anyhow::Result<u8> {
     }
     let not_good: Vec<String> = run.not_good_names().into_iter().map(String::from).collect();
     Ok(strict_exit(a.strict, &not_good))
+}
+
+/// The exit code of a published fit (see [`exit_code`]), after telling the user when a signal
+/// came too late to change it.
+fn finished(verdict: Verdict, strict: bool, signal: Option<i32>) -> u8 {
+    if let Some(note) = hairfit::cli::exit::late_signal_note(signal, verdict) {
+        tell!("{note}");
+    }
+    exit_code(verdict, strict, signal)
 }
 
 /// `--strict` of a batch: as `fit --strict` when an item's verdict is poor_fit or undetermined

@@ -34,10 +34,20 @@ pub(crate) fn synth(
 pub(crate) fn compare(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
     let cli: CompareCli = parse(args)?;
     let a = cli.compare;
-    let done = interruptible(py, |cancel| {
+    let end = interruptible(py, |cancel| {
         hairfit::cli::compare::compare_command(&a, Some(cancel))
     })?
     .map_err(hf)?;
+    let done = match end {
+        hairfit::compare::CompareEnd::Published(done) => done,
+        hairfit::compare::CompareEnd::Interrupted(why) => {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(why))
+        }
+    };
+    // As the CLI exits 1: a comparison with no successful fit is not a result.
+    if let Some(e) = done.no_fit_succeeded(&a.out) {
+        return Err(hf(e));
+    }
     let mut text: String = done.report_lines.concat();
     text.push_str(&hairfit::compare::summary_text(&done.comparison, &a.out));
     Ok(text)

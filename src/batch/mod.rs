@@ -142,6 +142,8 @@ impl ItemOutcome {
 pub struct BatchRun {
     pub shard: Shard,
     pub outcomes: Vec<(String, ItemOutcome)>,
+    /// The shard's items a signal kept from starting (each item that ran is complete).
+    pub not_run: Vec<String>,
 }
 
 impl BatchRun {
@@ -158,18 +160,22 @@ impl BatchRun {
             self.count(|o| matches!(o, ItemOutcome::Fitted { .. })),
             self.count(|o| matches!(o, ItemOutcome::Skipped(_))),
             self.count(ItemOutcome::failed),
-            if self.interrupted() {
-                ", interrupted"
-            } else {
-                ""
+            match (self.interrupted(), self.not_run.len()) {
+                (false, _) => String::new(),
+                (true, 0) => ", interrupted".into(),
+                (true, n) => format!(", interrupted ({n} not started)"),
             }
         )
     }
 
+    /// A signal stopped the shard: an item was interrupted, or some were never started. A
+    /// signal after the last item had finished leaves every result complete: not interrupted.
     pub fn interrupted(&self) -> bool {
-        self.outcomes
-            .iter()
-            .any(|(_, o)| matches!(o, ItemOutcome::Interrupted))
+        !self.not_run.is_empty()
+            || self
+                .outcomes
+                .iter()
+                .any(|(_, o)| matches!(o, ItemOutcome::Interrupted))
     }
 
     /// The names of the items that failed.
@@ -236,12 +242,16 @@ pub fn run_batch(
     manifest.check_channels(shard)?;
     claim_out_dir(out)?;
     let mut outcomes = Vec::new();
+    let mut not_run = Vec::new();
+    let mut stopped = false;
     for (i, item) in manifest.items.iter().enumerate() {
         if !shard.owns(i) {
             continue;
         }
-        if cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)) {
-            break;
+        stopped = stopped || cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst));
+        if stopped {
+            not_run.push(item.name.clone());
+            continue;
         }
         let finished = if options.rerun {
             None
@@ -253,13 +263,14 @@ pub fn run_batch(
             None => run_item(item, out, options.strict, cancel.clone()),
         };
         on_item(item, &outcome);
-        let stop = matches!(outcome, ItemOutcome::Interrupted);
+        stopped = matches!(outcome, ItemOutcome::Interrupted);
         outcomes.push((item.name.clone(), outcome));
-        if stop {
-            break;
-        }
     }
-    Ok(BatchRun { shard, outcomes })
+    Ok(BatchRun {
+        shard,
+        outcomes,
+        not_run,
+    })
 }
 
 fn run_item(item: &Item, out: &Path, strict: bool, cancel: Option<Arc<AtomicBool>>) -> ItemOutcome {

@@ -10,7 +10,7 @@ use clap::Args;
 
 use super::fit::FitArgs;
 use super::ModelArgs;
-use crate::compare::CompareOutcome;
+use crate::compare::CompareEnd;
 use crate::data::LoadOptions;
 use crate::error::{Error, Result};
 use crate::family::ModelFamily;
@@ -183,10 +183,7 @@ pub fn families(models: &str) -> Result<Vec<ModelFamily>> {
 }
 
 /// Run `hairfit compare`.
-pub fn compare_command(
-    args: &CompareArgs,
-    cancel: Option<Arc<AtomicBool>>,
-) -> Result<CompareOutcome> {
+pub fn compare_command(args: &CompareArgs, cancel: Option<Arc<AtomicBool>>) -> Result<CompareEnd> {
     let families = families(&args.models)?;
     if args.fit.model.family != ModelFamily::default() {
         return Err(Error::Other(format!(

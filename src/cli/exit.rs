@@ -21,19 +21,40 @@ Ctrl-C exits at once.";
 /// error, so a script tells a mistyped command from a poor fit.
 pub const STRICT_EXIT: u8 = 3;
 
-/// The exit code of a finished fit with `verdict`; `signal` is the signal that stopped it, if
-/// one did.
+/// The exit code of a finished fit with `verdict`; `signal` is the signal received, if one was.
+/// The code follows what was published: a signal the fit acted on made its verdict
+/// `interrupted` (128 + the signal); one that came after the fit had finished changed none of
+/// its outputs, so the verdict's own code stands (a `good` fit never exits 130).
 pub fn exit_code(verdict: Verdict, strict: bool, signal: Option<i32>) -> u8 {
-    if let Some(sig) = signal {
-        return signal_exit_code(sig);
-    }
     match verdict {
         Verdict::Good => 0,
         Verdict::PoorFit | Verdict::Undetermined if strict => STRICT_EXIT,
         Verdict::PoorFit | Verdict::Undetermined => 0,
         Verdict::Failed => 1,
-        // Interrupted without a recorded signal (the flag set by a caller): as Ctrl-C.
-        Verdict::Interrupted => 130,
+        // Without a recorded signal (the flag set by a caller): as Ctrl-C.
+        Verdict::Interrupted => signal.map_or(130, signal_exit_code),
+    }
+}
+
+/// What `hairfit` tells the user when a signal came after the work it would have stopped had
+/// finished: the outputs are complete and published, and the exit code is theirs.
+pub fn late_signal_note(signal: Option<i32>, verdict: Verdict) -> Option<String> {
+    let sig = signal?;
+    (verdict != Verdict::Interrupted).then(|| {
+        format!(
+            "hairfit: note: {} came after the fit had finished: its outputs are complete and published (verdict {verdict}), so the exit code is the verdict's",
+            signal_name(sig)
+        )
+    })
+}
+
+/// `SIGINT`, `SIGTERM`, … for the signals hairfit handles.
+pub fn signal_name(signal: i32) -> String {
+    match signal {
+        2 => "SIGINT".into(),
+        15 => "SIGTERM".into(),
+        1 => "SIGHUP".into(),
+        n => format!("signal {n}"),
     }
 }
 
@@ -137,6 +158,11 @@ mod tests {
         assert_eq!(exit_code(Verdict::Failed, false, None), 1);
         assert_eq!(exit_code(Verdict::Interrupted, false, Some(2)), 130);
         assert_eq!(exit_code(Verdict::Interrupted, false, Some(15)), 143);
-        assert_eq!(exit_code(Verdict::Good, false, Some(15)), 143);
+        assert_eq!(exit_code(Verdict::Interrupted, false, None), 130);
+        // A signal after the fit had finished changed nothing published: the verdict's code.
+        assert_eq!(exit_code(Verdict::Good, false, Some(15)), 0);
+        assert_eq!(exit_code(Verdict::PoorFit, true, Some(2)), 3);
+        assert!(late_signal_note(Some(2), Verdict::Good).is_some());
+        assert!(late_signal_note(Some(2), Verdict::Interrupted).is_none());
     }
 }

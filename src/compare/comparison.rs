@@ -10,7 +10,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::Result;
 use crate::family::{FamilyParams, ModelFamily};
-use crate::files::{ParameterEntry, ScaleEntry};
+use crate::files::{ParameterEntry, ScaleEntry, Verdict};
 
 /// What compare.json says about scales.
 pub const SCALE_NOTE: &str = "scales are not comparable across models: the families \
@@ -98,12 +98,28 @@ pub struct ModelSummary {
     pub bic: f64,
     pub reduced_chi2: Option<f64>,
     pub rms: Option<f64>,
-    /// fit.json's `verdict`, when the fit wrote one.
-    pub verdict: Option<serde_json::Value>,
+    /// The fit's verdict (fit.json's `verdict`); absent in files written before verdicts.
+    #[serde(default)]
+    pub verdict: Option<Verdict>,
     pub params: FamilyParams,
     pub parameters: Vec<ParameterEntry>,
     /// Not comparable across models (see `scale_note`).
     pub scale: Vec<ScaleEntry>,
+}
+
+impl ModelSummary {
+    /// The verdict's JSON spelling, `unknown` when there is none.
+    pub fn verdict_str(&self) -> &'static str {
+        self.verdict.map_or("unknown", |v| v.as_str())
+    }
+
+    /// Whether the fit takes part in the ranking: a fit whose verdict is `failed` or
+    /// `interrupted`, or whose AIC is not finite, is not a fit to rank.
+    pub fn rankable(&self) -> bool {
+        !matches!(self.verdict, Some(Verdict::Failed | Verdict::Interrupted))
+            && self.aic.is_finite()
+            && self.bic.is_finite()
+    }
 }
 
 /// One place in the ranking (lowest AIC first).
@@ -181,7 +197,8 @@ pub struct Comparison {
     pub criterion: String,
     /// One summary per family, in the order `--models` listed them.
     pub models: Vec<ModelSummary>,
-    /// The families by AIC, lowest first.
+    /// The families by AIC, lowest first; a fit that failed has no place (empty when no fit
+    /// succeeded).
     pub ranking: Vec<Ranked>,
     /// The lobe regions (R, TT, TRT; always, with an empty `rms` when they hold fewer than 3
     /// residuals), then the 10° bins of |φ| and of θh that hold at least 3.
@@ -192,9 +209,9 @@ pub struct Comparison {
 }
 
 impl Comparison {
-    /// The family with the lowest AIC.
-    pub fn best(&self) -> ModelFamily {
-        self.ranking[0].family
+    /// The family with the lowest AIC, if any fit succeeded.
+    pub fn best(&self) -> Option<ModelFamily> {
+        self.ranking.first().map(|r| r.family)
     }
 
     /// The ranking entry of `family`.

@@ -11,7 +11,7 @@ const BINS_NAMED: usize = 3;
 
 /// The families by AIC, lowest first (equal AIC: the order given).
 pub fn rank(models: &[ModelSummary]) -> Vec<Ranked> {
-    let mut order: Vec<&ModelSummary> = models.iter().collect();
+    let mut order: Vec<&ModelSummary> = models.iter().filter(|m| m.rankable()).collect();
     order.sort_by(|a, b| a.aic.total_cmp(&b.aic));
     let Some(best) = order.first().copied() else {
         return Vec::new();
@@ -84,13 +84,39 @@ pub fn and_list(items: &[&str]) -> String {
 /// beaten, then the note on scales.
 pub fn findings(models: &[ModelSummary], ranking: &[Ranked], regions: &[Region]) -> Vec<String> {
     let summary = |f: ModelFamily| models.iter().find(|m| m.family == f);
+    let unranked: Vec<String> = models
+        .iter()
+        .filter(|m| !ranking.iter().any(|r| r.family == m.family))
+        .map(|m| format!("{} ({})", m.family.title(), m.verdict_str()))
+        .collect();
     let (Some(first), Some(best)) = (
         ranking.first(),
         ranking.first().and_then(|r| summary(r.family)),
     ) else {
-        return Vec::new();
+        return vec![format!(
+            "No fit succeeded: {} — nothing is ranked and no family fits best; each fit's reasons are in its fit.json",
+            and_list(&unranked.iter().map(String::as_str).collect::<Vec<_>>())
+        )];
     };
     let b = best.family.title();
+    // A best fit that is not good is only the best of these: say so beside its name.
+    let ranked_verdicts: Vec<&str> = ranking
+        .iter()
+        .filter_map(|r| summary(r.family))
+        .map(ModelSummary::verdict_str)
+        .collect();
+    let caveat = if ranked_verdicts.iter().all(|v| *v == "good") {
+        String::new()
+    } else if ranked_verdicts.len() > 1 && ranked_verdicts.iter().all(|v| *v != "good") {
+        let mut kinds = ranked_verdicts.clone();
+        kinds.sort_unstable();
+        kinds.dedup();
+        format!(" of these, but every fit is {}", kinds.join(" or "))
+    } else if best.verdict_str() != "good" {
+        format!(" of these, but its verdict is {}", best.verdict_str())
+    } else {
+        String::new()
+    };
     let mut out = Vec::new();
     let tied: Vec<&str> = ranking[1..]
         .iter()
@@ -102,9 +128,24 @@ pub fn findings(models: &[ModelSummary], ranking: &[Ranked], regions: &[Region])
         first.aic, best.chi2, best.n_params
     );
     out.push(match (ranking.get(1), tied.is_empty()) {
-        (None, _) => format!("{b} is the only family listed ({own}): nothing to rank it against"),
+        (None, _) if unranked.is_empty() => format!(
+            "{b} is the only family listed ({own}): nothing to rank it against{}",
+            if best.verdict_str() == "good" {
+                String::new()
+            } else {
+                format!("; its verdict is {}", best.verdict_str())
+            }
+        ),
+        (None, _) => format!(
+            "{b} is the only fit that succeeded ({own}): nothing to rank it against{}",
+            if best.verdict_str() == "good" {
+                String::new()
+            } else {
+                format!("; its verdict is {}", best.verdict_str())
+            }
+        ),
         (Some(next), true) => format!(
-            "{b} fits best: {own}; the next, {}, has ΔAIC {:.1}",
+            "{b} fits best{caveat}: {own}; the next, {}, has ΔAIC {:.1}",
             next.family.title(),
             next.delta_aic
         ),
@@ -113,7 +154,7 @@ pub fn findings(models: &[ModelSummary], ranking: &[Ranked], regions: &[Region])
             let mut names = vec![b];
             names.extend(&tied);
             format!(
-                "{} fit equally well: their AIC lie within {:.2} of each other (< {AIC_TIE}, a tie); {b} has the lowest, {own}",
+                "{} fit equally well{caveat}: their AIC lie within {:.2} of each other (< {AIC_TIE}, a tie); {b} has the lowest, {own}",
                 and_list(&names),
                 spread.map_or(0.0, |r| r.delta_aic)
             )
@@ -161,6 +202,12 @@ pub fn findings(models: &[ModelSummary], ranking: &[Ranked], regions: &[Region])
             ));
         }
     }
+    if !unranked.is_empty() {
+        out.push(format!(
+            "Not ranked: {} — a fit that failed is not a fit (its reasons are in its fit.json)",
+            and_list(&unranked.iter().map(String::as_str).collect::<Vec<_>>())
+        ));
+    }
     out.push(format!("Scales: {SCALE_NOTE}."));
     out
 }
@@ -182,7 +229,7 @@ mod tests {
             bic: chi2 + k as f64 * 100f64.ln(),
             reduced_chi2: None,
             rms: None,
-            verdict: None,
+            verdict: Some(crate::files::Verdict::Good),
             params: serde_json::from_str(
                 r#"{"sigma_a": 0.3, "alpha_r_deg": -7, "beta_r_deg": 7.5, "k_g": 2, "w_c_deg": 15}"#,
             )

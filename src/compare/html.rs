@@ -28,17 +28,13 @@ fn ranking(h: &mut String, c: &Comparison) {
     h.push_str("<h2>Ranking</h2>\n<table><tr><th>rank</th><th>model</th><th>status</th><th>χ²</th><th>χ² / best</th><th>k</th><th>AIC</th><th>ΔAIC</th><th>BIC</th><th>ΔBIC</th><th>reduced χ²</th><th>verdict</th><th>report</th></tr>\n");
     for r in &c.ranking {
         let Some(m) = c.model(r.family) else { continue };
-        let verdict = match &m.verdict {
-            Some(serde_json::Value::String(s)) => s.clone(),
-            Some(v) => v.to_string(),
-            None => "—".into(),
-        };
+        let verdict = m.verdict_str();
         let _ = writeln!(
             h,
             "<tr{}><td class=\"n\">{}{}</td><td>{}</td><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{:.2}</td><td class=\"n\">{}</td><td>{}</td><td><a href=\"{}/index.html\">{}/</a></td></tr>",
             if r.rank == 1 { " class=\"best\"" } else { "" },
             r.rank,
-            if r.tied_with_best && r.family != c.best() { " (tie)" } else { "" },
+            if r.tied_with_best && Some(r.family) != c.best() { " (tie)" } else { "" },
             escape(m.family.title()),
             escape(&m.status),
             fmt_num(m.chi2),
@@ -49,7 +45,19 @@ fn ranking(h: &mut String, c: &Comparison) {
             r.bic,
             r.delta_bic,
             opt(m.reduced_chi2),
-            escape(&verdict),
+            escape(verdict),
+            m.dir,
+            m.dir
+        );
+    }
+    for m in c.models.iter().filter(|m| c.rank_of(m.family).is_none()) {
+        let _ = writeln!(
+            h,
+            "<tr><td>not ranked</td><td>{}</td><td>{}</td><td colspan=\"8\">—</td><td class=\"n\">{}</td><td>{}</td><td><a href=\"{}/index.html\">{}/</a></td></tr>",
+            escape(m.family.title()),
+            escape(&m.status),
+            opt(m.reduced_chi2),
+            escape(m.verdict_str()),
             m.dir,
             m.dir
         );

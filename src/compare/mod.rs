@@ -18,6 +18,7 @@ mod html;
 pub mod regions;
 
 use std::path::Path;
+use std::sync::atomic::Ordering;
 
 pub use comparison::{
     Comparison, ModelSummary, PerFamily, Ranked, Region, AIC_TIE, BIN_RATIO, MIN_RMS_GAP,
@@ -27,7 +28,7 @@ pub use fixes::check_fixes;
 
 use crate::error::{Error, Result};
 use crate::family::{FamilyParams, ModelFamily};
-use crate::files::{CurveRow, FitJson};
+use crate::files::{CurveRow, FitJson, Verdict};
 use crate::fit::{FitData, FitOptions, FitOutcome};
 
 /// χ², AIC and BIC of one fit from its curves (normalised residuals).
@@ -48,20 +49,15 @@ fn criteria(rows: &[CurveRow], k: usize, sigma_known: bool) -> (f64, f64, f64) {
     (chi2, fit_term + 2.0 * k, fit_term + k * n.ln())
 }
 
-/// The summary of one written fit (`dir` holds its fit.json, read back for a `verdict`).
+/// The summary of one fit.
 fn summarise(
     family: ModelFamily,
     outcome: &FitOutcome<FamilyParams>,
-    dir: &Path,
     sigma_known: bool,
 ) -> ModelSummary {
     let j = &outcome.json;
     let k = j.options.free_parameters.len() + j.data.channels.len();
     let (chi2, aic, bic) = criteria(&outcome.curves.to_rows(), k, sigma_known);
-    let verdict = std::fs::read_to_string(dir.join("fit.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|v| v.get("verdict").cloned());
     ModelSummary {
         family,
         dir: family.as_str().into(),
@@ -73,18 +69,17 @@ fn summarise(
         bic,
         reduced_chi2: j.residuals.reduced_chi2,
         rms: j.residuals.rms,
-        verdict,
+        verdict: Some(j.verdict),
         params: j.params.clone(),
         parameters: j.parameters.clone(),
         scale: j.scale.clone(),
     }
 }
 
-/// One written fit of a comparison: its family, outcome and directory.
+/// One written fit of a comparison: its family and outcome.
 pub struct WrittenFit<'a> {
     pub family: ModelFamily,
     pub outcome: &'a FitOutcome<FamilyParams>,
-    pub dir: &'a Path,
 }
 
 /// Compare written fits of the same data (curves of the same samples in the same order), in
@@ -110,7 +105,7 @@ pub fn compare(data_file: &str, data: &FitData, fits: &[WrittenFit<'_>]) -> Resu
     }
     let models: Vec<ModelSummary> = fits
         .iter()
-        .map(|f| summarise(f.family, f.outcome, f.dir, sigma_known))
+        .map(|f| summarise(f.family, f.outcome, sigma_known))
         .collect();
     let families: Vec<ModelFamily> = fits.iter().map(|f| f.family).collect();
     let regions = regions::regions(&families, &curves);
@@ -141,6 +136,61 @@ pub struct CompareOutcome {
     pub report_lines: Vec<String>,
 }
 
+impl CompareOutcome {
+    /// The error of a comparison in which no fit succeeded (every one `failed`): published
+    /// for inspection, but not a result.
+    pub fn no_fit_succeeded(&self, out: &Path) -> Option<Error> {
+        if !self.comparison.ranking.is_empty() {
+            return None;
+        }
+        let each: Vec<String> = self
+            .comparison
+            .models
+            .iter()
+            .map(|m| format!("{} {}", m.family, m.verdict_str()))
+            .collect();
+        Some(Error::Other(format!(
+            "no fit succeeded ({}), so nothing is ranked: each fit's reasons are in {}/<family>/fit.json",
+            each.join(", "),
+            out.display()
+        )))
+    }
+
+    /// Under `--strict`, why the comparison is not a usable answer: the best-ranked fit is not
+    /// `good`, or a listed fit failed.
+    pub fn strict_refusal(&self) -> Option<String> {
+        let c = &self.comparison;
+        let failed: Vec<&str> = c
+            .models
+            .iter()
+            .filter(|m| c.rank_of(m.family).is_none())
+            .map(|m| m.family.as_str())
+            .collect();
+        let best = c.best().and_then(|b| c.model(b))?;
+        if best.verdict != Some(Verdict::Good) {
+            return Some(format!(
+                "--strict: the best-ranked fit, {}, is {}",
+                best.family,
+                best.verdict_str()
+            ));
+        }
+        (!failed.is_empty()).then(|| {
+            format!(
+                "--strict: {} failed, so the comparison is incomplete",
+                failed.join(", ")
+            )
+        })
+    }
+}
+
+/// How `hairfit compare` ended.
+pub enum CompareEnd {
+    /// Every fit ran to its end and DIR is published.
+    Published(CompareOutcome),
+    /// A signal stopped it: nothing new is published (DIR is as it was).
+    Interrupted(String),
+}
+
 /// `hairfit compare DATA --out DIR`: load once, fit each family with its options (`fits`:
 /// one [`FitOptions`] per family, its `family` set, in the order compare.json lists them),
 /// and publish DIR as one output set (see [`crate::outdir`]): DIR/<family> (each a normal fit
@@ -154,7 +204,7 @@ pub fn compare_command(
     fits: &[FitOptions],
     out: &Path,
     force: bool,
-) -> Result<CompareOutcome> {
+) -> Result<CompareEnd> {
     let families: Vec<ModelFamily> = fits.iter().map(|o| o.family).collect();
     let set = crate::outdir::OutputSet::begin(out, "hairfit compare", force, &[data_path])?;
     let (ds, report) = crate::data::load(data_path, load_options)?;
@@ -167,26 +217,33 @@ pub fn compare_command(
     let file = data_path.display().to_string();
     let mut outcomes = Vec::new();
     let mut report_lines = Vec::new();
-    let mut staged = Vec::new();
+    let stopped = || {
+        fits.iter()
+            .any(|o| o.cancel.as_ref().is_some_and(|c| c.load(Ordering::SeqCst)))
+    };
+    let interrupted = |what: String| {
+        Ok(CompareEnd::Interrupted(format!(
+            "compare was interrupted {what}: nothing is published, {} is as it was",
+            out.display()
+        )))
+    };
     for opts in fits {
         let name = opts.family.as_str();
         let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), opts)?;
+        // A ranking of interrupted fits would be a ranking of best-so-far points.
+        if outcome.json.verdict == Verdict::Interrupted || stopped() {
+            return interrupted(format!("while fitting {name}"));
+        }
         outcome.json.options.load = Some(format!("{load_options:?}"));
         let dir = set.sub_dir(name)?;
         let written = crate::report::publish::write_fit(&set, &dir, outcome)?;
         report_lines.push(written.report_line(&out.join(name)));
         outcomes.push(written.outcome);
-        staged.push(dir);
     }
     let written: Vec<WrittenFit<'_>> = families
         .iter()
         .zip(&outcomes)
-        .zip(&staged)
-        .map(|((&family, outcome), dir)| WrittenFit {
-            family,
-            outcome,
-            dir,
-        })
+        .map(|(&family, outcome)| WrittenFit { family, outcome })
         .collect();
     let comparison = compare(&file, &data, &written)?;
     let staging = set.staging();
@@ -200,11 +257,16 @@ pub fn compare_command(
     let info =
         crate::plot::render(staging, &figure::overlay(&curves)).map_err(|e| set.explain(e))?;
     html::write_index(staging, &comparison, &info).map_err(|e| set.explain(e))?;
+    // The last moment a signal can still keep the set from being published; one after this
+    // changes nothing that is published (the command then exits as the comparison says).
+    if stopped() {
+        return interrupted("while its outputs were written".into());
+    }
     set.publish()?;
-    Ok(CompareOutcome {
+    Ok(CompareEnd::Published(CompareOutcome {
         comparison,
         report_lines,
-    })
+    }))
 }
 
 /// The fit.json of a fit directory written by compare.
@@ -229,10 +291,11 @@ pub fn summary_text(c: &Comparison, out: &Path) -> String {
     for r in &c.ranking {
         let Some(m) = c.model(r.family) else { continue };
         s += &format!(
-            "  {:>2}{} {:<width$} status {:<14} chi2 {:>12.5e}  k {:>2}  AIC {:>12.2}  ΔAIC {:>10.2}  BIC {:>12.2}  ΔBIC {:>10.2}\n",
+            "  {:>2}{} {:<width$} verdict {:<12} status {:<14} chi2 {:>12.5e}  k {:>2}  AIC {:>12.2}  ΔAIC {:>10.2}  BIC {:>12.2}  ΔBIC {:>10.2}\n",
             r.rank,
-            if r.tied_with_best && r.family != c.best() { "=" } else { " " },
+            if r.tied_with_best && Some(r.family) != c.best() { "=" } else { " " },
             m.family.as_str(),
+            m.verdict_str(),
             m.status,
             m.chi2,
             m.n_params,
@@ -240,6 +303,15 @@ pub fn summary_text(c: &Comparison, out: &Path) -> String {
             r.delta_aic,
             r.bic,
             r.delta_bic
+        );
+    }
+    // The fits with no place in the ranking, with their verdicts and no numbers to compare.
+    for m in c.models.iter().filter(|m| c.rank_of(m.family).is_none()) {
+        s += &format!(
+            "   - {:<width$} verdict {:<12} status {:<14} not ranked\n",
+            m.family.as_str(),
+            m.verdict_str(),
+            m.status
         );
     }
     for f in &c.findings {
