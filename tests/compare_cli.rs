@@ -93,7 +93,7 @@ fn compare_ranks_the_family_that_made_the_data_first() {
         r#"{"sigma_a": [0.3, 0.5, 0.9], "alpha_r_deg": -7, "beta_r_deg": 7.5, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#,
     );
     assert_complete(&m, &both);
-    assert_eq!(m.best(), ModelFamily::Marschner, "{text}");
+    assert_eq!(m.best(), Some(ModelFamily::Marschner), "{text}");
     let chiang = m.rank_of(ModelFamily::Chiang).unwrap();
     assert!(chiang.delta_aic > 0.0 && !chiang.tied_with_best, "{text}");
     assert_eq!(chiang.rank, 2);
@@ -130,7 +130,7 @@ fn compare_ranks_the_family_that_made_the_data_first() {
         r#"{"sigma_a": [0.3, 0.5, 0.9], "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2.5}"#,
     );
     assert_complete(&c, &both);
-    assert_eq!(c.best(), ModelFamily::Chiang, "{text}");
+    assert_eq!(c.best(), Some(ModelFamily::Chiang), "{text}");
     assert!(c.rank_of(ModelFamily::Marschner).unwrap().delta_aic > 0.0);
     assert!(
         c.findings.iter().any(|f| f.starts_with("Marschner misses")),
@@ -549,7 +549,7 @@ fn compare_all_ranks_the_generating_family_first() {
             &["--models", "all"],
         )));
         let c = Comparison::load(&out.join("compare.json")).unwrap();
-        assert_eq!(c.best(), family, "{text}");
+        assert_eq!(c.best(), Some(family), "{text}");
         for r in &c.ranking[1..] {
             assert!(
                 r.delta_aic > hairfit::compare::AIC_TIE && !r.tied_with_best,
