@@ -79,6 +79,19 @@ impl ModelFamily {
         }
     }
 
+    /// The family's model with its source, for help and lists ("Marschner 2003", "Karis 2016
+    /// (Unreal Engine 5)").
+    pub fn citation(self) -> &'static str {
+        match self {
+            ModelFamily::Marschner => "Marschner 2003",
+            ModelFamily::Chiang => "Chiang 2016 (pbrt-v4's hair)",
+            other => other
+                .table()
+                .expect("every other family is a table")
+                .title(),
+        }
+    }
+
     /// The table family this is, or `None` for Marschner and Chiang.
     pub fn table(self) -> Option<&'static dyn DynTable> {
         use table_family::{

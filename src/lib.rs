@@ -1,4 +1,5 @@
-//! hairfit: fit the Marschner 2003 hair scattering model to measured or synthetic
+//! hairfit: fit hair scattering models (Marschner 2003, Chiang 2016 and the models real-time
+//! renderers use; [`family::ModelFamily::ALL`] lists them) to measured or synthetic
 //! fiber-scattering data.
 //!
 //! The crate is a library with a thin CLI (`src/main.rs`). Its modules form layers, lowest
@@ -19,7 +20,9 @@
 //! - [`chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a whole-fibre S),
 //!   generic over the number type like [`model`].
 //! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
-//! - [`family`]: the model families (`--model marschner|chiang`), a parameter file of either.
+//! - [`table_family`]: the families given as a table of terms (Kajiya-Kay, d'Eon, Karis,
+//!   Frostbite).
+//! - [`family`]: every model family (`--model NAME`), and a parameter file of any of them.
 //!
 //! Files and samples:
 //! - [`files`]: every result format (fit.json, curves.csv, truth.json, timing.json, the load
@@ -33,18 +36,19 @@
 //! - [`synth`]: synthetic datasets with known truth.
 //! - [`trace`]: `hairfit trace`, a Monte Carlo ray tracer of one fibre: data no model made.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
-//! - [`export`]: `hairfit export`, renderer files (pbrt-v4, Blender, MaterialX) fitted to a fit's S.
+//! - [`export`]: `hairfit export`, the files a renderer or engine loads ([`export::Target::ALL`]),
+//!   fitted to a fit's S.
 //!
 //! Results:
 //! - [`report`]: `hairfit report`, plotted fit reports (SVG, PNG, offline index.html), and
 //!   publishing a fit with its report.
-//! - [`compare`]: `hairfit compare`, both families fitted to the same data, side by side.
+//! - [`compare`]: `hairfit compare`, several families fitted to the same data and ranked.
 //! - [`demo`]: `hairfit demo`, a synthesized dataset fitted and reported.
 //! - [`cost`]: `hairfit cost`, the accuracy-vs-time ledger of every accuracy knob.
 //!
 //! Commands:
 //! - [`cli`]: the command line's option groups, flag-worded checks, the fit summary, and what
-//!   `hairfit fit` and `hairfit synth` run.
+//!   `hairfit fit` and `hairfit synth` run, and the help's family and target lists.
 //! - [`batch`]: `hairfit batch`, many fits from a manifest, sharded for a cluster's scheduler.
 
 pub mod atomic;

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 use hairfit::cli::exit::exit_code;
 use hairfit::cli::ModelArgs;
@@ -22,11 +22,9 @@ macro_rules! tell {
 }
 
 #[derive(Parser)]
-#[command(
-    name = "hairfit",
-    version,
-    about = "Fit hair scattering models (Marschner 2003, Chiang 2016 and the models real-time renderers use) to fiber-scattering data"
-)]
+// `about`, the family lists and the export targets are filled in from the registries the code
+// uses (hairfit::cli::help), so they cannot go stale.
+#[command(name = "hairfit", version)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -43,7 +41,7 @@ enum Command {
     Fit(hairfit::cli::fit::FitCommandArgs),
     /// Fit every item of a manifest (or one shard of it) into --out/NAME; --merge summarises.
     Batch(BatchArgs),
-    /// Synthesize a realistic 3-channel dataset, fit it and write fits/demo/.
+    /// Synthesize a realistic 3-channel dataset, fit it and write data, fit and report to --out.
     #[command(after_help = hairfit::cli::exit::EXIT_CODES_HELP)]
     Demo(DemoArgs),
     /// Synthesize a dataset from known parameters: a rig's directions, the model, seeded noise.
@@ -59,7 +57,7 @@ enum Command {
         #[arg(long)]
         linear: bool,
     },
-    /// Write what a renderer loads (pbrt-v4, Blender, MaterialX) from a fit, its model fitted to the fit's S.
+    /// Write what a renderer or engine loads from a fit (the targets: hairfit::cli::help).
     Export(hairfit::cli::export::ExportArgs),
     /// Measure what each accuracy knob costs on this machine: cost.csv, cost.json, cost.svg/png.
     Cost {
@@ -69,17 +67,16 @@ enum Command {
         /// Write into a directory hairfit did not mark that holds other files (they are kept).
         #[arg(long)]
         force: bool,
-        /// Output directory (the committed ledger in fits/cost is regenerated only on purpose:
-        /// `--out fits/cost`).
-        #[arg(long, default_value = "hairfit-cost")]
+        /// Output directory (the default is untracked; scripts/regenerate-fits.sh rewrites the
+        /// committed fits/cost).
+        #[arg(long, default_value = "fits/my-cost")]
         out: PathBuf,
         /// `marschner`: its accuracy knobs; `chiang`: its width rule; another family: no knobs of
         /// its own. Every run ends with every family's cost (samples/s/core) side by side.
         #[arg(long = "model", value_enum, default_value_t = hairfit::family::ModelFamily::Marschner)]
         family: hairfit::family::ModelFamily,
     },
-    /// Fit both model families to the same data and compare them: DIR/{marschner,chiang}/,
-    /// DIR/compare.json, DIR/index.html.
+    /// Fit several model families to the same data and rank them (hairfit::cli::help).
     Compare(hairfit::cli::compare::CompareArgs),
 }
 
@@ -125,8 +122,9 @@ struct BatchArgs {
 struct DemoArgs {
     #[command(flatten)]
     fit: hairfit::cli::fit::FitArgs,
-    /// Output directory.
-    #[arg(long, default_value = "fits/demo")]
+    /// Output directory (the default is untracked; scripts/regenerate-fits.sh rewrites the
+    /// committed fits/demo).
+    #[arg(long, default_value = "fits/my-demo")]
     out: PathBuf,
 }
 
@@ -166,7 +164,8 @@ static ALLOCATOR: hairfit::cli::oom::ExitOnOom = hairfit::cli::oom::ExitOnOom;
 
 fn main() -> ExitCode {
     hairfit::cli::oom::set_aside();
-    let cli = Cli::parse();
+    let command = hairfit::cli::help::with_registries(Cli::command());
+    let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     if let Err(e) = start_worker_threads() {
         tell!("hairfit: error: {e}");
         return ExitCode::FAILURE;

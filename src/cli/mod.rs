@@ -7,6 +7,7 @@ pub mod compare;
 pub mod exit;
 pub mod export;
 pub mod fit;
+pub mod help;
 pub mod oom;
 pub mod summary;
 pub mod synth;
@@ -33,10 +34,8 @@ pub fn tell(line: std::fmt::Arguments<'_>) {
 /// table families: `--terms`).
 #[derive(Debug, Clone, Args)]
 pub struct ModelArgs {
-    /// Model family: `marschner` (Marschner 2003), `chiang` (Chiang 2016, pbrt-v4's hair),
-    /// `kajiya-kay` (Kajiya-Kay 1989), `deon` (d'Eon et al. 2011), `karis` (Karis 2016 as
-    /// Unreal Engine 5 renders it), `frostbite` (Tafuri 2019 as Unity HDRP's physical hair
-    /// evaluates it); docs/families.md lists each one's parameters and terms.
+    // help::with_registries appends the list of families.
+    /// Model family; docs/families.md lists each one's parameters and terms
     #[arg(long = "model", value_enum, default_value_t = ModelFamily::Marschner)]
     pub family: ModelFamily,
     /// Terms of S, comma-separated [default: all]: Chiang's R, TT, TRT, residual; a table

@@ -101,7 +101,8 @@ impl FromStr for Renderer {
             "blender" | "cycles" => Ok(Renderer::Blender),
             "materialx" | "mtlx" => Ok(Renderer::Materialx),
             other => Err(Error::Other(format!(
-                "unknown renderer `{other}`: use --to pbrt, blender or materialx"
+                "unknown renderer `{other}`: use --to {}",
+                or_list(&Renderer::ALL.map(|r| r.to_string()))
             ))),
         }
     }
@@ -137,6 +138,17 @@ impl Target {
         Target::Unreal,
         Target::Unity,
     ];
+
+    /// The renderer or engine that loads the file, for help ("pbrt-v4", "Unreal Engine 5").
+    pub fn program(&self) -> &'static str {
+        match self {
+            Target::Renderer(Renderer::Pbrt) => "pbrt-v4",
+            Target::Renderer(Renderer::Blender) => "Blender Cycles",
+            Target::Renderer(Renderer::Materialx) => "MaterialX",
+            Target::Unreal => "Unreal Engine 5",
+            Target::Unity => "Unity HDRP",
+        }
+    }
 
     /// The extension of the (main) file written, without the dot.
     pub fn extension(&self) -> &'static str {
@@ -205,10 +217,20 @@ impl FromStr for Target {
             "unity" | "hdrp" => Ok(Target::Unity),
             other => other.parse().map(Target::Renderer).map_err(|_| {
                 Error::Other(format!(
-                    "unknown export target `{other}`: use --to pbrt, blender, materialx, unreal or unity"
+                    "unknown export target `{other}`: use --to {}",
+                    or_list(&Target::ALL.map(|t| t.to_string()))
                 ))
             }),
         }
+    }
+}
+
+/// `a, b or c`.
+fn or_list(names: &[String]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} or {last}", rest.join(", ")),
     }
 }
 
