@@ -392,8 +392,24 @@ impl FamilyParams {
 
     /// Read the parameter file `path` as a `family` file. A `"model"` key, when present, must
     /// name `family` (the error names the file and `--model`); a Marschner file may carry
-    /// `"model": "marschner"`, which is checked and dropped.
+    /// `"model": "marschner"`, which is checked and dropped. A directory stands for the fit
+    /// `hairfit fit --out` wrote there: its params.json (`eval --params fits/demo`, as
+    /// `hairfit.eval("fits/demo", …)` in Python).
     pub fn load(path: &Path, family: ModelFamily) -> Result<FamilyParams> {
+        let in_dir;
+        let path = if path.is_dir() {
+            in_dir = path.join("params.json");
+            if !in_dir.is_file() {
+                return Err(Error::Other(format!(
+                    "{} is a directory without a params.json: give a parameter file, or the \
+                     directory of a fit (`hairfit fit --out DIR` writes DIR/params.json)",
+                    path.display()
+                )));
+            }
+            in_dir.as_path()
+        } else {
+            path
+        };
         let text = crate::json_file::read_text(path)?;
         Self::from_json_text(text, path, family)
     }

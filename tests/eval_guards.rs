@@ -296,3 +296,24 @@ fn semicolon_tables_and_decimal_commas_are_named_with_the_fix() {
         ],
     );
 }
+
+#[test]
+fn a_fit_directory_as_params_reads_its_params_json_as_python_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = dir.path().join("fit");
+    std::fs::create_dir(&fit).unwrap();
+    let file = write(&fit, "params.json", PARAMS);
+    let input = write(dir.path(), "a.csv", ANGLES);
+    // The directory and its params.json are the same parameters, so the output is byte-equal.
+    let by_dir = hairfit_ok(&["eval", "--params", s(&fit), "--input", s(&input)]);
+    let by_file = hairfit_ok(&["eval", "--params", s(&file), "--input", s(&input)]);
+    assert_eq!(stdout(&by_dir), stdout(&by_file));
+    // A directory that is not a fit's says what to give instead (not "Is a directory").
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let out = eval(&empty, &input, &[]);
+    assert_fails_with(
+        &out,
+        &["empty", "without a params.json", "hairfit fit --out DIR"],
+    );
+}

@@ -106,13 +106,10 @@ def _split_load_options(options: Dict[str, Any]) -> Tuple[Dict[str, Any], Dict[s
 
 def _params_source(params: Params) -> Tuple[Optional[str], Optional[str]]:
     """(JSON text, path): a mapping as parameter-file JSON, else a params.json or a fit
-    directory (its params.json)."""
+    directory (the library reads its params.json, as `hairfit eval --params DIR` does)."""
     if isinstance(params, Mapping):
         return json.dumps(dict(params)), None
-    path = os.fspath(params)
-    if os.path.isdir(path):
-        path = os.path.join(path, "params.json")
-    return None, path
+    return None, os.fspath(params)
 
 
 def _model_flags(model: str, options: Dict[str, Any]) -> List[str]:

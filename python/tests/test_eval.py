@@ -68,6 +68,9 @@ def test_params_dict_path_and_fit_dir_agree(tmp_path):
     fit_dir.mkdir()
     (fit_dir / "params.json").write_text(PARAMS.read_text())
     assert_bits(hairfit.eval(fit_dir, *angles), from_path)
+    # A directory that holds no fit is refused with the CLI's message (the library's).
+    with pytest.raises(hairfit.HairfitError, match="is a directory without a params.json"):
+        hairfit.eval(tmp_path, *angles)
 
 
 def test_marschner_options_and_radians(cli, tmp_path):
