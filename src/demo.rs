@@ -1,5 +1,5 @@
 //! `hairfit demo`: a realistic 3-channel dataset from the project's synthesizer (2% relative
-//! noise, a goniometer-style scan), fitted from the default start design, written to `fits/demo/`.
+//! noise, a goniometer-style scan), fitted from the default start design, written to `--out`.
 //! [`synthesize`] gives the fit's tests and benchmark the same synthesizer in memory.
 
 use std::path::Path;
