@@ -16,6 +16,16 @@ from conftest import DATA
 LONG = dict(starts=50_000, subsample=5000, intervals="profile")
 
 
+@pytest.fixture(autouse=True)
+def python_handles_sigint():
+    """A shell's background job (`scripts/test.sh &` in a script) starts with SIGINT ignored, and
+    Python then installs no handler: Ctrl-C could not be what these tests send. Give the test
+    Python's own handler, as an interactive session has."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 def test_interrupt_main_raises_keyboard_interrupt():
     timer = threading.Timer(0.5, _thread.interrupt_main)
     started = time.monotonic()
@@ -27,7 +37,8 @@ def test_interrupt_main_raises_keyboard_interrupt():
 
 
 SCRIPT = f"""
-import sys, hairfit
+import signal, sys, hairfit
+signal.signal(signal.SIGINT, signal.default_int_handler)
 print("fitting", flush=True)
 hairfit.fit({str(DATA / "longitudinal_rgb.csv")!r}, **{LONG!r})
 print("finished", flush=True)
