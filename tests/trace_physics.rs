@@ -350,3 +350,32 @@ fn a_seed_gives_the_same_bits_with_any_thread_count() {
         assert_eq!(bits(&x.sigma), bits(&y.sigma));
     }
 }
+
+/// The ziggurat's draws are standard normal: over 10⁶ draws the mean, variance and the share
+/// beyond 1, 2 and 3.5 (the last reaches the tail beyond R = 3.44) agree with N(0, 1) within 5
+/// standard errors of each statistic.
+#[test]
+fn ziggurat_draws_are_standard_normal() {
+    let mut r = rng(21);
+    let n = 1_000_000;
+    let (mut s1, mut s2) = (0.0, 0.0);
+    let mut beyond = [0usize; 3];
+    let cut = [1.0, 2.0, 3.5];
+    for _ in 0..n {
+        let x = hairfit::trace::normal::normal(&mut r);
+        s1 += x;
+        s2 += x * x;
+        for (b, c) in beyond.iter_mut().zip(cut) {
+            *b += usize::from(x.abs() > c);
+        }
+    }
+    let nf = n as f64;
+    assert!((s1 / nf).abs() < 5.0 / nf.sqrt(), "mean {}", s1 / nf);
+    assert!((s2 / nf - 1.0).abs() < 5.0 * 2f64.sqrt() / nf.sqrt(), "var {}", s2 / nf);
+    // P(|x| > c) = erfc(c/√2): 0.3173105, 0.0455003, 4.6525e-4.
+    for (k, p) in [0.317_310_5, 0.045_500_26, 4.652_5e-4].into_iter().enumerate() {
+        let got = beyond[k] as f64 / nf;
+        let se = (p * (1.0 - p) / nf).sqrt();
+        assert!((got - p).abs() < 5.0 * se, "|x| > {}: {got} vs {p}", cut[k]);
+    }
+}

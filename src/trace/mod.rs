@@ -12,6 +12,7 @@
 //! parallel and are combined in order, so a seed gives the same bytes with any thread count.
 
 pub mod fiber;
+pub mod normal;
 pub mod optics;
 pub mod output;
 pub mod sampler;

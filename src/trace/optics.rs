@@ -30,11 +30,8 @@ pub fn fresnel(cos_i: f64, n1: f64, n2: f64) -> (f64, f64) {
         return (1.0, 0.0);
     }
     let cos_t = (1.0 - sin2_t).sqrt();
-    // r_s = a/b and r_p = c/d with one division.
-    let (a, b) = (n1 * cos_i - n2 * cos_t, n1 * cos_i + n2 * cos_t);
-    let (c, d) = (n2 * cos_i - n1 * cos_t, n2 * cos_i + n1 * cos_t);
-    let inv = 1.0 / (b * d);
-    let (rs, rp) = (a * d * inv, c * b * inv);
+    let rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    let rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
     ((rs * rs + rp * rp) / 2.0, cos_t)
 }
 

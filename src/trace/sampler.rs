@@ -7,6 +7,7 @@ use rand_chacha::rand_core::RngCore;
 use super::fiber::Fiber;
 use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
+use super::normal::normal;
 use crate::synth::random::uniform;
 
 /// Most colour channels a traced fibre may have.
@@ -149,8 +150,7 @@ impl Sampler {
         };
         let mut p = [p0[0] + t * d[1], p0[1] + t * d[2]];
         let ng = self.geometric_normal(section, p);
-        let mut spare = None;
-        let m = self.shading_normal(ng, d, true, rng, &mut spare, balance);
+        let m = self.shading_normal(ng, d, true, rng, balance);
         let cos_i = -dot(d, m);
         let (f, cos_t) = fresnel(cos_i, 1.0, eta);
         let r = keep_side(reflect(d, m), ng, true, balance);
@@ -173,7 +173,7 @@ impl Sampler {
             }
             p = [p[0] + l * d[1], p[1] + l * d[2]];
             let ng = self.geometric_normal(section, p);
-            let m = self.shading_normal(ng, d, false, rng, &mut spare, balance);
+            let m = self.shading_normal(ng, d, false, rng, balance);
             let cos_i = dot(d, m);
             let (f, cos_t) = fresnel(cos_i, eta, 1.0);
             if f < 1.0 {
@@ -201,7 +201,7 @@ impl Sampler {
     /// The outward shading normal at an interface with geometric normal `ng`, for a ray `d`
     /// arriving from outside (`outside`) or inside: the facet `ng + s_l·u + s_a·(u × ng)`
     /// (normalised) with longitudinal slope `s_l = tan α + tan β·ξ₁` and azimuthal slope
-    /// `s_a = tan β_φ·ξ₂` (ξ standard normal, fresh at every interface), drawn among the facets
+    /// `s_a = tan β_φ·ξ₂` (ξ standard normal by [`normal`], fresh at every interface), drawn among the facets
     /// `d` can see with probability proportional to the cosine it sees them at (a facet's
     /// projected area).
     fn shading_normal(
@@ -210,25 +210,13 @@ impl Sampler {
         d: V3,
         outside: bool,
         rng: &mut impl RngCore,
-        spare: &mut Option<f64>,
         balance: &mut Balance,
     ) -> V3 {
         let sees = |m: V3| if outside { -dot(d, m) } else { dot(d, m) };
         if self.rough {
             for _ in 0..NORMAL_TRIES {
-                let (x1, x2) = if self.slope_sd_az == 0.0 {
-                    // One normal per try: the pair's second waits for the next.
-                    match spare.take() {
-                        Some(x) => (x, 0.0),
-                        None => {
-                            let (a, b) = normal_pair(rng);
-                            *spare = Some(b);
-                            (a, 0.0)
-                        }
-                    }
-                } else {
-                    normal_pair(rng)
-                };
+                let x1 = normal(rng);
+                let x2 = if self.slope_sd_az == 0.0 { 0.0 } else { normal(rng) };
                 let m = facet(ng, self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
                 let c = sees(m);
                 if c > 0.0 && uniform(rng) < c {
@@ -253,19 +241,6 @@ impl Sampler {
 pub fn facet(ng: V3, s_l: f64, s_a: f64) -> V3 {
     let k = 1.0 / (1.0 + s_l * s_l + s_a * s_a).sqrt();
     [s_l * k, (ng[1] - s_a * ng[2]) * k, (ng[2] + s_a * ng[1]) * k]
-}
-
-/// Two independent standard normals (Marsaglia's polar method: no trigonometry).
-pub fn normal_pair(rng: &mut impl RngCore) -> (f64, f64) {
-    loop {
-        let u = 2.0 * uniform(rng) - 1.0;
-        let v = 2.0 * uniform(rng) - 1.0;
-        let s = u * u + v * v;
-        if s > 0.0 && s < 1.0 {
-            let f = (-2.0 * s.ln() / s).sqrt();
-            return (u * f, v * f);
-        }
-    }
 }
 
 /// `d` on the side of the geometric surface it should leave toward (`out`: along `ng`),

@@ -70,7 +70,9 @@ impl Section {
     /// Outward unit normal at boundary point `p`, in `(v, w)`.
     pub fn normal(&self, p: [f64; 2]) -> [f64; 2] {
         if self.a == 1.0 {
-            return p; // on the unit circle
+            // On the unit circle up to rounding; normalised so the rounding does not accumulate.
+            let k = 1.0 / (p[0] * p[0] + p[1] * p[1]).sqrt();
+            return [p[0] * k, p[1] * k];
         }
         let l = self.local(p);
         let g = [l[0], l[1] * self.ia2];

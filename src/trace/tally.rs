@@ -118,7 +118,8 @@ impl Detector {
 }
 
 fn row(z: f64, n: usize) -> usize {
-    (((z + 1.0) * 0.5 * n as f64).floor().max(0.0) as usize).min(n - 1)
+    // `as` truncates toward zero and saturates below at 0: the floor here, without a libm call.
+    (((z + 1.0) * 0.5 * n as f64) as usize).min(n - 1)
 }
 
 fn col(phi: f64, n: usize) -> usize {
