@@ -12,7 +12,9 @@ use hairfit::export::{export, write_export, Renderer};
 #[test]
 #[ignore = "needs bpy (scripts/install-test-tools.sh --with-bpy); renders with Cycles"]
 fn blender_runs_the_export_and_renders_it() {
-    let probe = export_support::test_python().args(["-c", "import bpy"]).output();
+    let probe = export_support::test_python()
+        .args(["-c", "import bpy"])
+        .output();
     match probe {
         Ok(o) if o.status.success() => {}
         _ => panic!("bpy is missing: run scripts/install-test-tools.sh --with-bpy"),

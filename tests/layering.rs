@@ -25,7 +25,10 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["model", "params", "chiang", "table_family", "family"],
     ),
     ("files and samples", &["files", "data", "slices"]),
-    ("fit and synthesis", &["fit", "synth", "trace", "eval", "export"]),
+    (
+        "fit and synthesis",
+        &["fit", "synth", "trace", "eval", "export"],
+    ),
     ("results", &["report", "compare", "demo", "cost"]),
     ("commands", &["cli", "batch"]),
 ];

@@ -18,7 +18,16 @@ fn trace(dir: &Path, name: &str, rig: &str, rays: &str) -> std::path::PathBuf {
     std::fs::write(&fiber, BROWN).unwrap();
     let out = dir.join(format!("{name}.csv"));
     hairfit_ok(&[
-        "trace", "--fiber", s(&fiber), "--rig", rig, "--rays", rays, "--seed", "4", "--output",
+        "trace",
+        "--fiber",
+        s(&fiber),
+        "--rig",
+        rig,
+        "--rays",
+        rays,
+        "--seed",
+        "4",
+        "--output",
         s(&out),
     ]);
     out
@@ -46,13 +55,23 @@ fn a_traced_fibre_fits_end_to_end_and_is_a_poor_fit() {
     for model in ["marschner", "chiang"] {
         let out = dir.path().join(model);
         let f = hairfit(&[
-            "fit", s(&csv), "--model", model, "--out", s(&out), "--no-progress",
+            "fit",
+            s(&csv),
+            "--model",
+            model,
+            "--out",
+            s(&out),
+            "--no-progress",
         ]);
         let j: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("fit.json")).unwrap())
                 .unwrap_or_else(|e| panic!("{model}: {e}: {}", cli::stderr(&f)));
         assert_eq!(j["verdict"], "poor_fit", "{model}: {}", j["reasons"]);
-        assert!(j["reasons"].to_string().contains("chi2"), "{}", j["reasons"]);
+        assert!(
+            j["reasons"].to_string().contains("chi2"),
+            "{}",
+            j["reasons"]
+        );
         let chi2 = j["goodness_of_fit"]["chi2"].as_f64().unwrap();
         let dof = j["goodness_of_fit"]["chi2_dof"].as_f64().unwrap();
         assert!(chi2 / dof > 3.0, "{model}: reduced χ² {}", chi2 / dof);
@@ -72,8 +91,15 @@ fn a_seed_gives_the_same_files_with_one_or_two_threads() {
     for threads in ["1", "2"] {
         let out = dir.path().join(format!("t{threads}.csv"));
         let mut c = hairfit_command(&[
-            "trace", "--fiber", s(&fiber), "--rig", "azimuthal:incidences=30:steps=60",
-            "--rays", "40000", "--output", s(&out),
+            "trace",
+            "--fiber",
+            s(&fiber),
+            "--rig",
+            "azimuthal:incidences=30:steps=60",
+            "--rays",
+            "40000",
+            "--output",
+            s(&out),
         ]);
         c.env("RAYON_NUM_THREADS", threads);
         let (o, _) = run_within(c, cli::DEFAULT_LIMIT);
@@ -99,7 +125,13 @@ fn wrong_input_is_refused_with_the_option_named() {
     let out = dir.path().join("o.csv");
     let run = |fiber: &Path, extra: &[&str]| {
         let mut args = vec![
-            "trace", "--fiber", s(fiber), "--rig", "azimuthal", "--output", s(&out),
+            "trace",
+            "--fiber",
+            s(fiber),
+            "--rig",
+            "azimuthal",
+            "--output",
+            s(&out),
         ];
         if !extra.contains(&"--rays") {
             args.extend(["--rays", "1000"]);
@@ -114,7 +146,14 @@ fn wrong_input_is_refused_with_the_option_named() {
     let txt = dir.path().join("o.txt");
     assert_fails_with(
         &hairfit(&[
-            "trace", "--fiber", s(&good), "--rig", "azimuthal", "--rays", "1000", "--output",
+            "trace",
+            "--fiber",
+            s(&good),
+            "--rig",
+            "azimuthal",
+            "--rays",
+            "1000",
+            "--output",
             s(&txt),
         ]),
         &["FILE.csv"],

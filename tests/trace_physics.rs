@@ -116,7 +116,11 @@ fn energy_balances_to_rounding() {
             assert!((sum - 1.0).abs() < 1e-14, "ray {k} channel {c}: {sum}");
         }
     }
-    let dirs = [[0.5, 0.0, -0.5, 1.0], [0.5, 0.0, -0.4, 3.0], [-0.3, 1.0, 0.2, -2.0]];
+    let dirs = [
+        [0.5, 0.0, -0.5, 1.0],
+        [0.5, 0.0, -0.4, 3.0],
+        [-0.3, 1.0, 0.2, -2.0],
+    ];
     let setup = TraceSetup {
         rays: 32_000,
         seed: 3,
@@ -127,8 +131,13 @@ fn energy_balances_to_rounding() {
     assert_eq!(n, 64_000.0);
     for c in 0..3 {
         let b = &res.balance;
-        let sum: f64 = (0..ORDERS).map(|p| b.tallied[p][c]).sum::<f64>() + b.absorbed[c] + b.inside[c];
-        assert!((sum / n - 1.0).abs() < 1e-12, "channel {c}: {}", sum / n - 1.0);
+        let sum: f64 =
+            (0..ORDERS).map(|p| b.tallied[p][c]).sum::<f64>() + b.absorbed[c] + b.inside[c];
+        assert!(
+            (sum / n - 1.0).abs() < 1e-12,
+            "channel {c}: {}",
+            sum / n - 1.0
+        );
         assert!(b.absorbed[c] > 0.0 && b.tallied[1][c] > 0.0);
     }
 }
@@ -261,7 +270,11 @@ fn tilted_fibre_reflects_the_central_ray_at_twice_the_tilt() {
         let (p, d, _) = exits[0];
         assert_eq!(p, 0);
         let want = f64::to_radians(-theta_deg + 2.0 * alpha_deg);
-        assert!((d[0].asin() - want).abs() < 1e-14, "α={alpha_deg}: {}", d[0].asin());
+        assert!(
+            (d[0].asin() - want).abs() < 1e-14,
+            "α={alpha_deg}: {}",
+            d[0].asin()
+        );
         assert!(d[2].abs() < 1e-15 && d[1] > 0.0);
     }
 }
@@ -338,7 +351,10 @@ fn a_seed_gives_the_same_bits_with_any_thread_count() {
         kernel: 0.04,
     };
     let with = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| run(&f, &dirs, &setup, &|_| {}))
     };
     let (one, two) = (with(1), with(2));
@@ -371,9 +387,16 @@ fn ziggurat_draws_are_standard_normal() {
     }
     let nf = n as f64;
     assert!((s1 / nf).abs() < 5.0 / nf.sqrt(), "mean {}", s1 / nf);
-    assert!((s2 / nf - 1.0).abs() < 5.0 * 2f64.sqrt() / nf.sqrt(), "var {}", s2 / nf);
+    assert!(
+        (s2 / nf - 1.0).abs() < 5.0 * 2f64.sqrt() / nf.sqrt(),
+        "var {}",
+        s2 / nf
+    );
     // P(|x| > c) = erfc(c/√2): 0.3173105, 0.0455003, 4.6525e-4.
-    for (k, p) in [0.317_310_5, 0.045_500_26, 4.652_5e-4].into_iter().enumerate() {
+    for (k, p) in [0.317_310_5, 0.045_500_26, 4.652_5e-4]
+        .into_iter()
+        .enumerate()
+    {
         let got = beyond[k] as f64 / nf;
         let se = (p * (1.0 - p) / nf).sqrt();
         assert!((got - p).abs() < 5.0 * se, "|x| > {}: {got} vs {p}", cut[k]);

@@ -104,8 +104,10 @@ pub fn run(args: &TraceArgs, command_line: Option<String>) -> Result<TraceSummar
         kernel: args.kernel_deg.to_radians(),
     };
     let n_incidences = {
-        let mut seen: Vec<(u64, u64)> =
-            directions.iter().map(|a| (a[0].to_bits(), a[1].to_bits())).collect();
+        let mut seen: Vec<(u64, u64)> = directions
+            .iter()
+            .map(|a| (a[0].to_bits(), a[1].to_bits()))
+            .collect();
         seen.sort_unstable();
         seen.dedup();
         seen.len() as u64
@@ -129,7 +131,12 @@ pub fn run(args: &TraceArgs, command_line: Option<String>) -> Result<TraceSummar
     let seconds = start.elapsed().as_secs_f64();
     let channels = channel_names(nc);
     let (ds, extra) = output::dataset(&result, &directions);
-    if let Some(v) = ds.radiance.iter().chain(ds.sigma.iter().flatten()).find(|v| !v.is_finite()) {
+    if let Some(v) = ds
+        .radiance
+        .iter()
+        .chain(ds.sigma.iter().flatten())
+        .find(|v| !v.is_finite())
+    {
         return Err(Error::Other(format!(
             "the tracer produced {v} for {}: please report this fibre",
             args.fiber.display()

@@ -349,7 +349,10 @@ pub fn write_csv_with(
     extra_columns: &[(String, Vec<f64>)],
     path: &Path,
 ) -> Result<()> {
-    if let Some((name, col)) = extra_columns.iter().find(|(_, col)| col.len() != dataset.len()) {
+    if let Some((name, col)) = extra_columns
+        .iter()
+        .find(|(_, col)| col.len() != dataset.len())
+    {
         return Err(Error::Other(format!(
             "column `{name}` has {} values for {} samples",
             col.len(),

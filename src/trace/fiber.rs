@@ -143,7 +143,11 @@ impl ParameterFile for FiberFile {
             ));
         }
         if let Some(r) = self.rotation_deg.filter(|r| !r.is_finite()) {
-            return Err(bad("rotation_deg", r, "give a finite angle, or null to average"));
+            return Err(bad(
+                "rotation_deg",
+                r,
+                "give a finite angle, or null to average",
+            ));
         }
         if !(1..=MAX_SEGMENTS_LIMIT).contains(&self.max_segments) {
             return Err(bad(

@@ -5,9 +5,9 @@
 use rand_chacha::rand_core::RngCore;
 
 use super::fiber::Fiber;
+use super::normal::normal;
 use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
-use super::normal::normal;
 use crate::synth::random::uniform;
 
 /// Most colour channels a traced fibre may have.
@@ -216,7 +216,11 @@ impl Sampler {
         if self.rough {
             for _ in 0..NORMAL_TRIES {
                 let x1 = normal(rng);
-                let x2 = if self.slope_sd_az == 0.0 { 0.0 } else { normal(rng) };
+                let x2 = if self.slope_sd_az == 0.0 {
+                    0.0
+                } else {
+                    normal(rng)
+                };
                 let m = facet(ng, self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
                 let c = sees(m);
                 if c > 0.0 && uniform(rng) < c {
@@ -240,7 +244,11 @@ impl Sampler {
 /// tilted toward the tip by atan(s_l / √(1 + s_a²)) and turned about the axis by atan(s_a).
 pub fn facet(ng: V3, s_l: f64, s_a: f64) -> V3 {
     let k = 1.0 / (1.0 + s_l * s_l + s_a * s_a).sqrt();
-    [s_l * k, (ng[1] - s_a * ng[2]) * k, (ng[2] + s_a * ng[1]) * k]
+    [
+        s_l * k,
+        (ng[1] - s_a * ng[2]) * k,
+        (ng[2] + s_a * ng[1]) * k,
+    ]
 }
 
 /// `d` on the side of the geometric surface it should leave toward (`out`: along `ng`),

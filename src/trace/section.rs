@@ -26,7 +26,10 @@ impl Section {
 
     /// A 2-D vector in the ellipse's own axes.
     fn local(&self, x: [f64; 2]) -> [f64; 2] {
-        [self.c * x[0] + self.s * x[1], -self.s * x[0] + self.c * x[1]]
+        [
+            self.c * x[0] + self.s * x[1],
+            -self.s * x[0] + self.c * x[1],
+        ]
     }
 
     /// Half the width the section presents across the in-plane direction `dir` (unit).

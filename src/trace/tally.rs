@@ -107,7 +107,8 @@ impl Detector {
     /// Call `hit(s)` for every sampling point `s` whose cap holds the unit direction `d`.
     pub fn visit(&self, d: V3, mut hit: impl FnMut(usize)) {
         let r = row(d[0], self.n_rows);
-        let c = ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as usize).min(self.n_cols - 1);
+        let c =
+            ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as usize).min(self.n_cols - 1);
         let k = r * self.n_cols + c;
         for &s in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
             if dot(self.dirs[s as usize], d) >= self.cos_kernel {
