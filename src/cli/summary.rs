@@ -6,22 +6,26 @@ use std::path::Path;
 
 use crate::fit::FitOutcome;
 use crate::model::Measurement;
+use crate::plot::{fmt_interval, fmt_value_se};
 
-/// `v ± e` with a sensible number of digits.
+/// `v ± e`, both to the error's second significant digit (the report's format,
+/// [`fmt_value_se`]); a value without an error reads as [`crate::plot::fmt_num`].
 fn pm(v: Option<f64>, e: Option<f64>) -> String {
-    match (v, e) {
-        (Some(v), Some(e)) => format!("{v:>12.6} ± {e:.2e}"),
-        (Some(v), None) => format!("{v:>12.6}"),
-        _ => "        null".into(),
+    match v {
+        Some(v) => match fmt_value_se(v, e) {
+            (v, Some(e)) => format!("{v:>12} ± {e}"),
+            (v, None) => format!("{v:>12}"),
+        },
+        None => "        null".into(),
     }
 }
 
-/// The 68% profile interval column: `  68% [lo, hi]` (an open side reads "open"); empty when
-/// the parameter was not profiled.
-fn interval(i: Option<&crate::files::Interval>) -> String {
-    let side = |v: Option<f64>| v.map_or("open".to_string(), |v| format!("{v:.6}"));
+/// The 68% profile interval column: `  68% [lo, hi]` (an open side reads "open"), to the
+/// value's error digits ([`fmt_interval`]); empty when the parameter was not profiled.
+fn interval(i: Option<&crate::files::Interval>, v: Option<f64>, se: Option<f64>) -> String {
     i.map_or(String::new(), |i| {
-        format!("  68% [{}, {}]", side(i.lower), side(i.upper))
+        let [lo, hi] = fmt_interval(i.lower, i.upper, v.unwrap_or(f64::NAN), se);
+        format!("  68% [{lo}, {hi}]")
     })
 }
 
@@ -95,7 +99,7 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
             p.name,
             pm(p.value, p.std_error),
             p.status,
-            interval(p.interval_68.as_ref())
+            interval(p.interval_68.as_ref(), p.value, p.std_error)
         );
     }
     for c in &j.scale {
@@ -108,10 +112,11 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     }
     let r = &j.residuals;
     s += &format!(
-        "residuals ({} space, {} loss): rms {} reduced chi2 {} dof {}\n",
+        "residuals ({} space, {} loss): rms {} {} {} dof {}\n",
         r.space,
         r.loss,
         r.rms.map_or("null".into(), |v| format!("{v:.4e}")),
+        crate::report::cost_chi2_label(&r.loss),
         r.reduced_chi2.map_or("null".into(), |v| format!("{v:.4e}")),
         r.dof
     );

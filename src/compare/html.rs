@@ -12,20 +12,32 @@ use super::findings::and_list;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 use crate::family::ModelFamily;
-use crate::plot::{escape, fmt_num, FigureInfo};
+use crate::plot::{escape, fmt_num, fmt_value_se, FigureInfo};
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1500px;margin:1em auto}\
 table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;\
 text-align:left}td.n{text-align:right}td.miss{background:#fbd5d5}td.low{font-weight:bold}\
-tr.best td{background:#e6f2e6}.key{color:#555}";
+tr.best td{background:#e6f2e6}.key{color:#555}img{max-width:100%;height:auto}";
 
 fn opt(v: Option<f64>) -> String {
     v.map_or("—".into(), fmt_num)
 }
 
+/// A value and its standard error to the error's second significant digit, as the fit
+/// report prints them ("—" for a missing one).
+fn value_se(v: Option<f64>, se: Option<f64>) -> [String; 2] {
+    match v {
+        Some(v) => {
+            let (v, e) = fmt_value_se(v, se);
+            [v, e.unwrap_or_else(|| "—".into())]
+        }
+        None => ["—".into(), opt(se)],
+    }
+}
+
 /// The ranking: one row per family, best first.
 fn ranking(h: &mut String, c: &Comparison) {
-    h.push_str("<h2>Ranking</h2>\n<table><tr><th>rank</th><th>model</th><th>status</th><th>χ²</th><th>χ² / best</th><th>k</th><th>AIC</th><th>ΔAIC</th><th>BIC</th><th>ΔBIC</th><th>reduced χ²</th><th>verdict</th><th>report</th></tr>\n");
+    h.push_str("<h2>Ranking</h2>\n<table><tr><th>rank</th><th>model</th><th>status</th><th>χ²</th><th>χ² / best</th><th>k</th><th>AIC</th><th>ΔAIC</th><th>BIC</th><th>ΔBIC</th><th>reduced χ² (cost / dof)</th><th>verdict</th><th>report</th></tr>\n");
     for r in &c.ranking {
         let Some(m) = c.model(r.family) else { continue };
         let verdict = m.verdict_str();
@@ -126,22 +138,20 @@ fn parameters(h: &mut String, c: &Comparison) {
             escape(m.family.title())
         );
         for p in &m.parameters {
+            let [value, se] = value_se(p.value, p.std_error);
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td>{}</td></tr>",
+                "<tr><td>{}</td><td class=\"n\">{value}</td><td class=\"n\">{se}</td><td>{}</td></tr>",
                 escape(&p.name),
-                opt(p.value),
-                opt(p.std_error),
                 p.status
             );
         }
         for s in &m.scale {
+            let [value, se] = value_se(s.value, s.std_error);
             let _ = writeln!(
                 h,
-                "<tr><td>scale[{}] (not comparable)</td><td class=\"n\">{}</td><td class=\"n\">{}</td><td></td></tr>",
+                "<tr><td>scale[{}] (not comparable)</td><td class=\"n\">{value}</td><td class=\"n\">{se}</td><td></td></tr>",
                 escape(&s.channel),
-                opt(s.value),
-                opt(s.std_error)
             );
         }
         h.push_str("</table>\n");

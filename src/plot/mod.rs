@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 
 pub use chart::{cartesian, draw_key, header, line_glyph, Axes, Chart, Frame};
 pub use render::{escape, render, FigureInfo};
-pub use scale::{fmt_num, fmt_tick, range_of, YScale};
+pub use scale::{fmt_interval, fmt_num, fmt_tick, fmt_value_se, range_of, YScale};
 
 /// Font family registered with the shipped DejaVu Sans (see [`render`]).
 pub const FONT: &str = "sans-serif";

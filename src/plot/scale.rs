@@ -113,6 +113,96 @@ pub fn fmt_tick(v: f64, span: f64) -> String {
     }
 }
 
+/// Decimal places that show `se` to two significant digits (negative: round to tens, …).
+fn se_places(se: f64) -> i32 {
+    1 - se.log10().floor() as i32
+}
+
+/// `v` to `places` decimals, or in scientific notation with the same last digit when fixed
+/// decimals would be too many (or too long a number).
+fn at_places(v: f64, places: i32) -> String {
+    if !v.is_finite() {
+        return "n/a".into();
+    }
+    if (0..=8).contains(&places) && v.abs() < 1e6 {
+        let s = format!("{v:.*}", places as usize);
+        // −0.00 is 0.00.
+        return if s
+            .trim_start_matches('-')
+            .chars()
+            .all(|c| c == '0' || c == '.')
+        {
+            s.trim_start_matches('-').to_string()
+        } else {
+            s
+        };
+    }
+    if places < 0 && v.abs() < 1e6 {
+        let step = 10f64.powi(-places);
+        return format!("{:.0}", (v / step).round() * step);
+    }
+    let exponent = if v == 0.0 {
+        0
+    } else {
+        v.abs().log10().floor() as i32
+    };
+    let digits = (exponent + places).clamp(0, 15) as usize;
+    format!("{v:.digits$e}")
+}
+
+/// A value with its standard error, both to the standard error's second significant digit
+/// (`7.50002`, `0.00021`), so a value differs visibly from its neighbours within a few SEs.
+/// Without a usable SE the value reads as [`fmt_num`] and the error as `None`.
+pub fn fmt_value_se(v: f64, se: Option<f64>) -> (String, Option<String>) {
+    match se.filter(|e| e.is_finite() && *e > 0.0) {
+        Some(e) if v.is_finite() => {
+            let places = se_places(e);
+            let e_text = if places <= 8 && v.abs() < 1e6 {
+                at_places(e, places)
+            } else {
+                format!("{e:.1e}")
+            };
+            (at_places(v, places), Some(e_text))
+        }
+        _ => (fmt_num(v), None),
+    }
+}
+
+/// A profile interval's two ends (`None`: open, read "open") to the digits of the value's
+/// standard error (else of the interval's own half-width), with digits added until the ends
+/// differ from each other and from `v` whenever the numbers do.
+pub fn fmt_interval(lo: Option<f64>, hi: Option<f64>, v: f64, se: Option<f64>) -> [String; 2] {
+    let half = match (lo, hi) {
+        (Some(a), Some(b)) => 0.5 * (b - a).abs(),
+        (Some(a), None) | (None, Some(a)) => (a - v).abs(),
+        (None, None) => f64::NAN,
+    };
+    let scale = se
+        .filter(|e| e.is_finite() && *e > 0.0)
+        .or_else(|| (half.is_finite() && half > 0.0).then_some(half));
+    let Some(scale) = scale else {
+        return [lo, hi].map(|x| x.map_or("open".into(), fmt_num));
+    };
+    let mut places = se_places(scale);
+    // An interval much narrower than the SE still gets digits that tell its ends apart.
+    if half.is_finite() && half > 0.0 {
+        places = places.max(se_places(half));
+    }
+    let text = |x: Option<f64>, p: i32| x.map_or("open".to_string(), |x| at_places(x, p));
+    for p in places..=places + 12 {
+        let (a, b, c) = (text(lo, p), text(hi, p), at_places(v, p));
+        let clash =
+            |x: Option<f64>, tx: &str, y: f64, ty: &str| x.is_some_and(|x| x != y) && tx == ty;
+        let distinct = !(lo.zip(hi).is_some_and(|(l, h)| l != h) && a == b)
+            && !clash(lo, &a, v, &c)
+            && !clash(hi, &b, v, &c);
+        if distinct {
+            return [a, b];
+        }
+    }
+    [text(lo, places + 12), text(hi, places + 12)]
+}
+
 /// Two significant digits (tick labels between decades), never NaN text.
 pub fn sig2(v: f64) -> String {
     if !v.is_finite() || v == 0.0 {
@@ -182,6 +272,73 @@ mod tests {
         assert_eq!(fmt_tick(-1e-12, 2.0), "0.0");
         assert_eq!(fmt_tick(3.0e6, 1.0e5), "3.000e6");
         assert_eq!(fmt_tick(f64::NAN, 1.0), "n/a");
+    }
+
+    #[test]
+    fn a_value_and_its_error_share_the_errors_second_digit() {
+        let pm = |v: f64, e: f64| {
+            let (a, b) = fmt_value_se(v, Some(e));
+            format!("{a} ± {}", b.unwrap())
+        };
+        // The report's own cases: β_R, w_c, eccentricity, σ_a and k_G of fits/demo.
+        assert_eq!(pm(7.500017, 2.09e-4), "7.50002 ± 0.00021");
+        assert_eq!(pm(15.000231, 0.001225), "15.0002 ± 0.0012");
+        assert_eq!(pm(0.9000112, 3.17e-5), "0.900011 ± 0.000032");
+        assert_eq!(pm(0.2503, 4.46e-4), "0.25030 ± 0.00045");
+        assert_eq!(pm(2.001, 0.002804), "2.0010 ± 0.0028");
+        assert_eq!(pm(12345.0, 560.0), "12350 ± 560");
+        assert_eq!(pm(2.5e-9, 3.0e-11), "2.500e-9 ± 3.0e-11");
+        assert_eq!(pm(3.0e6, 1.0e4), "3.000e6 ± 1.0e4");
+        assert_eq!(pm(-1e-9, 0.01), "0.000 ± 0.010");
+        assert_eq!(fmt_value_se(1.55, None), ("1.55".to_string(), None));
+        assert_eq!(fmt_value_se(1.55, Some(f64::NAN)).1, None);
+        assert_eq!(fmt_value_se(f64::NAN, Some(0.1)).0, "n/a");
+    }
+
+    #[test]
+    fn interval_ends_differ_from_each_other_and_from_the_value() {
+        // fits/demo's β_R, w_c and eccentricity read [7.500, 7.500], [15.00, 15.00], [0.9, 0.9].
+        let cases = [
+            (7.500017, 2.09e-4, 7.499808, 7.500226),
+            (15.000231, 0.001225, 14.999006, 15.001456),
+            (0.9000112, 3.17e-5, 0.8999795, 0.9000429),
+            // An interval 25× narrower than the SE (cauchy k_G beside undetermined α_R, β_R).
+            (2.410580, 0.5533, 2.392262, 2.436283),
+            // Ends a hair from the value: digits are added until they differ.
+            (1.0, 0.1, 0.999999, 1.000002),
+        ];
+        for (v, se, lo, hi) in cases {
+            let [a, b] = fmt_interval(Some(lo), Some(hi), v, Some(se));
+            let (value, _) = fmt_value_se(v, Some(se));
+            assert_ne!(a, b, "{v} ± {se}");
+            assert!(a.parse::<f64>().unwrap() < b.parse::<f64>().unwrap());
+            // Each end reads back within half its last digit of the end itself.
+            for (text, end) in [(&a, lo), (&b, hi)] {
+                let last = text.split('.').nth(1).map_or(0, str::len) as i32;
+                let back: f64 = text.parse().unwrap();
+                assert!(
+                    (back - end).abs() <= 0.5 * 10f64.powi(-last) + 1e-12,
+                    "{text} {end}"
+                );
+            }
+            if value.split('.').nth(1).map_or(0, str::len)
+                >= a.split('.').nth(1).map_or(0, str::len)
+            {
+                assert!(a != value && b != value, "{value} in [{a}, {b}]");
+            }
+        }
+        assert_eq!(
+            fmt_interval(Some(7.499808), Some(7.500226), 7.500017, Some(2.09e-4)),
+            ["7.49981".to_string(), "7.50023".to_string()]
+        );
+        assert_eq!(
+            fmt_interval(None, Some(2.5), 2.0, None),
+            ["open".to_string(), "2.50".to_string()]
+        );
+        assert_eq!(
+            fmt_interval(None, None, 2.0, None),
+            ["open".to_string(), "open".to_string()]
+        );
     }
 
     #[test]

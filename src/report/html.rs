@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use super::{ReportOptions, ReportSummary};
 use crate::files::{FitJson, FitStatus, ParamStatus};
-use crate::plot::{escape, fmt_num};
+use crate::plot::{escape, fmt_interval, fmt_num, fmt_value_se};
 
 const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,sans-serif;margin:24px auto;max-width:1720px;color:#222;background:#fff;padding:0 16px}\
 h1{font-size:1.6em;margin-bottom:4px}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:4px;margin-top:32px}\
@@ -16,7 +16,7 @@ th{background:#f0f2f5}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .warn{background:#fff6e0;border-left:4px solid #e0a000;padding:6px 12px;margin:4px 0}\
 .note{background:#eef3fb;border-left:4px solid #5b7fc0;padding:6px 12px;margin:4px 0}\
 figure{margin:12px 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}\
-figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;overflow:auto;font-size:.85em}\
+figcaption{color:#555;font-size:.9em}pre{background:#f6f6f6;padding:10px;white-space:pre-wrap;overflow-wrap:anywhere;font-size:.85em}\
 .grid{display:flex;flex-wrap:wrap;gap:24px;align-items:flex-start}\
 .verdict{border:2px solid;border-radius:6px;padding:8px 16px;margin:12px 0}.verdict h2{border:0;margin:4px 0}\
 .v-good{border-color:#2a8a2a;background:#eef8ee}.v-poor_fit,.v-undetermined{border-color:#e0a000;background:#fff6e0}\
@@ -161,12 +161,19 @@ fn summary_section(h: &mut String, fit: &FitJson) {
         format!("space {}, loss {}", escape(&r.space), escape(&r.loss)),
     );
     row("RMS normalised residual", opt(r.rms));
-    row("reduced χ²", opt(r.reduced_chi2));
+    row(
+        &super::cost_chi2_label(&r.loss).replace("chi2", "χ²"),
+        opt(r.reduced_chi2),
+    );
     row("degrees of freedom", r.dof.to_string());
     for c in &r.per_channel {
         row(
             &format!("channel {}", c.channel),
-            format!("RMS {}, reduced χ² {}", opt(c.rms), opt(c.reduced_chi2)),
+            format!(
+                "RMS {}, reduced χ² (cost / dof) {}",
+                opt(c.rms),
+                opt(c.reduced_chi2)
+            ),
         );
     }
     h.push_str("</table>\n");
@@ -207,10 +214,12 @@ fn parameter_table(h: &mut String, fit: &FitJson) {
     let rows = fit.parameters.iter().map(|p| {
         // The parameter table knows each unit (σ_a: per fiber radius).
         let unit = fit.family().unit_label(&p.name);
+        // Value, error and interval ends all to the error's second significant digit.
+        let (value, se_text) = value_se(p.value, p.std_error);
         let err = match p.status {
             ParamStatus::Fixed => "<span class=\"muted\">fixed</span>".to_string(),
             ParamStatus::Undetermined => "<span class=\"bad\">undetermined</span>".to_string(),
-            _ => opt(p.std_error),
+            _ => se_text,
         };
         let status = match p.status {
             ParamStatus::Undetermined | ParamStatus::AtBound => {
@@ -220,10 +229,10 @@ fn parameter_table(h: &mut String, fit: &FitJson) {
         };
         vec![
             Cell::Text(escape(&with_channel(&p.name, &fit.data.channels))),
-            Cell::Num(opt(p.value)),
+            Cell::Num(value),
             Cell::Num(err),
-            Cell::Num(interval_cell(p.interval_68.as_ref())),
-            Cell::Num(interval_cell(p.interval_95.as_ref())),
+            Cell::Num(interval_cell(p.interval_68.as_ref(), p.value, p.std_error)),
+            Cell::Num(interval_cell(p.interval_95.as_ref(), p.value, p.std_error)),
             Cell::Text(unit.into()),
             Cell::Text(status),
         ]
@@ -240,11 +249,25 @@ fn parameter_table(h: &mut String, fit: &FitJson) {
     table_section(h, "Parameters", &head, rows);
 }
 
-/// A profile interval `[lower, upper]` (an open side reads "open"); "—" when not profiled.
-fn interval_cell(i: Option<&crate::files::Interval>) -> String {
-    let side = |v: Option<f64>| v.map_or("open".to_string(), fmt_num);
+/// A value and its standard error as table cells ("—" for a missing one), to the error's
+/// digits ([`fmt_value_se`]).
+fn value_se(v: Option<f64>, se: Option<f64>) -> (String, String) {
+    match v {
+        Some(v) => {
+            let (value, err) = fmt_value_se(v, se);
+            (value, err.unwrap_or_else(|| "—".into()))
+        }
+        None => ("—".into(), opt(se)),
+    }
+}
+
+/// A profile interval `[lower, upper]` (an open side reads "open"), to the digits of the
+/// value's standard error and never showing equal ends ([`fmt_interval`]); "—" when not
+/// profiled.
+fn interval_cell(i: Option<&crate::files::Interval>, v: Option<f64>, se: Option<f64>) -> String {
     i.map_or("—".into(), |i| {
-        format!("[{}, {}]", side(i.lower), side(i.upper))
+        let [lo, hi] = fmt_interval(i.lower, i.upper, v.unwrap_or(f64::NAN), se);
+        format!("[{lo}, {hi}]")
     })
 }
 
@@ -268,8 +291,8 @@ fn scale_table(h: &mut String, fit: &FitJson) {
     let rows = fit.scale.iter().map(|s| {
         vec![
             Cell::Text(escape(&s.channel)),
-            Cell::Num(opt(s.value)),
-            Cell::Num(opt(s.std_error)),
+            Cell::Num(value_se(s.value, s.std_error).0),
+            Cell::Num(value_se(s.value, s.std_error).1),
         ]
     });
     let head = ["channel", "scale", "std. error"];
