@@ -100,6 +100,18 @@ fn check_fit_dir(dir: &Path, is_dir: bool) -> Result<()> {
     }))
 }
 
+/// The label of fit.json's `residuals.reduced_chi2`: the fit's own cost (the loss applied to
+/// the normalised residuals) over the degrees of freedom, the factor that scales the standard
+/// errors. Under a robust loss it differs from the verdict's χ² test, which sums plain squared
+/// normalised residuals and leaves out those beyond 5 σ; under l2 the two agree.
+pub fn cost_chi2_label(loss: &str) -> String {
+    if loss == "l2" {
+        "reduced chi2 (l2 cost / dof)".into()
+    } else {
+        format!("reduced chi2 of the {loss} cost (cost / dof, not the verdict's chi2)")
+    }
+}
+
 /// Write the report of the fit in `dir` with default options (reads its files).
 pub fn write_report(dir: &Path) -> Result<ReportSummary> {
     write_report_with(dir, &ReportOptions::default())
@@ -283,11 +295,16 @@ fn data_figures(
         summary.panels = panels.len();
         summary.drawn_points += panels.iter().map(panel_points).sum::<usize>();
         let subtitle = format!(
-            "{} of {} slices ({} azimuthal, {} longitudinal); lines: model re-evaluated densely with the fitted parameters and scale",
+            "{} of {} slices ({} azimuthal, {} longitudinal); lines: model re-evaluated densely with the fitted parameters and scale{}",
             panels.len(),
             slices.len(),
             slices.iter().filter(|s| matches!(s.kind, SliceKind::Azimuthal { .. })).count(),
             slices.iter().filter(|s| matches!(s.kind, SliceKind::Longitudinal { .. })).count(),
+            if scale == YScale::Log {
+                figures::LOG_FLOOR_NOTE
+            } else {
+                ""
+            },
         );
         let fig = CurvesFigure {
             panels,
@@ -365,7 +382,7 @@ fn parameter_figures(dir: &Path, fit: &FitJson, summary: &mut ReportSummary) -> 
             .figures
             .push(render(dir, &ProfileFigure { panels: profiles })?);
     }
-    let stages: Vec<(String, Vec<f64>)> = fit
+    let stages: Vec<(String, u64, Vec<f64>)> = fit
         .trace
         .iter()
         .map(|t| {
@@ -374,9 +391,9 @@ fn parameter_figures(dir: &Path, fit: &FitJson, summary: &mut ReportSummary) -> 
             } else {
                 t.history.clone()
             };
-            (t.stage.clone(), h)
+            (t.stage.clone(), t.iterations, h)
         })
-        .filter(|(_, h)| !h.is_empty())
+        .filter(|(_, _, h)| !h.is_empty())
         .collect();
     if !stages.is_empty() {
         summary

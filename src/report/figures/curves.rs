@@ -83,8 +83,22 @@ fn segments(xs: &[f64], ys: &[f64], scale: YScale, floor: f64) -> Vec<Vec<(f64, 
     out
 }
 
-/// The value range of a panel in plot coordinates: log axes get a fixed margin, linear ones
-/// start at zero at the latest.
+/// A log axis shows at most this many decades below a panel's largest value: one stray tiny
+/// value (a model's zero at φ = ±180°, a dark sample) must not squash the lobes into a strip.
+pub const MAX_LOG_DECADES: f64 = 5.0;
+
+/// The curves figure's subtitle says where lower values go.
+pub const LOG_FLOOR_NOTE: &str =
+    "; log axes span at most 5 decades below each panel's peak: lower points sit on the floor";
+
+/// The low end of a log axis holding mapped values `lo..hi`, capped [`MAX_LOG_DECADES`] below
+/// `hi`.
+pub fn log_floor(lo: f64, hi: f64) -> f64 {
+    lo.max(hi - MAX_LOG_DECADES)
+}
+
+/// The value range of a panel in plot coordinates: log axes get a fixed margin and at most
+/// [`MAX_LOG_DECADES`], linear ones start at zero at the latest.
 fn value_range(panel: &SlicePanel, scale: YScale) -> (f64, f64) {
     let ys = panel.channels.iter().flat_map(|c| {
         c.points
@@ -96,7 +110,7 @@ fn value_range(panel: &SlicePanel, scale: YScale) -> (f64, f64) {
     let pad = if scale == YScale::Log { 0.0 } else { 0.05 };
     let (y0, y1) = range_of(ys, pad, (-1.0, 1.0));
     match scale {
-        YScale::Log => (y0 - 0.15, y1 + 0.15),
+        YScale::Log => (log_floor(y0, y1) - 0.15, y1 + 0.15),
         YScale::Linear => (y0.min(0.0), y1),
     }
 }
@@ -149,7 +163,7 @@ fn draw_slice_panel<DB: DrawingBackend>(
             let pts: Vec<(f64, f64)> = ch
                 .fit_at_points
                 .iter()
-                .filter_map(|&(x, y)| scale.map(y).map(|v| (x, v)))
+                .filter_map(|&(x, y)| scale.map(y).map(|v| (x, v.max(y0))))
                 .collect();
             chart.draw_series(LineSeries::new(pts, thick)).map_err(de)?;
         }
@@ -158,9 +172,9 @@ fn draw_slice_panel<DB: DrawingBackend>(
         chart
             .draw_series(ch.points.iter().filter_map(|p| {
                 let s = p.sigma.filter(|s| s.is_finite() && *s > 0.0)?;
-                let mid = scale.map(p.y)?;
+                let mid = scale.map(p.y)?.max(y0);
                 let lo = scale.map(p.y - s).unwrap_or(y0).max(y0);
-                let hi = scale.map(p.y + s)?.min(y1);
+                let hi = scale.map(p.y + s)?.clamp(y0, y1);
                 Some(ErrorBar::new_vertical(p.x, lo, mid, hi, bar, 6))
             }))
             .map_err(de)?;
@@ -168,14 +182,14 @@ fn draw_slice_panel<DB: DrawingBackend>(
             .draw_series(ch.points.iter().filter(|p| !p.outlier).filter_map(|p| {
                 scale
                     .map(p.y)
-                    .map(|v| Circle::new((p.x, v), 3, colour.filled()))
+                    .map(|v| Circle::new((p.x, v.max(y0)), 3, colour.filled()))
             }))
             .map_err(de)?;
         chart
             .draw_series(ch.points.iter().filter(|p| p.outlier).filter_map(|p| {
                 scale
                     .map(p.y)
-                    .map(|v| Cross::new((p.x, v), 5, BLACK.stroke_width(2)))
+                    .map(|v| Cross::new((p.x, v.max(y0)), 5, BLACK.stroke_width(2)))
             }))
             .map_err(de)?;
     }
@@ -248,6 +262,15 @@ fn draw_legend<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_stray_tiny_value_does_not_stretch_a_log_axis() {
+        // The old demo: peak 3 (log 0.48), one model value 1e-26 at φ = −180°: the axis keeps
+        // 5 decades, not 26, and the figure's note names that number.
+        assert_eq!(log_floor(-26.0, 0.48), 0.48 - MAX_LOG_DECADES);
+        assert_eq!(log_floor(-2.0, 0.48), -2.0);
+        assert!(LOG_FLOOR_NOTE.contains(&format!("{MAX_LOG_DECADES} decades")));
+    }
 
     #[test]
     fn segments_break_at_gaps() {

@@ -17,6 +17,7 @@ use plotters::style::RGBColor;
 pub use convergence::ConvergenceFigure;
 pub use correlation::CorrelationFigure;
 pub use curves::CurvesFigure;
+pub use curves::LOG_FLOOR_NOTE;
 pub use data_vs_fit::DataVsFitFigure;
 pub use polar::PolarFigure;
 pub use profile::{ProfileFigure, ProfilePanel};

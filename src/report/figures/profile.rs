@@ -61,7 +61,7 @@ impl Figure for ProfileFigure {
             root,
             HEADER_H,
             &self.title(),
-            "blue: profile (dots: solved points; dashed to a ring: the local quadratic's 95% end); grey: Δχ² = 1 (68%), 3.84 (95%); orange: the linearised SE's parabola",
+            "blue: profile (dots: solved points, joined by a curve exact for a quadratic profile; dashed to a ring: the local quadratic's 95% end); grey: Δχ² = 1 (68%), 3.84 (95%); orange: the linearised SE's parabola",
         )?;
         let (cols, rows) = self.grid();
         let areas = body.split_evenly((rows, cols));
@@ -70,6 +70,39 @@ impl Figure for ProfileFigure {
         }
         Ok(())
     }
+}
+
+/// The profile drawn as a curve through its solved points: between neighbours it interpolates
+/// the signed root `z = sign(v − v̂)·√Δχ²` linearly (MINOS's variable, linear in `v` for a
+/// quadratic profile) and draws `z²`, so three points of a parabola draw that parabola rather
+/// than a V. `steps` points per gap; points below the minimum (Δχ² < 0) count as Δχ² = 0.
+pub fn profile_curve(points: &[(f64, f64)], value: f64, steps: usize) -> Vec<(f64, f64)> {
+    let z = |(x, y): (f64, f64)| (x - value).signum() * y.max(0.0).sqrt();
+    let mut out = Vec::new();
+    for pair in points.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let (za, zb) = (z(a), z(b));
+        // A gap that straddles the fit's value passes through Δχ² = 0 there.
+        let through_min = a.0 < value && value < b.0;
+        for i in 0..steps {
+            let t = i as f64 / steps as f64;
+            let x = a.0 + (b.0 - a.0) * t;
+            let zx = if through_min {
+                if x < value {
+                    za * (value - x) / (value - a.0)
+                } else {
+                    zb * (x - value) / (b.0 - value)
+                }
+            } else {
+                za + (zb - za) * t
+            };
+            out.push((x, zx * zx));
+        }
+    }
+    if let Some(&(x, y)) = points.last() {
+        out.push((x, y.max(0.0)));
+    }
+    out
 }
 
 fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePanel) -> Result<()> {
@@ -125,8 +158,12 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePane
         .iter()
         .map(|&(x, y)| (x, y.clamp(Y_MIN, Y_MAX)))
         .collect();
+    let curve: Vec<(f64, f64)> = profile_curve(&p.points, p.value, 16)
+        .into_iter()
+        .map(|(x, y)| (x, y.clamp(Y_MIN, Y_MAX)))
+        .collect();
     chart
-        .draw_series(LineSeries::new(shown.clone(), blue.stroke_width(2)))
+        .draw_series(LineSeries::new(curve, blue.stroke_width(2)))
         .map_err(de)?;
     chart
         .draw_series(shown.iter().map(|&q| Circle::new(q, 3, blue.filled())))
@@ -160,4 +197,27 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &ProfilePane
             .map_err(de)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn three_points_of_a_parabola_draw_the_parabola_not_a_v() {
+        // fits/demo's profiles: the fit and one solved point each side, on ((v − 2)/0.1)².
+        let d = |x: f64| ((x - 2.0) / 0.1f64).powi(2);
+        let points = [(1.85, d(1.85)), (2.0, 0.0), (2.12, d(2.12))];
+        let curve = profile_curve(&points, 2.0, 16);
+        assert_eq!(curve.first(), Some(&(1.85, d(1.85))));
+        assert_eq!(curve.last(), Some(&(2.12, d(2.12))));
+        for (x, y) in curve {
+            // Exact for a quadratic up to rounding; straight segments would be off by up to
+            // ~0.56 at the segments' middles.
+            assert!((y - d(x)).abs() < 1e-9, "{x}: {y} vs {}", d(x));
+        }
+        // A negative Δχ² (a point below the fit's cost) draws at 0, never below.
+        let curve = profile_curve(&[(1.9, 1.0), (2.0, -0.01), (2.1, 1.0)], 2.0, 4);
+        assert!(curve.iter().all(|&(_, y)| y >= 0.0));
+    }
 }
