@@ -390,7 +390,7 @@ pub fn poor_fit_reasons(g: &GoodnessOfFit, loss: Loss, n: usize) -> Vec<String> 
             let red = chi2 / g.chi2_dof.max(1) as f64;
             if p < P_VALUE && red > MIN_REDUCED_CHI2 {
                 why.push(format!(
-                    "chi2 = {} for {} degrees of freedom (reduced chi2 {}, p = {p:.2e}): the model misses the data by more than their sigma column allows (poor when p < {P_VALUE:e} and reduced chi2 > {MIN_REDUCED_CHI2})",
+                    "chi2 = {} for {} degrees of freedom (reduced chi2 of the normalised residuals {}, p = {p:.2e}): the model misses the data by more than their sigma column allows (poor when p < {P_VALUE:e} and reduced chi2 > {MIN_REDUCED_CHI2})",
                     num(chi2),
                     g.chi2_dof,
                     num(red)
@@ -452,7 +452,7 @@ fn good_fit_reasons(g: &GoodnessOfFit) -> Vec<String> {
     if g.sigma_given {
         return match (g.chi2, g.chi2_p_value) {
             (Some(chi2), Some(p)) => vec![format!(
-                "chi2 = {} for {} degrees of freedom (reduced chi2 {}, p = {p:.3}): consistent with the sigma column{}",
+                "chi2 = {} for {} degrees of freedom (reduced chi2 of the normalised residuals {}, p = {p:.3}): consistent with the sigma column{}",
                 num(chi2),
                 g.chi2_dof,
                 num(chi2 / g.chi2_dof.max(1) as f64),
