@@ -1,5 +1,5 @@
 //! `hairfit demo`: a realistic 3-channel dataset from the project's synthesizer (2% relative
-//! noise, a goniometer-style scan), fitted from the default start design, written to `--out`.
+//! noise over a camera's noise floor, a goniometer-style scan), fitted from the default start design, written to `--out`.
 //! [`synthesize`] gives the fit's tests and benchmark the same synthesizer in memory.
 
 use std::path::Path;
@@ -167,8 +167,14 @@ pub fn demo_data(opts: &FitOptions) -> Result<FitData> {
     Ok(crate::fit::fit_data(&demo_synthesis(opts)?.0))
 }
 
+/// The demo camera's noise floor (additive, σ in the data's units): about 1/10⁴ of the brightest
+/// demo values (~3), a 13–14-bit sensor's read noise, so dark directions read as noise around
+/// zero as on a real rig (data/README.md) instead of values down to 1e-26.
+pub const DEMO_FLOOR: f64 = 3e-4;
+
 fn demo_noise() -> crate::synth::Noise {
-    crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}")).expect("the demo noise parses")
+    crate::synth::Noise::parse(&format!("relative:{DEMO_NOISE}+floor:{DEMO_FLOOR}"))
+        .expect("the demo noise parses")
 }
 
 /// The demo's data, truth and fit, written into `staging` (published later as `out`).
