@@ -205,7 +205,7 @@ mod tests {
         ];
         let w = outside_yet_inside("k_g", &profile, &i).unwrap();
         assert!(
-            w.contains("2 profile point(s)") && w.contains("2.3696"),
+            w.contains("2 profile point(s)") && w.contains("2.370…2.374"),
             "{w}"
         );
         assert!(outside_yet_inside("k_g", &profile[3..], &i).is_none());
