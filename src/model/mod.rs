@@ -19,6 +19,7 @@ pub mod bravais;
 pub mod chain;
 pub mod eccentricity;
 pub mod exit_angle;
+pub mod fact;
 pub mod fresnel;
 pub mod instrument;
 pub mod jacobian;
@@ -41,7 +42,7 @@ pub use lanes::scattering_lanes;
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
 pub use measurement::Measurement;
-pub use parameters::{ParamSpec, Unit};
+pub use parameters::{ParamFact, Unit};
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -175,8 +176,8 @@ impl ParamName {
     /// The JSON name (`"eta"`, `"sigma_a[1]"`, `"alpha_r_deg"`, ...), from the parameter table.
     pub fn json_name(&self) -> String {
         match self {
-            ParamName::SigmaA(c) => format!("{}[{c}]", self.spec().json),
-            _ => self.spec().json.into(),
+            ParamName::SigmaA(c) => format!("{}[{c}]", self.fact().name),
+            _ => self.fact().name.into(),
         }
     }
 }
@@ -283,7 +284,7 @@ impl Params<f64> {
     pub fn validate(&self) -> Result<()> {
         require_channels(&self.sigma_a)?;
         for name in parameters::all_parameters(self.sigma_a.len()) {
-            let spec = name.spec();
+            let spec = name.fact();
             let value = self.get(name) * spec.unit.file_factor();
             spec.check(value).map_err(|message| Error::Parameter {
                 name: name.json_name(),

@@ -117,7 +117,7 @@ fn hint(table: &dyn DynTable) -> String {
             };
             match f.fitted {
                 Fitted::Yes => format!("{}{list}", f.name),
-                _ => format!("{}{list}, optional, {}", f.name, f.default),
+                _ => format!("{}{list}, optional, {}", f.name, f.held()),
             }
         })
         .collect();
@@ -283,7 +283,7 @@ fn resolve(
                     keys()
                 ));
             }
-            values.push(vec![f.default]);
+            values.push(vec![f.held()]);
             continue;
         };
         let Written(v, is_array) = entries.swap_remove(at).1;
