@@ -24,8 +24,8 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-pub use crate::model::fact::ParamFact;
-use crate::model::parameters::{Fitted, Interval, Unit};
+pub use crate::geometry::ParamFact;
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub mod azimuthal;

@@ -18,8 +18,8 @@ use crate::chiang::azimuthal::ExitRefraction;
 use crate::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
 use crate::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
 use crate::chiang::quadrature::WidthRule;
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::angles::{wrap, wrap_t};
-use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
 /// The d'Eon 2011 family.

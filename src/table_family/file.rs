@@ -12,7 +12,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{by_name, DynTable, TableParams, ALL};
 use crate::error::{Error, Result};
-use crate::model::parameters::Fitted;
+use crate::geometry::Fitted;
 
 /// A table family's parameter file, file units, each value as written (one number, or one
 /// per channel).

@@ -21,8 +21,8 @@ use std::f64::consts::PI;
 use num_dual::DualNum;
 
 use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::angles::wrap;
-use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 use azimuthal::{Logistic, BETA_N_MIN};
 

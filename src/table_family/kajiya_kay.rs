@@ -13,7 +13,7 @@
 use num_dual::DualNum;
 
 use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
-use crate::model::parameters::{Fitted, Interval, Unit};
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
 /// The Kajiya–Kay family.

@@ -18,8 +18,8 @@ use std::f64::consts::PI;
 use num_dual::DualNum;
 
 use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::angles::wrap;
-use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
 /// The Karis / Unreal family.

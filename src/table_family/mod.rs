@@ -20,8 +20,8 @@ use std::marker::PhantomData;
 use num_dual::DualNum;
 
 use crate::error::{Error, Result};
-pub use crate::model::fact::ParamFact;
-use crate::model::parameters::Fitted;
+use crate::geometry::Fitted;
+pub use crate::geometry::ParamFact;
 use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub use file::TableParamFile;

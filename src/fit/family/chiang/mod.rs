@@ -18,8 +18,8 @@ use crate::files::{Floored, LoadReport};
 use crate::fit::fixes::FreeSet;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
+use crate::geometry::Fitted;
 use crate::model::angles::wrap;
-use crate::model::parameters::Fitted;
 pub use forward::ChiangForward;
 
 /// The Chiang 2016 family (CHIANG.md).

@@ -3,7 +3,7 @@
 //! fit bounds, typical range, default and when a fit varies it. Numbers are in FILE units
 //! (degrees for angles); the accessors that return model values convert.
 
-use super::parameters::{Interval, Unit};
+use super::units::{Interval, Unit};
 
 /// Whether a fit varies a parameter whose effect is on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
