@@ -111,7 +111,7 @@ impl ModelFamily {
     pub fn unit_label(self, json_name: &str) -> &'static str {
         match self {
             ModelFamily::Marschner => crate::model::ParamName::from_json_name(json_name)
-                .map_or("", |n| n.spec().unit.label()),
+                .map_or("", |n| n.fact().unit.label()),
             ModelFamily::Chiang => crate::chiang::chiang_unit_label(json_name),
             table => {
                 let base = json_name.split('[').next().unwrap_or(json_name);

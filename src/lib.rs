@@ -65,6 +65,7 @@ pub mod export;
 pub mod family;
 pub mod files;
 pub mod fit;
+pub mod geometry;
 pub mod json_file;
 pub mod lm;
 pub mod model;

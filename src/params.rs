@@ -4,12 +4,12 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::model::parameters::TABLE;
+use crate::model::parameters::{NAMES, TABLE};
 use crate::model::{ParamName, Params};
 
 /// The parameter table's default of `name` (file units), for serde's `default = ...`.
 fn table_default(name: ParamName) -> f64 {
-    name.spec()
+    name.fact()
         .default
         .expect("the parameter file omits only parameters with a default in the table")
 }
@@ -144,7 +144,7 @@ impl crate::json_file::ParameterFile for ParamFile {
     fn hint() -> String {
         format!(
             "a parameter file is a JSON object with keys {}",
-            TABLE.map(|s| s.json).join(", ")
+            TABLE.map(|s| s.name).join(", ")
         )
     }
 
@@ -187,15 +187,15 @@ impl ParamFile {
     /// Warnings for values that look like radians in a degrees key (S would come out near zero
     /// everywhere with no other sign), naming the key.
     pub fn radians_in_degrees_keys(&self) -> Vec<String> {
-        TABLE
+        NAMES
             .iter()
-            .filter(|spec| spec.looks_like_radians(self.file_value(spec.name)))
-            .map(|spec| {
-                let v = self.file_value(spec.name);
+            .map(|&name| (name.fact(), self.file_value(name)))
+            .filter(|(spec, v)| spec.looks_like_radians(*v))
+            .map(|(spec, v)| {
                 format!(
                     "{} = {v} is read as degrees but looks like radians (typical {}..{} \
                      degrees; S may be near zero everywhere): if you meant {v} rad, write {:.4}",
-                    spec.json,
+                    spec.name,
                     spec.typical.0,
                     spec.typical.1,
                     v.to_degrees()
@@ -207,13 +207,13 @@ impl ParamFile {
     /// Model parameters, converted to model units by the parameter table (degrees to radians).
     pub fn to_params(&self) -> Params<f64> {
         Params::from_fn(self.n_channels(), |name| {
-            name.spec().unit.to_model(self.file_value(name))
+            name.fact().unit.to_model(self.file_value(name))
         })
     }
 
     /// The file form of `params` (radians to degrees); one channel becomes a scalar `sigma_a`.
     pub fn from_params(params: &Params<f64>) -> ParamFile {
-        let file = |name: ParamName| params.get(name) * name.spec().unit.file_factor();
+        let file = |name: ParamName| params.get(name) * name.fact().unit.file_factor();
         let sigma_a = if params.sigma_a.len() == 1 {
             SigmaA::Scalar(params.sigma_a[0])
         } else {

@@ -18,6 +18,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "outdir",
             "plot",
             "json_file",
+            "geometry",
         ],
     ),
     (

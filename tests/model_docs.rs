@@ -1,7 +1,8 @@
 //! docs/model.md stays in step with the code: every line of the parameter table appears in it with
 //! its unit, domain, bounds, typical range and default, and no doc links outside the repository.
 
-use hairfit::model::parameters::{Fitted, ParamSpec, TABLE};
+use hairfit::model::parameters::{Fitted, ParamFact, NAMES, TABLE};
+use hairfit::model::ParamName;
 
 const DOCS: &str = include_str!("../docs/model.md");
 
@@ -15,7 +16,7 @@ fn num(x: f64) -> String {
 }
 
 /// The row docs/model.md must hold for `s`.
-fn row(s: &ParamSpec) -> String {
+fn row((s, name): (&ParamFact, ParamName)) -> String {
     let fit = match s.fit_hi {
         Some(hi) => format!("[{}, {}]", num(s.fit_lo), num(hi)),
         None => format!("[{}, inf)", num(s.fit_lo)),
@@ -27,7 +28,7 @@ fn row(s: &ParamSpec) -> String {
     };
     format!(
         "| `{}` | {} | {} | {} | {} | {} to {} | {} | {} | {} |",
-        s.json,
+        s.name,
         s.symbol,
         s.unit.describe(),
         s.domain.text(),
@@ -35,7 +36,7 @@ fn row(s: &ParamSpec) -> String {
         num(s.typical.0),
         num(s.typical.1),
         s.default.map(num).unwrap_or_else(|| "—".into()),
-        s.used_by.describe(),
+        name.used_by().describe(),
         fitted
     )
 }
@@ -44,13 +45,19 @@ fn row(s: &ParamSpec) -> String {
 fn every_parameter_appears_with_its_unit_and_domain() {
     let missing: Vec<String> = TABLE
         .iter()
+        .zip(NAMES)
         .map(row)
         .filter(|r| !DOCS.lines().any(|l| l.trim() == r))
         .collect();
     assert!(
         missing.is_empty(),
         "docs/model.md lacks these rows of the parameter table (paste them in):\n{}",
-        TABLE.iter().map(row).collect::<Vec<_>>().join("\n")
+        TABLE
+            .iter()
+            .zip(NAMES)
+            .map(row)
+            .collect::<Vec<_>>()
+            .join("\n")
     );
     // σ_a's unit is the one most easily lost: say it in words too.
     assert!(DOCS.contains("per fiber radius"));

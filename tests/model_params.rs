@@ -234,9 +234,9 @@ fn parameter_lists_follow_the_table() {
 #[test]
 fn units_come_from_the_table() {
     use hairfit::model::Unit;
-    assert_eq!(ParamName::SigmaA(2).spec().unit, Unit::PerFiberRadius);
-    assert_eq!(ParamName::SigmaA(2).spec().unit.label(), "per fiber radius");
-    assert_eq!(ParamName::WC.spec().unit.label(), "deg");
+    assert_eq!(ParamName::SigmaA(2).fact().unit, Unit::PerFiberRadius);
+    assert_eq!(ParamName::SigmaA(2).fact().unit.label(), "per fiber radius");
+    assert_eq!(ParamName::WC.fact().unit.label(), "deg");
     assert_eq!(
         ParamName::from_json_name("sigma_a[2]"),
         Some(ParamName::SigmaA(2))

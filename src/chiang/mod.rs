@@ -24,7 +24,8 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::model::parameters::Interval;
+pub use crate::geometry::ParamFact;
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub mod azimuthal;
@@ -180,110 +181,85 @@ impl fmt::Display for ChiangParamName {
     }
 }
 
-/// What the project knows about one Chiang parameter, in file units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ParamFact {
-    pub name: &'static str,
-    pub meaning: &'static str,
-    pub unit: &'static str,
-    /// Where the model is defined, in file units.
-    pub domain: Interval,
-    pub default: Option<f64>,
-    /// Fit bounds `[fit_lo, fit_hi]`, file units, inside the domain.
-    pub fit_lo: f64,
-    pub fit_hi: f64,
-    /// Typical range, file units: the box the fit's start design samples.
-    pub typical: (f64, f64),
-    /// The value a fit holds the parameter at when it does not vary it (file units).
-    pub reference: f64,
-    /// True when a fit varies it only on request (`--free eta`), as for the Marschner model.
-    pub on_request: bool,
-}
-
-impl ParamFact {
-    /// Check a file-unit value against the domain; `Err` names it.
-    pub fn check(&self, x: f64) -> std::result::Result<(), String> {
-        if self.domain.contains(x) {
-            Ok(())
-        } else {
-            Err(format!(
-                "{} must be finite and in {} ({})",
-                self.meaning,
-                self.domain.text(),
-                self.unit
-            ))
-        }
-    }
-}
-
 /// The one table of Chiang parameter facts (CHIANG.md "Parameters"); pbrt-v4 defaults where the
 /// project uses one.
 pub const PARAMETERS: [ParamFact; 5] = [
     ParamFact {
         name: "eta",
+        symbol: "η",
         meaning: "cortex index of refraction",
-        unit: "1",
+        unit: Unit::Dimensionless,
         // CHIANG.md says > 1. Capped at 10 as in the Marschner table: no fibre comes near it
         // (diamond is 2.42), and η² overflows for η near 1e154, turning S into NaN.
         domain: Interval::open_closed(1.0, 10.0),
         default: Some(1.55),
         fit_lo: 1.000001,
-        fit_hi: 2.5,
+        fit_hi: Some(2.5),
         typical: (1.5, 1.6),
-        reference: 1.55,
-        on_request: true,
+        reference: Some(1.55),
+        fitted: Fitted::OnRequest,
+        ..ParamFact::BASE
     },
     ParamFact {
         name: "sigma_a",
+        symbol: "σ_a",
+        per_channel: true,
         meaning: "absorption per unit fibre radius, one value per colour channel",
-        unit: "1/radius",
+        unit: Unit::PerFiberRadius,
         domain: Interval::closed_open(0.0, f64::INFINITY),
         default: None,
         // σ_a = 50 per radius already removes all transmitted light.
         fit_lo: 0.0,
-        fit_hi: 50.0,
+        fit_hi: Some(50.0),
         typical: (0.05, 2.0),
-        reference: 0.4,
-        on_request: false,
+        reference: Some(0.4),
+        fitted: Fitted::Yes,
+        ..ParamFact::BASE
     },
     ParamFact {
         name: "beta_m",
+        symbol: "β_m",
         meaning: "longitudinal roughness",
-        unit: "1",
+        unit: Unit::Dimensionless,
         domain: Interval::open_closed(0.0, 1.0),
         default: None,
         // pbrt-v4 clamps β to [0.01, 1].
         fit_lo: 0.01,
-        fit_hi: 1.0,
+        fit_hi: Some(1.0),
         typical: (0.1, 0.5),
-        reference: 0.3,
-        on_request: false,
+        reference: Some(0.3),
+        fitted: Fitted::Yes,
+        ..ParamFact::BASE
     },
     ParamFact {
         name: "beta_n",
+        symbol: "β_n",
         meaning: "azimuthal roughness",
-        unit: "1",
+        unit: Unit::Dimensionless,
         domain: Interval::open_closed(0.0, 1.0),
         default: None,
         // Below 0.05 the logistic peaks get too narrow for the default 1024 width nodes.
         fit_lo: 0.05,
-        fit_hi: 1.0,
+        fit_hi: Some(1.0),
         typical: (0.1, 0.5),
-        reference: 0.3,
-        on_request: false,
+        reference: Some(0.3),
+        fitted: Fitted::Yes,
+        ..ParamFact::BASE
     },
     ParamFact {
         name: "alpha_deg",
+        symbol: "α",
         meaning: "cuticle-scale tilt; the R peak sits at theta_h = +alpha_deg",
-        unit: "degree",
+        unit: Unit::Degrees,
         domain: Interval::open(-90.0, 90.0),
         default: None,
         // As the Marschner α_R: a tilt beyond ±30° is not hair (|α| ≤ 5° in practice).
         fit_lo: -30.0,
-        fit_hi: 30.0,
+        fit_hi: Some(30.0),
         typical: (-5.0, 5.0),
-        reference: 2.0,
-        on_request: false,
+        reference: Some(2.0),
+        fitted: Fitted::Yes,
+        ..ParamFact::BASE
     },
 ];
 
@@ -291,11 +267,10 @@ pub const PARAMETERS: [ParamFact; 5] = [
 /// [`PARAMETERS`]: `deg`, `per fiber radius`, or empty.
 pub fn chiang_unit_label(json_name: &str) -> &'static str {
     let base = json_name.split('[').next().unwrap_or(json_name);
-    match PARAMETERS.iter().find(|f| f.name == base).map(|f| f.unit) {
-        Some("degree") => "deg",
-        Some("1/radius") => "per fiber radius",
-        _ => "",
-    }
+    PARAMETERS
+        .iter()
+        .find(|f| f.name == base)
+        .map_or("", |f| f.unit.label())
 }
 
 /// Chiang parameters, α in RADIANS, generic over the number type.
@@ -480,7 +455,7 @@ pub fn all_parameters(nc: usize) -> Vec<ChiangParamName> {
 
 /// The table's reference values: what a fit holds a parameter it does not vary at.
 pub fn reference_params(nc: usize) -> ChiangParams<f64> {
-    let r = |i: usize| PARAMETERS[i].reference;
+    let r = |i: usize| PARAMETERS[i].held();
     ChiangParams {
         eta: r(0),
         sigma_a: vec![r(1); nc],

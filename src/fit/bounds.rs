@@ -18,7 +18,7 @@ pub enum Bound {
 impl Bound {
     /// The fit bounds of `name` in the parameter table (natural units, radians).
     pub fn of(name: ParamName) -> Bound {
-        match name.spec().fit_bounds() {
+        match name.fact().fit_bounds() {
             (lo, Some(hi)) => Bound::Both(lo, hi),
             (lo, None) => Bound::Lower(lo),
         }
@@ -76,23 +76,23 @@ impl Bound {
 
 /// MODEL.md's typical range of `name` in natural units (radians for angles): the start design box.
 pub fn typical_range(name: ParamName) -> (f64, f64) {
-    name.spec().typical_range()
+    name.fact().typical_range()
 }
 
 /// True for parameters stored in radians and reported in degrees.
 pub fn is_angle(name: ParamName) -> bool {
-    name.spec().unit == Unit::Degrees
+    name.fact().unit == Unit::Degrees
 }
 
 /// Factor from natural units to reporting units (degrees for angles).
 pub fn report_factor(name: ParamName) -> f64 {
-    name.spec().unit.file_factor()
+    name.fact().unit.file_factor()
 }
 
 /// The table's reference values (defaults, else mid typical range): a neutral parameter set with
 /// `n_channels` channels, the value of every parameter a fit does not vary.
 pub fn reference_params(n_channels: usize) -> Params<f64> {
-    Params::from_fn(n_channels, |name| name.spec().reference_value())
+    Params::from_fn(n_channels, |name| name.fact().reference_value())
 }
 
 #[cfg(test)]

@@ -13,7 +13,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-pub mod angles;
 pub mod azimuthal;
 pub mod bravais;
 pub mod chain;
@@ -28,6 +27,7 @@ pub mod measurement;
 pub mod parameters;
 pub mod roots;
 
+pub use crate::geometry::{angles, fact, Angles};
 use angles::half_angles;
 use azimuthal::{add_r, add_root_sum, add_trt_with_glints, GlintParams, Sink};
 use bravais::bravais_indices;
@@ -41,7 +41,7 @@ pub use lanes::scattering_lanes;
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
 pub use measurement::Measurement;
-pub use parameters::{ParamSpec, Unit};
+pub use parameters::{ParamFact, Unit};
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -175,8 +175,8 @@ impl ParamName {
     /// The JSON name (`"eta"`, `"sigma_a[1]"`, `"alpha_r_deg"`, ...), from the parameter table.
     pub fn json_name(&self) -> String {
         match self {
-            ParamName::SigmaA(c) => format!("{}[{c}]", self.spec().json),
-            _ => self.spec().json.into(),
+            ParamName::SigmaA(c) => format!("{}[{c}]", self.fact().name),
+            _ => self.fact().name.into(),
         }
     }
 }
@@ -283,7 +283,7 @@ impl Params<f64> {
     pub fn validate(&self) -> Result<()> {
         require_channels(&self.sigma_a)?;
         for name in parameters::all_parameters(self.sigma_a.len()) {
-            let spec = name.spec();
+            let spec = name.fact();
             let value = self.get(name) * spec.unit.file_factor();
             spec.check(value).map_err(|message| Error::Parameter {
                 name: name.json_name(),
@@ -292,55 +292,6 @@ impl Params<f64> {
             })?;
         }
         Ok(())
-    }
-}
-
-/// Incident and reflected directions in the fiber frame, radians.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Angles {
-    pub theta_i: f64,
-    pub phi_i: f64,
-    pub theta_r: f64,
-    pub phi_r: f64,
-}
-
-impl Angles {
-    /// Check `θ ∈ (−90°, 90°)` (|θ| = 90° puts the direction on the fiber axis) and all finite;
-    /// the error names the angle and its value in degrees.
-    pub fn validate(&self) -> Result<()> {
-        let check = |name: &str, v: f64, limit: Option<f64>| {
-            let ok = v.is_finite() && limit.is_none_or(|l| v.abs() < l);
-            if ok {
-                Ok(())
-            } else {
-                Err(Error::Parameter {
-                    name: name.into(),
-                    value: v.to_degrees(),
-                    message: match limit {
-                        Some(_) => {
-                            "an inclination must be finite and strictly between -90 and 90 degrees"
-                                .into()
-                        }
-                        None => "an azimuth must be finite".into(),
-                    },
-                })
-            }
-        };
-        let half_pi = Some(std::f64::consts::FRAC_PI_2);
-        check("theta_i", self.theta_i, half_pi)?;
-        check("phi_i", self.phi_i, None)?;
-        check("theta_r", self.theta_r, half_pi)?;
-        check("phi_r", self.phi_r, None)
-    }
-
-    /// Angles from degrees.
-    pub fn from_degrees(theta_i: f64, phi_i: f64, theta_r: f64, phi_r: f64) -> Angles {
-        Angles {
-            theta_i: theta_i.to_radians(),
-            phi_i: phi_i.to_radians(),
-            theta_r: theta_r.to_radians(),
-            phi_r: phi_r.to_radians(),
-        }
     }
 }
 

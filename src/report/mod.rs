@@ -410,7 +410,7 @@ fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
         .filter(|p| !p.profile.is_empty())
         .map(|p| {
             let unit = crate::model::ParamName::from_json_name(&p.name)
-                .map_or("", |n| n.spec().unit.label());
+                .map_or("", |n| n.fact().unit.label());
             ProfilePanel {
                 title: if unit.is_empty() {
                     p.name.clone()

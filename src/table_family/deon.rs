@@ -13,13 +13,13 @@ use std::sync::{Arc, OnceLock};
 
 use num_dual::DualNum;
 
-use super::{Fact, LobeColumn, TableFamily, TableParams, Term, TermSet, Terms};
+use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
 use crate::chiang::azimuthal::ExitRefraction;
 use crate::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
 use crate::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
 use crate::chiang::quadrature::WidthRule;
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::angles::{wrap, wrap_t};
-use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
 /// The d'Eon 2011 family.
@@ -281,8 +281,8 @@ impl TableFamily for DEon {
             column: LobeColumn::TRT,
         },
     ];
-    const PARAMETERS: &'static [Fact] = &[
-        Fact {
+    const PARAMETERS: &'static [ParamFact] = &[
+        ParamFact {
             name: "eta",
             symbol: "η",
             meaning: "cortex index of refraction",
@@ -290,13 +290,15 @@ impl TableFamily for DEon {
             per_channel: false,
             // As the Marschner and Chiang tables: refraction needs η > 1; 10 keeps η² finite.
             domain: Interval::open_closed(1.0, 10.0),
-            fit: (1.000001, 2.5),
+            fit_lo: 1.000001,
+            fit_hi: Some(2.5),
             typical: (1.5, 1.6),
-            default: 1.55,
+            reference: Some(1.55),
             fitted: Fitted::OnRequest,
             terms: &[],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "sigma_a",
             symbol: "σ_a",
             meaning: "absorption per unit fibre radius, one value per colour channel",
@@ -304,26 +306,30 @@ impl TableFamily for DEon {
             per_channel: true,
             domain: Interval::closed_open(0.0, f64::INFINITY),
             // σ_a = 50 per radius already removes all transmitted light.
-            fit: (0.0, 50.0),
+            fit_lo: 0.0,
+            fit_hi: Some(50.0),
             typical: (0.05, 2.0),
-            default: 0.4,
+            reference: Some(0.4),
             fitted: Fitted::Yes,
             terms: &["TT", "TRT", "residual"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "beta_r_deg",
             symbol: "β_R",
             meaning: "longitudinal roughness: the R lobe's width in theta_h (v_R = (2 beta_R)^2)",
             unit: Unit::Degrees,
             per_channel: false,
             domain: Interval::open_closed(0.0, 90.0),
-            fit: (0.1, 30.0),
+            fit_lo: 0.1,
+            fit_hi: Some(30.0),
             typical: (4.0, 12.0),
-            default: 7.0,
+            reference: Some(7.0),
             fitted: Fitted::Yes,
             terms: &[],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "beta_n_deg",
             symbol: "β_N",
             meaning: "azimuthal roughness: standard deviation of the wrapped Gaussian detector",
@@ -332,24 +338,28 @@ impl TableFamily for DEon {
             // Five images of the Gaussian are exact up to 90°; below 4° the width rule no
             // longer holds S to 1e-6 (docs/deon.md "Width quadrature"), 5° leaves a margin.
             domain: Interval::open_closed(0.0, 90.0),
-            fit: (5.0, 90.0),
+            fit_lo: 5.0,
+            fit_hi: Some(90.0),
             typical: (8.0, 30.0),
-            default: 15.0,
+            reference: Some(15.0),
             fitted: Fitted::Yes,
             terms: &[],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "alpha_deg",
             symbol: "α",
             meaning: "cuticle-scale tilt; the R peak sits at theta_h = +alpha_deg",
             unit: Unit::Degrees,
             per_channel: false,
             domain: Interval::open(-90.0, 90.0),
-            fit: (-30.0, 30.0),
+            fit_lo: -30.0,
+            fit_hi: Some(30.0),
             typical: (-6.0, -1.0),
-            default: -3.0,
+            reference: Some(-3.0),
             fitted: Fitted::Yes,
             terms: &["R", "TT", "TRT"],
+            ..ParamFact::BASE
         },
     ];
 

@@ -12,7 +12,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{by_name, DynTable, TableParams, ALL};
 use crate::error::{Error, Result};
-use crate::model::parameters::Fitted;
+use crate::geometry::Fitted;
 
 /// A table family's parameter file, file units, each value as written (one number, or one
 /// per channel).
@@ -117,7 +117,7 @@ fn hint(table: &dyn DynTable) -> String {
             };
             match f.fitted {
                 Fitted::Yes => format!("{}{list}", f.name),
-                _ => format!("{}{list}, optional, {}", f.name, f.default),
+                _ => format!("{}{list}, optional, {}", f.name, f.held()),
             }
         })
         .collect();
@@ -283,7 +283,7 @@ fn resolve(
                     keys()
                 ));
             }
-            values.push(vec![f.default]);
+            values.push(vec![f.held()]);
             continue;
         };
         let Written(v, is_array) = entries.swap_remove(at).1;

@@ -20,9 +20,9 @@ use std::f64::consts::PI;
 
 use num_dual::DualNum;
 
-use super::{Fact, LobeColumn, TableFamily, TableParams, Term, TermSet, Terms};
+use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::angles::wrap;
-use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 use azimuthal::{Logistic, BETA_N_MIN};
 
@@ -176,47 +176,53 @@ impl TableFamily for Frostbite {
             column: LobeColumn::TRT,
         },
     ];
-    const PARAMETERS: &'static [Fact] = &[
-        Fact {
+    const PARAMETERS: &'static [ParamFact] = &[
+        ParamFact {
             name: "base_color",
             symbol: "C",
             meaning: "Base Color (linear), one per colour channel: absorption (ln C/D(β_N))²",
             unit: Unit::Dimensionless,
             per_channel: true,
             domain: closed(BASE_COLOR_MIN, 1.0),
-            fit: (BASE_COLOR_MIN, 1.0),
+            fit_lo: BASE_COLOR_MIN,
+            fit_hi: Some(1.0),
             typical: (0.05, 0.9),
-            default: 0.5,
+            reference: Some(0.5),
             fitted: Fitted::Yes,
             terms: &["TT", "TRT"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "smoothness",
             symbol: "s_L",
             meaning: "Smoothness: R's longitudinal width 1 - s_L in radians (TT half, TRT twice)",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: closed(0.0, SMOOTHNESS_MAX),
-            fit: (0.0, SMOOTHNESS_MAX),
+            fit_lo: 0.0,
+            fit_hi: Some(SMOOTHNESS_MAX),
             typical: (0.75, 0.95),
-            default: 0.85,
+            reference: Some(0.85),
             fitted: Fitted::Yes,
             terms: &[],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "radial_smoothness",
             symbol: "s_N",
             meaning: "Radial Smoothness: azimuthal roughness beta_N = 1 - s_N",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: closed(0.0, RADIAL_SMOOTHNESS_MAX),
-            fit: (0.0, RADIAL_SMOOTHNESS_MAX),
+            fit_lo: 0.0,
+            fit_hi: Some(RADIAL_SMOOTHNESS_MAX),
             typical: (0.5, 0.85),
-            default: 0.7,
+            reference: Some(0.7),
             fitted: Fitted::Yes,
             terms: &[],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "cuticle_angle_deg",
             symbol: "a",
             meaning:
@@ -224,24 +230,28 @@ impl TableFamily for Frostbite {
             unit: Unit::Degrees,
             per_channel: false,
             domain: Interval::open(-45.0, 45.0),
-            fit: (-15.0, 15.0),
+            fit_lo: -15.0,
+            fit_hi: Some(15.0),
             typical: (1.0, 5.0),
-            default: 3.0,
+            reference: Some(3.0),
             fitted: Fitted::Yes,
             terms: &[],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "eta",
             symbol: "η",
             meaning: "index of refraction (HDRP fixes 1.55; it moves Fresnel and theta_t only)",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: Interval::open(1.0, 3.0),
-            fit: (1.2, 2.2),
+            fit_lo: 1.2,
+            fit_hi: Some(2.2),
             typical: (1.5, 1.6),
-            default: 1.55,
+            reference: Some(1.55),
             fitted: Fitted::OnRequest,
             terms: &[],
+            ..ParamFact::BASE
         },
     ];
 

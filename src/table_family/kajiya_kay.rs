@@ -12,8 +12,8 @@
 
 use num_dual::DualNum;
 
-use super::{Fact, LobeColumn, TableFamily, TableParams, Term, TermSet, Terms};
-use crate::model::parameters::{Fitted, Interval, Unit};
+use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
 /// The Kajiya–Kay family.
@@ -65,45 +65,51 @@ impl TableFamily for KajiyaKay {
             column: LobeColumn::R,
         },
     ];
-    const PARAMETERS: &'static [Fact] = &[
-        Fact {
+    const PARAMETERS: &'static [ParamFact] = &[
+        ParamFact {
             name: "k_d",
             symbol: "K_d",
             meaning: "diffuse coefficient, one per colour channel (relative to K_s)",
             unit: Unit::Dimensionless,
             per_channel: true,
             domain: Interval::closed_open(0.0, f64::INFINITY),
-            fit: (0.0, 100.0),
+            fit_lo: 0.0,
+            fit_hi: Some(100.0),
             typical: (0.01, 1.0),
-            default: 0.3,
+            reference: Some(0.3),
             fitted: Fitted::Yes,
             terms: &["diffuse"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "k_s",
             symbol: "K_s",
             meaning: "specular coefficient (the fit's per-channel scale absorbs it)",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: Interval::closed_open(0.0, f64::INFINITY),
-            fit: (0.0, 100.0),
+            fit_lo: 0.0,
+            fit_hi: Some(100.0),
             typical: (0.5, 2.0),
-            default: 1.0,
+            reference: Some(1.0),
             fitted: Fitted::No,
             terms: &["specular"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "exponent",
             symbol: "p",
             meaning: "specular exponent (larger: a narrower highlight)",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: Interval::open(0.0, 1.0e6),
-            fit: (0.5, 5000.0),
+            fit_lo: 0.5,
+            fit_hi: Some(5000.0),
             typical: (10.0, 200.0),
-            default: 50.0,
+            reference: Some(50.0),
             fitted: Fitted::Yes,
             terms: &["specular"],
+            ..ParamFact::BASE
         },
     ];
 

@@ -17,9 +17,9 @@ use std::f64::consts::PI;
 
 use num_dual::DualNum;
 
-use super::{Fact, LobeColumn, TableFamily, TableParams, Term, TermSet, Terms};
+use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::geometry::{Fitted, Interval, Unit};
 use crate::model::angles::wrap;
-use crate::model::parameters::{Fitted, Interval, Unit};
 use crate::model::Angles;
 
 /// The Karis / Unreal family.
@@ -319,86 +319,98 @@ impl TableFamily for Karis {
             column: LobeColumn::TRT,
         },
     ];
-    const PARAMETERS: &'static [Fact] = &[
-        Fact {
+    const PARAMETERS: &'static [ParamFact] = &[
+        ParamFact {
             name: "base_color",
             symbol: "C",
             meaning: "Base Color (linear), one per colour channel: the colour TT and TRT carry",
             unit: Unit::Dimensionless,
             per_channel: true,
             domain: Interval::open_closed(0.0, 1.0),
-            fit: (1e-3, 1.0),
+            fit_lo: 1e-3,
+            fit_hi: Some(1.0),
             typical: (0.1, 0.7),
-            default: 0.5,
+            reference: Some(0.5),
             fitted: Fitted::Yes,
             terms: &["TT", "TRT", "scatter"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "roughness",
             symbol: "r",
             meaning: "Roughness: the lobe widths r², r²/2, 2r² in sin θ_i + sin θ_r",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: closed(MIN_ROUGHNESS, 1.0),
-            fit: (0.05, 1.0),
+            fit_lo: 0.05,
+            fit_hi: Some(1.0),
             typical: (0.25, 0.75),
-            default: 0.5,
+            reference: Some(0.5),
             fitted: Fitted::Yes,
             terms: &["R", "TT", "TRT"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "specular",
             symbol: "s",
             meaning: "Specular: R is scaled by 2s (0.5 leaves it as is)",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: closed(0.0, 1.0),
-            fit: (0.0, 1.0),
+            fit_lo: 0.0,
+            fit_hi: Some(1.0),
             typical: (0.2, 0.8),
-            default: 0.5,
+            reference: Some(0.5),
             fitted: Fitted::Yes,
             terms: &["R"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "backlit",
             symbol: "b",
             meaning: "Backlit: TT is scaled by b and R faded toward b for light from behind",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: closed(0.0, 1.0),
-            fit: (0.0, 1.0),
+            fit_lo: 0.0,
+            fit_hi: Some(1.0),
             typical: (0.5, 1.0),
-            default: 1.0,
+            reference: Some(1.0),
             fitted: Fitted::No,
             terms: &["R", "TT"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "scatter",
             symbol: "σ_ms",
             meaning: "Scatter: the weight of the multiple-scattering approximation",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: closed(0.0, 1.0),
-            fit: (0.0, 1.0),
+            fit_lo: 0.0,
+            fit_hi: Some(1.0),
             typical: (0.05, 0.5),
-            default: 0.0,
+            reference: Some(0.0),
             fitted: Fitted::Yes,
             terms: &["scatter"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "eta",
             symbol: "η",
             meaning: "refractive index in Schlick's F0 (the engine's 1.55; --free eta)",
             unit: Unit::Dimensionless,
             per_channel: false,
             domain: Interval::open_closed(1.0, 10.0),
-            fit: (1.2, 2.5),
+            fit_lo: 1.2,
+            fit_hi: Some(2.5),
             typical: (1.45, 1.65),
-            default: ENGINE_ETA,
+            reference: Some(ENGINE_ETA),
             fitted: Fitted::OnRequest,
             terms: &["R", "TT", "TRT"],
+            ..ParamFact::BASE
         },
-        Fact {
+        ParamFact {
             name: "shift_deg",
             symbol: "s₀",
             meaning: "cuticle shift unit: lobes at -2s0, s0, 4s0 in sin θ_i + sin θ_r, R toward \
@@ -406,11 +418,13 @@ impl TableFamily for Karis {
             unit: Unit::Degrees,
             per_channel: false,
             domain: closed(-10.0, 10.0),
-            fit: (-10.0, 10.0),
+            fit_lo: -10.0,
+            fit_hi: Some(10.0),
             typical: (1.0, 3.0),
-            default: ENGINE_SHIFT * (180.0 / PI),
+            reference: Some(ENGINE_SHIFT * (180.0 / PI)),
             fitted: Fitted::No,
             terms: &["R", "TT", "TRT"],
+            ..ParamFact::BASE
         },
     ];
 

@@ -1,13 +1,13 @@
 //! The model families that are one parameter table and one scattering function: Kajiya–Kay
 //! 1989 and the families real-time renderers approximate Marschner with. A family is one type
-//! implementing [`TableFamily`] — its terms ([`Term`]), its parameter table ([`Fact`], every
+//! implementing [`TableFamily`] — its terms ([`Term`]), its parameter table ([`ParamFact`], every
 //! parameter's name, unit, domain, fit bounds, typical range and default in one line) and
 //! `scatter`, generic over the number type so dual numbers give exact derivatives. Everything
 //! else is written once for all of them: the parameter file ([`file`]), evaluation
 //! ([`DynTable`], what commands hold), and, in `crate::fit::family::table`, the fit.
 //!
 //! What a term switch turns off is not computed, and a parameter only the switched-off terms
-//! read is not fitted ([`Fact::terms`]).
+//! read is not fitted ([`ParamFact::terms`]).
 
 pub mod deon;
 pub mod file;
@@ -20,7 +20,8 @@ use std::marker::PhantomData;
 use num_dual::DualNum;
 
 use crate::error::{Error, Result};
-use crate::model::parameters::{Fitted, Interval, Unit};
+use crate::geometry::Fitted;
+pub use crate::geometry::ParamFact;
 use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub use file::TableParamFile;
@@ -99,49 +100,6 @@ impl TermSet {
     }
 }
 
-/// One line of a family's parameter table. Numbers are in file units (degrees for angles).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Fact {
-    /// The parameter file's key (`sigma_a`, `roughness`, `alpha_deg`).
-    pub name: &'static str,
-    /// The symbol in docs (`σ_a`, `β_R`).
-    pub symbol: &'static str,
-    pub meaning: &'static str,
-    pub unit: Unit,
-    /// One value per colour channel (written `name[c]` in fit.json and `--fix`).
-    pub per_channel: bool,
-    /// What the model accepts; every command checks it.
-    pub domain: Interval,
-    /// The fit's bounds, inside the domain.
-    pub fit: (f64, f64),
-    /// The box the fit's start design samples.
-    pub typical: (f64, f64),
-    /// The value a fit holds the parameter at when it does not vary it, and the one a parameter
-    /// file may omit it at when [`Fact::fitted`] is not `Yes`.
-    pub default: f64,
-    pub fitted: Fitted,
-    /// The terms that read it (empty: every term); off with all of them, it is not fitted.
-    pub terms: &'static [&'static str],
-}
-
-impl Fact {
-    /// Check a file-unit value against the domain; `Err` says what the domain is.
-    pub fn check(&self, x: f64) -> std::result::Result<(), String> {
-        if self.domain.contains(x) {
-            return Ok(());
-        }
-        let unit = match self.unit.label() {
-            "" => String::new(),
-            label => format!(" {label}"),
-        };
-        Err(format!(
-            "{} must be finite and in {}{unit}",
-            self.meaning,
-            self.domain.text()
-        ))
-    }
-}
-
 /// A family's parameters in model units (radians for angles): one vector per table line, one
 /// value (shared) or one per channel.
 #[derive(Debug, Clone, PartialEq)]
@@ -173,10 +131,10 @@ impl<T: Clone> TableParams<T> {
 
 impl TableParams<f64> {
     /// Every parameter at its table default, for `nc` channels.
-    pub fn defaults(facts: &[Fact], nc: usize) -> TableParams<f64> {
+    pub fn defaults(facts: &[ParamFact], nc: usize) -> TableParams<f64> {
         let values = facts
             .iter()
-            .map(|f| vec![f.unit.to_model(f.default); if f.per_channel { nc } else { 1 }])
+            .map(|f| vec![f.unit.to_model(f.held()); if f.per_channel { nc } else { 1 }])
             .collect();
         TableParams {
             values,
@@ -185,7 +143,7 @@ impl TableParams<f64> {
     }
 
     /// Check every value against its domain; the error names the parameter (`base_color[1]`).
-    pub fn validate(&self, facts: &[Fact]) -> Result<()> {
+    pub fn validate(&self, facts: &[ParamFact]) -> Result<()> {
         for (fact, values) in facts.iter().zip(&self.values) {
             for (c, &v) in values.iter().enumerate() {
                 let file_value = v * fact.unit.file_factor();
@@ -205,7 +163,7 @@ impl TableParams<f64> {
 /// The demo's truth of a table family for `nc` channels: shared parameters at their default,
 /// per-channel ones spread over the typical range (a quarter, half and three quarters of the
 /// way for three channels), so the channels differ as hair colours do.
-pub fn demo_params(facts: &[Fact], nc: usize) -> TableParams<f64> {
+pub fn demo_params(facts: &[ParamFact], nc: usize) -> TableParams<f64> {
     let mut p = TableParams::defaults(facts, nc);
     for (f, values) in facts.iter().zip(&mut p.values) {
         if f.per_channel {
@@ -221,7 +179,7 @@ pub fn demo_params(facts: &[Fact], nc: usize) -> TableParams<f64> {
 
 /// The parameter table as docs print it (a header and one Markdown row per line), so
 /// `tests/table_families.rs` can check each family's page holds exactly its table.
-pub fn markdown_table(facts: &[Fact]) -> Vec<String> {
+pub fn markdown_table(facts: &[ParamFact]) -> Vec<String> {
     let num = |x: f64| {
         if x.is_infinite() {
             return if x > 0.0 { "inf" } else { "-inf" }.to_string();
@@ -252,11 +210,11 @@ pub fn markdown_table(facts: &[Fact]) -> Vec<String> {
             f.unit.describe(),
             if f.per_channel { "yes" } else { "no" },
             f.domain.text(),
-            num(f.fit.0),
-            num(f.fit.1),
+            num(f.fit_lo),
+            num(f.fit_hi.unwrap_or(f64::INFINITY)),
             num(f.typical.0),
             num(f.typical.1),
-            num(f.default),
+            num(f.held()),
             fitted,
             read_by
         )
@@ -265,7 +223,7 @@ pub fn markdown_table(facts: &[Fact]) -> Vec<String> {
 }
 
 /// `name` or `name[c]`.
-pub fn param_name(fact: &Fact, channel: Option<usize>) -> String {
+pub fn param_name(fact: &ParamFact, channel: Option<usize>) -> String {
     match channel {
         Some(c) => format!("{}[{c}]", fact.name),
         None => fact.name.to_string(),
@@ -279,7 +237,7 @@ pub trait TableFamily: Send + Sync + 'static {
     /// Who and what, for summaries ("Kajiya–Kay 1989").
     const TITLE: &'static str;
     const TERMS: &'static [Term];
-    const PARAMETERS: &'static [Fact];
+    const PARAMETERS: &'static [ParamFact];
     /// A `--fix` item for messages to show.
     const FIX_EXAMPLE: &'static str;
 
@@ -342,7 +300,7 @@ pub trait DynTable: Sync {
     fn name(&self) -> &'static str;
     fn title(&self) -> &'static str;
     fn terms(&self) -> &'static [Term];
-    fn facts(&self) -> &'static [Fact];
+    fn facts(&self) -> &'static [ParamFact];
     /// The terms on without `--terms`.
     fn default_terms(&self) -> TermSet;
     /// `S` of a batch, `out[k·nc + c]`.
@@ -361,7 +319,7 @@ impl<F: TableFamily> DynTable for Table<F> {
     fn terms(&self) -> &'static [Term] {
         F::TERMS
     }
-    fn facts(&self) -> &'static [Fact] {
+    fn facts(&self) -> &'static [ParamFact] {
         F::PARAMETERS
     }
     fn default_terms(&self) -> TermSet {
@@ -433,13 +391,13 @@ pub fn by_name(name: &str) -> Option<&'static dyn DynTable> {
 /// `--fix`: those an on term reads, an `OnRequest` `eta` only when `free_on_request`
 /// (`--free eta`).
 pub fn fitted(
-    facts: &[Fact],
+    facts: &[ParamFact],
     terms: &[Term],
     on: TermSet,
     nc: usize,
     free_on_request: bool,
 ) -> Vec<(usize, Option<usize>)> {
-    let wanted = |f: &Fact| {
+    let wanted = |f: &ParamFact| {
         let asked = match f.fitted {
             Fitted::Yes => true,
             // `--free` frees η only; the tables mark nothing else on request.
@@ -454,7 +412,7 @@ pub fn fitted(
 }
 
 /// Every parameter (table index, channel) for `nc` channels, in output order.
-pub fn every_parameter(facts: &[Fact], nc: usize) -> Vec<(usize, Option<usize>)> {
+pub fn every_parameter(facts: &[ParamFact], nc: usize) -> Vec<(usize, Option<usize>)> {
     let mut out = Vec::new();
     for (k, f) in facts.iter().enumerate() {
         if f.per_channel {

@@ -22,7 +22,7 @@ use crate::fit::{diagnostics, fit_with, require_samples, FitOutcome, FitRun};
 use crate::model::{Angles, Measurement};
 use crate::table_family::{
     by_name, clear_terms, every_parameter, fitted, lobes_config, param_name, total, zero_terms,
-    DynTable, Fact, Table, TableFamily, TableParamFile, TableParams, TermSet,
+    DynTable, ParamFact, Table, TableFamily, TableParamFile, TableParams, TermSet,
 };
 
 /// One parameter of the table family `F`: a line of its table and, for a per-channel line,
@@ -61,7 +61,7 @@ impl<F: TableFamily> TableParam<F> {
         }
     }
 
-    fn fact(self) -> &'static Fact {
+    fn fact(self) -> &'static ParamFact {
         &F::PARAMETERS[self.fact as usize]
     }
 
@@ -83,7 +83,10 @@ impl<F: TableFamily> FitParam for TableParam<F> {
     fn bound(self) -> Bound {
         let f = self.fact();
         let factor = f.unit.file_factor();
-        Bound::Both(f.fit.0 / factor, f.fit.1 / factor)
+        Bound::Both(
+            f.fit_lo / factor,
+            f.fit_hi.unwrap_or(f64::INFINITY) / factor,
+        )
     }
     fn json_name(self) -> String {
         param_name(self.fact(), self.channel.map(usize::from))

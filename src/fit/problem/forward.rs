@@ -60,7 +60,7 @@ impl FitParam for ParamName {
         crate::fit::bounds::typical_range(self)
     }
     fn check_domain(self, report_value: f64) -> std::result::Result<(), String> {
-        self.spec().check(report_value)
+        self.fact().check(report_value)
     }
     fn channel(self) -> Option<usize> {
         match self {

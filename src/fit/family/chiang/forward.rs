@@ -33,7 +33,10 @@ impl FitParam for ChiangParamName {
     }
     fn bound(self) -> Bound {
         let f = self.fact();
-        Bound::Both(f.fit_lo / self.file_factor(), f.fit_hi / self.file_factor())
+        Bound::Both(
+            f.fit_lo / self.file_factor(),
+            f.fit_hi.unwrap_or(f64::INFINITY) / self.file_factor(),
+        )
     }
     fn json_name(self) -> String {
         ChiangParamName::json_name(&self)

@@ -18,6 +18,7 @@ use crate::files::{Floored, LoadReport};
 use crate::fit::fixes::FreeSet;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
+use crate::geometry::Fitted;
 use crate::model::angles::wrap;
 pub use forward::ChiangForward;
 
@@ -110,7 +111,7 @@ pub fn fit_chiang(
         model,
         measurement: opts.measurement,
     });
-    let wanted = |p: &ChiangParamName| !p.fact().on_request || opts.free_eta;
+    let wanted = |p: &ChiangParamName| p.fact().fitted != Fitted::OnRequest || opts.free_eta;
     let wanted_of = |e: &ChiangEffects| e.parameters(nc).into_iter().filter(wanted).collect();
     let set = FreeSet::new(
         Chiang::parse_fixes(&opts.fix, nc)?,

@@ -1,6 +1,8 @@
 //! Angle bookkeeping of MODEL.md "Geometry and angles": wrapping and the half/difference angles.
 
 use num_dual::DualNum;
+
+use crate::error::{Error, Result};
 use std::f64::consts::{PI, TAU};
 
 /// `wrap`: map an angle to `(−π, π]`.
@@ -116,6 +118,55 @@ mod tests {
                 );
             }
             x += 0.012_345;
+        }
+    }
+}
+
+/// Incident and reflected directions in the fiber frame, radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Angles {
+    pub theta_i: f64,
+    pub phi_i: f64,
+    pub theta_r: f64,
+    pub phi_r: f64,
+}
+
+impl Angles {
+    /// Check `θ ∈ (−90°, 90°)` (|θ| = 90° puts the direction on the fiber axis) and all finite;
+    /// the error names the angle and its value in degrees.
+    pub fn validate(&self) -> Result<()> {
+        let check = |name: &str, v: f64, limit: Option<f64>| {
+            let ok = v.is_finite() && limit.is_none_or(|l| v.abs() < l);
+            if ok {
+                Ok(())
+            } else {
+                Err(Error::Parameter {
+                    name: name.into(),
+                    value: v.to_degrees(),
+                    message: match limit {
+                        Some(_) => {
+                            "an inclination must be finite and strictly between -90 and 90 degrees"
+                                .into()
+                        }
+                        None => "an azimuth must be finite".into(),
+                    },
+                })
+            }
+        };
+        let half_pi = Some(std::f64::consts::FRAC_PI_2);
+        check("theta_i", self.theta_i, half_pi)?;
+        check("phi_i", self.phi_i, None)?;
+        check("theta_r", self.theta_r, half_pi)?;
+        check("phi_r", self.phi_r, None)
+    }
+
+    /// Angles from degrees.
+    pub fn from_degrees(theta_i: f64, phi_i: f64, theta_r: f64, phi_r: f64) -> Angles {
+        Angles {
+            theta_i: theta_i.to_radians(),
+            phi_i: phi_i.to_radians(),
+            theta_r: theta_r.to_radians(),
+            phi_r: phi_r.to_radians(),
         }
     }
 }
