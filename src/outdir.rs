@@ -722,9 +722,11 @@ impl OutputSet {
         let Some(marker) = marker else {
             return Ok(());
         };
-        for name in marker.names.iter().flatten() {
-            let (old_sub, new_sub) = (old.join(name), new.join(name));
-            if old_sub.is_dir() && new_sub.is_dir() {
+        let entries = std::fs::read_dir(old).map_err(|e| Error::io(old, e))?;
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let (old_sub, new_sub) = (old.join(&name), new.join(&name));
+            if marker.owns(old, &name) && old_sub.is_dir() && new_sub.is_dir() {
                 let sub_marker = Marker::read(&old_sub)?;
                 if sub_marker.is_some() {
                     self.carry_over(&old_sub, &new_sub, sub_marker.as_ref())?;

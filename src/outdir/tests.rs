@@ -136,6 +136,27 @@ fn the_users_files_and_folders_are_carried_into_the_new_set() {
 }
 
 #[test]
+fn the_users_files_inside_a_compare_fit_are_carried_over() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cmp");
+    for run in ["first", "second"] {
+        let set = OutputSet::begin(&out, "hairfit compare", false, &[]).unwrap();
+        let sub = set.sub_dir("marschner").unwrap();
+        std::fs::write(sub.join("fit.json"), run).unwrap();
+        set.publish().unwrap();
+        if run == "first" {
+            std::fs::write(out.join("marschner/notes.txt"), "mine").unwrap();
+        }
+    }
+    assert_eq!(
+        names(&out.join("marschner")),
+        [MARKER, "fit.json", "notes.txt"]
+    );
+    let sub = Marker::read(&out.join("marschner")).unwrap().unwrap();
+    assert_eq!(sub.kind, Kind::Fit);
+}
+
+#[test]
 fn sets_of_many_results_are_never_replaced_by_another_kind() {
     let tmp = tempfile::tempdir().unwrap();
     let batch = tmp.path().join("b");
