@@ -514,7 +514,9 @@ def compare(
     return result
 
 
-def export(fit_dir: PathLike, to: str, output: Optional[PathLike] = None) -> str:
+def export(
+    fit_dir: PathLike, to: str, output: Optional[PathLike] = None, allow_failed: bool = False
+) -> str:
     """What a renderer loads from a saved fit, as ``hairfit export DIR --to R [--output F]``.
 
     Args:
@@ -524,10 +526,12 @@ def export(fit_dir: PathLike, to: str, output: Optional[PathLike] = None) -> str
             script beside it) or ``unity`` (Unity HDRP hair inputs: ``output`` is required and
             names the JSON; the C# editor script goes beside it).
         output: a file to write (atomically); when None the text is returned.
+        allow_failed: export a fit whose verdict is ``failed`` (refused otherwise: its
+            parameters are not a fit); the summary warns that they are not.
 
     Returns:
         The file's text when ``output`` is None, else the command's summary line (the mapping's
         error and where it wrote).
     """
-    summary, text = _native.export([os.fspath(fit_dir)] + _flags(to=to, output=output))
+    summary, text = _native.export([os.fspath(fit_dir)] + _flags(to=to, output=output, allow_failed=allow_failed))
     return text if text is not None else summary

@@ -35,6 +35,10 @@ pub struct ExportArgs {
     /// needs --output and writes hair.cs beside it.
     #[arg(long)]
     pub output: Option<PathBuf>,
+    /// Export a fit whose verdict is `failed` (refused without this: its parameters are not a
+    /// fit); the summary warns that they are not.
+    #[arg(long)]
+    pub allow_failed: bool,
 }
 
 fn parse_target(s: &str) -> std::result::Result<Target, String> {
@@ -45,6 +49,7 @@ fn parse_target(s: &str) -> std::result::Result<Target, String> {
 /// stdout.
 pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
     // Checked before the model is fitted, which takes a while.
+    let verdict_warnings = crate::export::source::exportable(&args.dir, args.allow_failed)?;
     if args.to == Target::Unity {
         unity_output(args.output.as_deref())?;
     }
@@ -65,11 +70,15 @@ pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
             refuse_inside_a_set(path, out)?;
         }
     }
-    match args.to {
+    let (summary, text) = match args.to {
         Target::Renderer(renderer) => renderer_command(args, renderer),
         Target::Unreal => unreal_command(args),
         Target::Unity => unity_command(args).map(|summary| (summary, None)),
-    }
+    }?;
+    Ok((
+        format!("{}{summary}", warning_lines(&verdict_warnings)),
+        text,
+    ))
 }
 
 /// An export written into a hairfit output set would be lost when the set is replaced (the next

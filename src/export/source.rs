@@ -303,6 +303,9 @@ fn quality_line(fit: &Value) -> String {
         "status {}",
         text("/status").unwrap_or("unrecorded")
     )];
+    if let Some(verdict) = text("/verdict") {
+        parts.push(format!("verdict {verdict}"));
+    }
     if let Some(rms) = num("/residuals/rms") {
         parts.push(format!("residual rms {rms:.4}"));
     }
@@ -313,4 +316,36 @@ fn quality_line(fit: &Value) -> String {
         parts.push(format!("{space} space"));
     }
     parts.join(", ")
+}
+
+/// Whether the fit in `dir` is one to hand a renderer: a `failed` fit's parameters are not a
+/// fit (often the start point), so exporting one is an error unless `allow_failed`, and then a
+/// warning; an `interrupted` fit's are the best so far, said in a warning. Returns the warnings.
+pub fn exportable(dir: &Path, allow_failed: bool) -> Result<Vec<String>> {
+    let fit_path = dir.join("fit.json");
+    let fit: Value = crate::files::read_json(
+        &fit_path,
+        "fit.json is written by `hairfit fit` — re-run the fit to regenerate it",
+    )?;
+    let reasons = fit
+        .get("reasons")
+        .and_then(Value::as_array)
+        .and_then(|r| r.first())
+        .and_then(Value::as_str)
+        .map_or(String::new(), |r| format!(" ({r})"));
+    match fit.get("verdict").and_then(Value::as_str) {
+        Some("failed") if !allow_failed => Err(Error::Other(format!(
+            "{}: the fit's verdict is failed{reasons}: its parameters are not a fit, so a renderer would get numbers no data chose; fix the fit and re-run it, or pass --allow-failed to export them all the same",
+            fit_path.display()
+        ))),
+        Some("failed") => Ok(vec![format!(
+            "{}: the fit's verdict is failed{reasons}; exported because of --allow-failed: these parameters are not a fit",
+            fit_path.display()
+        )]),
+        Some("interrupted") => Ok(vec![format!(
+            "{}: the fit was interrupted: these are its best parameters so far, not a converged fit; re-run the fit to finish it",
+            fit_path.display()
+        )]),
+        _ => Ok(Vec::new()),
+    }
 }
