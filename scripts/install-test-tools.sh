@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Install the real tools the export tests load hairfit's files in, into target/test-venv (the
 # venv scripts/test uses; nothing is installed outside the repository):
-# - MaterialX's Python package (tests/export_materialx.rs, default suite; scripts/test installs
+# - MaterialX's Python package (tests/files/export_materialx.rs, default suite; scripts/test installs
 #   it too);
-# - with --with-bpy, Blender as a Python module (tests/export_blender.rs, ignored by default:
+# - with --with-bpy, Blender as a Python module (tests/files/export_blender.rs, ignored by default:
 #   runs the exported script and renders with Cycles; a ~400 MB download). Then run
-#   `PATH=$PWD/target/test-venv/bin:$PATH cargo test --release --test export_blender -- --ignored`.
+#   `PATH=$PWD/target/test-venv/bin:$PATH cargo test --release --test files export_blender:: -- --ignored`.
 # Both need Python 3.11 (the wheels pinned here are built for it).
 set -euo pipefail
 cd "$(dirname "$0")/.."

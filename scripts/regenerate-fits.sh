@@ -22,5 +22,5 @@ done
 $hairfit cost --out fits/cost
 $hairfit cost --model chiang --out fits/cost_chiang
 # fits/export/demo_blender.png needs Blender: scripts/install-test-tools.sh --with-bpy, then
-# cargo test --release --test export_blender -- --ignored (docs/export.md).
+# cargo test --release --test files export_blender:: -- --ignored (docs/export.md).
 git status --short fits/

@@ -3,7 +3,7 @@
 //! fiber-scattering data.
 //!
 //! The crate is a library with a thin CLI (`src/main.rs`). Its modules form layers, lowest
-//! first; a module imports only its own layer and those below (`tests/layering.rs` checks it,
+//! first; a module imports only its own layer and those below (`tests/files/layering.rs` checks it,
 //! docs/architecture.md describes it).
 //!
 //! Foundations:

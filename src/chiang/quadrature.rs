@@ -169,7 +169,7 @@ fn piece_rule(n: usize) -> &'static GaussLegendre {
 /// Node density of the automatic rule (nodes per π of γ) for azimuthal roughness `beta_n`: at
 /// each band's lowest β_n (where it is hardest: narrower peaks) the composite rule's worst
 /// relative error of `S` stays at or below 4.1e-8 over 600 random cases of CHIANG.md's domain
-/// against a 2048-density reference (`tests/chiang_quadrature.rs` checks the bound 1e-7; the plain
+/// against a 2048-density reference (`tests/families/chiang_quadrature.rs` checks the bound 1e-7; the plain
 /// 1024-node rule's worst there is 7.4e-7, at β_n = 0.9). Below β_n = 0.05, the fit's bound,
 /// 1024 nodes per π resolve the peaks no better than the plain rule does.
 pub fn auto_density(beta_n: f64) -> usize {

@@ -178,7 +178,7 @@ pub fn demo_params(facts: &[ParamFact], nc: usize) -> TableParams<f64> {
 }
 
 /// The parameter table as docs print it (a header and one Markdown row per line), so
-/// `tests/table_families.rs` can check each family's page holds exactly its table.
+/// `tests/families/table_families.rs` can check each family's page holds exactly its table.
 pub fn markdown_table(facts: &[ParamFact]) -> Vec<String> {
     let num = |x: f64| {
         if x.is_infinite() {

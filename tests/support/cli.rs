@@ -1,5 +1,5 @@
-//! Running the `hairfit` binary from integration tests, the one way every test crate does it:
-//! include with `#[path = "support/cli.rs"] mod cli;`.
+//! Running the `hairfit` binary from integration tests, the one way every test binary does it
+//! (`crate::support::cli`).
 //!
 //! Every run is bounded ([`hairfit_within`]): a command that regresses into a hang fails its test
 //! instead of hanging the suite. Commands run in the crate root, so shipped files are `data/…`.

@@ -1,6 +1,6 @@
 //! Test support: run the library's Levenberg–Marquardt solver to the end and collect what the
 //! tests check (parameters, residuals, Jacobian, counts, why it stopped). Shared by
-//! `tests/lm_solver.rs`, `tests/nist.rs` and `benches/lm.rs` (each includes it with `#[path]`).
+//! `tests/fit/lm_solver.rs`, `tests/fit/nist.rs` and `benches/lm.rs` (with `#[path]`).
 
 // Each including crate uses a different part of this file.
 #![allow(dead_code)]

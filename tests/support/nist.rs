@@ -1,8 +1,8 @@
 //! Test support: the NIST StRD nonlinear-regression suite the LM solver is validated on —
 //! parsing the `.dat` files, the 27 models with exact (forward-mode AD) Jacobians, and running
-//! the solver (through [`crate::lm::minimize`]) on all 54 problem–start pairs with the log
-//! relative error (LRE) of the result. Included with `#[path]` next to `support/lm.rs` (as
-//! crate-root module `lm`) by `tests/nist.rs` and `benches/lm.rs`.
+//! the solver (through [`super::lm::minimize`]) on all 54 problem–start pairs with the log
+//! relative error (LRE) of the result. A sibling of `lm`: `support::nist` in the test
+//! binaries, a crate-root module next to `lm` in `benches/lm.rs` (with `#[path]`).
 
 // Each including crate uses a different part of this file.
 #![allow(dead_code)]
@@ -15,7 +15,7 @@ use hairfit::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{Dual64, DualNum};
 
-use crate::lm::{minimize, LmOptions};
+use super::lm::{minimize, LmOptions};
 
 /// NIST certifies 11 significant digits, so no LRE above 11 is meaningful.
 pub const LRE_CAP: f64 = 11.0;

@@ -1,6 +1,6 @@
 """A stand-in for the Unreal Editor's `unreal` module with just the calls hairfit's export script
 makes (names and signatures as the UE 5.x Python API documents them), recording what the script
-does so tests/export_unreal.rs can check it without the editor. The state is written as JSON to
+does so tests/files/export_unreal.rs can check it without the editor. The state is written as JSON to
 the file named by HAIRFIT_UNREAL_STUB_OUT when the script saves the instance; the parent
 materials and their parameters come from HAIRFIT_UNREAL_STUB_PARENTS (JSON: path -> [scalar
 names, vector names])."""
