@@ -48,8 +48,7 @@ fn parse_target(s: &str) -> std::result::Result<Target, String> {
 /// Run the export; returns the summary line for stderr, and the file's text when it goes to
 /// stdout.
 pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
-    // Checked before the model is fitted, which takes a while.
-    let verdict_warnings = crate::export::source::exportable(&args.dir, args.allow_failed)?;
+    // Checked before the model is fitted, which takes a while: the options first, then the fit.
     if args.to == Target::Unity {
         unity_output(args.output.as_deref())?;
     }
@@ -70,6 +69,7 @@ pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
             refuse_inside_a_set(path, out)?;
         }
     }
+    let verdict_warnings = crate::export::source::exportable(&args.dir, args.allow_failed)?;
     let (summary, text) = match args.to {
         Target::Renderer(renderer) => renderer_command(args, renderer),
         Target::Unreal => unreal_command(args),

@@ -17,6 +17,7 @@ mod data;
 mod deon;
 mod eval;
 mod eval_guards;
+mod export_failed;
 mod fault_kill;
 mod fit;
 mod frostbite;
