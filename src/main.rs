@@ -376,7 +376,7 @@ fn run(cli: Cli) -> anyhow::Result<u8> {
             let stop = ctrl_c_flag();
             let cancel = Some(stop.flag.clone());
             let done = match hairfit::cli::compare::compare_command(&a, cancel)? {
-                hairfit::compare::CompareEnd::Published(done) => done,
+                hairfit::compare::CompareEnd::Published(done) => *done,
                 hairfit::compare::CompareEnd::Interrupted(why) => {
                     tell!("hairfit: {why}");
                     return Ok(exit_code(

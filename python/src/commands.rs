@@ -39,7 +39,7 @@ pub(crate) fn compare(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
     })?
     .map_err(hf)?;
     let done = match end {
-        hairfit::compare::CompareEnd::Published(done) => done,
+        hairfit::compare::CompareEnd::Published(done) => *done,
         hairfit::compare::CompareEnd::Interrupted(why) => {
             return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(why))
         }

@@ -186,7 +186,7 @@ impl CompareOutcome {
 /// How `hairfit compare` ended.
 pub enum CompareEnd {
     /// Every fit ran to its end and DIR is published.
-    Published(CompareOutcome),
+    Published(Box<CompareOutcome>),
     /// A signal stopped it: nothing new is published (DIR is as it was).
     Interrupted(String),
 }
@@ -263,10 +263,10 @@ pub fn compare_command(
         return interrupted("while its outputs were written".into());
     }
     set.publish()?;
-    Ok(CompareEnd::Published(CompareOutcome {
+    Ok(CompareEnd::Published(Box::new(CompareOutcome {
         comparison,
         report_lines,
-    }))
+    })))
 }
 
 /// The fit.json of a fit directory written by compare.

@@ -193,7 +193,7 @@ pub fn fmt_interval(lo: Option<f64>, hi: Option<f64>, v: f64, se: Option<f64>) -
         let (a, b, c) = (text(lo, p), text(hi, p), at_places(v, p));
         let clash =
             |x: Option<f64>, tx: &str, y: f64, ty: &str| x.is_some_and(|x| x != y) && tx == ty;
-        let distinct = !(lo.zip(hi).is_some_and(|(l, h)| l != h) && a == b)
+        let distinct = (lo.zip(hi).is_none_or(|(l, h)| l == h) || a != b)
             && !clash(lo, &a, v, &c)
             && !clash(hi, &b, v, &c);
         if distinct {

@@ -166,10 +166,14 @@ impl Sampler {
             let Some(l) = section.chord(p, [d[1], d[2]]) else {
                 break; // along the axis: it never leaves
             };
-            for c in 0..nc {
-                let kept = w[c] * (-self.fiber.sigma_a[c] * l).exp();
-                balance.absorbed[c] += w[c] - kept;
-                w[c] = kept;
+            for ((w, sigma_a), absorbed) in w[..nc]
+                .iter_mut()
+                .zip(&self.fiber.sigma_a)
+                .zip(balance.absorbed.iter_mut())
+            {
+                let kept = *w * (-sigma_a * l).exp();
+                *absorbed += *w - kept;
+                *w = kept;
             }
             p = [p[0] + l * d[1], p[1] + l * d[2]];
             let ng = self.geometric_normal(section, p);
