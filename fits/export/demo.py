@@ -1,8 +1,8 @@
 # hairfit export: Blender Cycles Principled Hair BSDF, model Chiang (tilt on theta_i)
 # source fit: fits/demo (Marschner model, fitted by hairfit 0.1.0)
 # written by hairfit 0.1.0
-# fit quality: status converged, residual rms 1.0068, reduced chi2 1.015, log space
-# mapping: renderer model fitted over 2340 measured + 1573 sphere directions: rms |d ln S| 0.3947 (max 3.460, measured directions only 0.3740; floor 1e-3 of each channel's peak), 70 LM iterations from 2 starts
+# fit quality: status converged, verdict good, residual rms 1.0050, reduced chi2 1.012, log space
+# mapping: renderer model fitted over 2340 measured + 1573 sphere directions: rms |d ln S| 0.3946 (max 3.460, measured directions only 0.3739; floor 1e-3 of each channel's peak), 69 LM iterations from 2 starts
 # measured directions: fits/demo/curves.csv (2340 samples)
 # colour: channels r, g, b written as R, G, B
 # Cycles tilts theta_i (R at -Offset), so Offset was fitted, not negated; Offset is in radians in bpy; colour is given as Absorption Coefficient (per fibre radius), so Blender's melanin constants do not enter; Coat 0 keeps the R roughness at Roughness
@@ -15,12 +15,12 @@ import bpy
 MATERIAL_NAME = "hairfit_demo"
 # Input name -> value; Offset in radians (bpy angle sockets are radians).
 INPUTS = {
-    "Absorption Coefficient": (0.145886, 0.311144, 0.593976),
-    "Roughness": 0.277437,
-    "Radial Roughness": 0.346614,
+    "Absorption Coefficient": (0.145779, 0.310946, 0.594125),
+    "Roughness": 0.277372,
+    "Radial Roughness": 0.346559,
     "Coat": 0.0,
-    "IOR": 1.699343,
-    "Offset": 0.116227,
+    "IOR": 1.699358,
+    "Offset": 0.116203,
     "Random Roughness": 0.0,
 }
 

@@ -1,10 +1,10 @@
-# WARNING: Scatter 0.0034 is applied to hair cards and meshes only: hair strands ignore it and would miss the fit's S by rms |d ln S| 0.6311 (max 5.097)
+# WARNING: Scatter 0.0034 is applied to hair cards and meshes only: hair strands ignore it and would miss the fit's S by rms |d ln S| 0.6312 (max 5.111)
 # hairfit export: Unreal Engine 5 Hair shading model (Karis 2016), Unreal Engine 5.0-5.3 conventions
 # source fit: fits/demo (Marschner model, fitted by hairfit 0.1.0)
 # written by hairfit 0.1.0
-# fit quality: status converged, residual rms 1.0073, reduced chi2 1.016, log space
-# mapping: engine inputs fitted over 2340 measured + 1573 sphere directions: rms |d ln S| 0.6290 (max 5.066, measured directions only 0.5787; floor 1e-3 of each channel's peak), 180 LM iterations from 3 starts
-# light gain 3.3442413954816876: the engine's S times this is the fit's S (set it as the light's intensity, or ignore it when only the look matters)
+# fit quality: status converged, verdict good, residual rms 1.0050, reduced chi2 1.012, log space
+# mapping: engine inputs fitted over 2340 measured + 1573 sphere directions: rms |d ln S| 0.6291 (max 5.080, measured directions only 0.5787; floor 1e-3 of each channel's peak), 180 LM iterations from 3 starts
+# light gain 3.37366760449125: the engine's S times this is the fit's S (set it as the light's intensity, or ignore it when only the look matters)
 """Create the material instance MI_hairfit_demo of a hair material with hairfit's fitted inputs.
 
 Run it in the Unreal Editor with the Python Editor Script Plugin enabled, e.g. in the Output
@@ -21,12 +21,12 @@ PARENT_MATERIAL = "/Game/Hairfit/M_HairfitHair"
 PACKAGE_PATH = "/Game/Hairfit"
 INSTANCE_NAME = "MI_hairfit_demo"
 # Linear RGB, as the Base Color pin takes it.
-VECTORS = {"BaseColor": (0.11677125407667434, 0.05451275000904135, 0.017103011780060972)}
+VECTORS = {"BaseColor": (0.115215036355809, 0.05377591066978483, 0.016829654988400423)}
 SCALARS = {
-    "Roughness": 0.5328817510658974,
-    "Specular": 0.34810276433429965,
-    "Backlit": 0.9999971424007128,
-    "Scatter": 0.003439186532642963,
+    "Roughness": 0.5328348921972592,
+    "Specular": 0.3448859855125226,
+    "Backlit": 0.9999989502517731,
+    "Scatter": 0.003438651522411545,
 }
 
 
