@@ -18,6 +18,9 @@ pub struct Detector {
     /// Sample indices per cell, cells row-major: `starts[k]..starts[k+1]`.
     starts: Vec<u32>,
     members: Vec<u32>,
+    /// Rows with at least one member: most exits fall in rows no cap reaches (a rig samples a
+    /// few inclinations), and are dismissed before the column's arithmetic.
+    row_used: Vec<bool>,
 }
 
 /// A monotone stand-in for φ ∈ [0, 2π) in [0, 4) from the in-plane components (the "diamond
@@ -86,6 +89,9 @@ impl Detector {
             members.extend_from_slice(l);
         }
         starts.push(members.len() as u32);
+        let row_used = (0..n_rows)
+            .map(|r| starts[r * n_cols] != starts[(r + 1) * n_cols])
+            .collect();
         Detector {
             dirs,
             cos_kernel: kernel.cos(),
@@ -93,6 +99,7 @@ impl Detector {
             n_cols,
             starts,
             members,
+            row_used,
         }
     }
 
@@ -107,6 +114,9 @@ impl Detector {
     /// Call `hit(s)` for every sampling point `s` whose cap holds the unit direction `d`.
     pub fn visit(&self, d: V3, mut hit: impl FnMut(usize)) {
         let r = row(d[0], self.n_rows);
+        if !self.row_used[r] {
+            return;
+        }
         let c =
             ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as usize).min(self.n_cols - 1);
         let k = r * self.n_cols + c;
