@@ -120,7 +120,7 @@ impl<T: DualNum<f64>> Logistic<T> {
     }
 
     /// `norm·(f₀ + f₁δ + f₂δ²)`, `δ = 1/s − 1/s₀` (zero in value; see [`Logistic::taylor`]).
-    fn from_taylor(&self, f: [f64; 3]) -> T {
+    fn series(&self, f: [f64; 3]) -> T {
         let delta = self.inv_s.clone() - self.inv_s.re();
         let series = (delta.clone() * f[2] + f[1]) * delta + f[0];
         series * self.norm.clone()
@@ -215,11 +215,14 @@ fn gauss_legendre() -> &'static GaussLegendre {
 /// Most entries [`SUMS`] holds per thread before it starts over (≈ 5 MB).
 const CACHE_ENTRIES: usize = 1 << 16;
 
+/// (p, φ, x, s bits) → the three sums of [`lobe_sums`].
+type SumsByKey = HashMap<(usize, u64, u64, u64), [f64; 3], BuildHasherDefault<KeyHasher>>;
+
 thread_local! {
     /// The rule's f64 sums by (p, φ, x, s) bits: a goniometer's samples share (θ_d, |φ|) (the
     /// demo's 2,340 samples have 440 distinct pairs), so a pass integrates each pair once. The
     /// sums are a pure function of the key, so a hit returns the very bits a recomputation would.
-    static SUMS: RefCell<HashMap<(usize, u64, u64, u64), [f64; 3], BuildHasherDefault<KeyHasher>>> =
+    static SUMS: RefCell<SumsByKey> =
         RefCell::new(HashMap::default());
 }
 
@@ -262,7 +265,7 @@ pub fn lobe<T: DualNum<f64>>(p: usize, phi: f64, x: f64, logistic: &Logistic<T>)
         });
         sums
     });
-    logistic.from_taylor(sums)
+    logistic.series(sums)
 }
 
 /// The rule's three f64 sums of [`Logistic::taylor`] for one lobe.
