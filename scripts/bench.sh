@@ -43,7 +43,12 @@ run_case() {
     for _ in $(seq "$RUNS"); do
         rm -rf "$work/out"
         local t
-        t=$( { /usr/bin/time -f "%e %U %S" "$@" --out "$work/out" --no-progress >/dev/null 2>/dev/null; } 2>&1 | tail -1)
+        /usr/bin/time -o "$work/time" -f "%e %U %S" "$@" --out "$work/out" --no-progress \
+            >/dev/null 2>"$work/stderr" || {
+            echo "bench: $name failed:" >&2
+            tail -5 "$work/stderr" >&2
+        }
+        t=$(tail -1 "$work/time")
         local wall cpu
         wall=$(echo "$t" | awk '{print $1}')
         cpu=$(echo "$t" | awk '{printf "%.2f", $2 + $3}')
