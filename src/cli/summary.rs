@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::fit::FitOutcome;
 use crate::model::Measurement;
-use crate::plot::{fmt_interval, fmt_value_se};
+use crate::plot::{fmt_interval, fmt_num, fmt_value_se};
 
 /// `v ± e`, both to the error's second significant digit (the report's format,
 /// [`fmt_value_se`]); a value without an error reads as [`crate::plot::fmt_num`].
@@ -115,9 +115,9 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
         "residuals ({} space, {} loss): rms {} {} {} dof {}\n",
         r.space,
         r.loss,
-        r.rms.map_or("null".into(), |v| format!("{v:.4e}")),
+        r.rms.map_or("null".into(), fmt_num),
         crate::report::cost_chi2_label(&r.loss),
-        r.reduced_chi2.map_or("null".into(), |v| format!("{v:.4e}")),
+        r.reduced_chi2.map_or("null".into(), fmt_num),
         r.dof
     );
     if !j.options.intervals.is_empty() {

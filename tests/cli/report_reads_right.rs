@@ -47,6 +47,18 @@ fn the_demo_report_reads_right() {
         .collect();
     assert!(errors.len() >= 11, "{errors:?}");
     assert!(errors.iter().all(|e| !e.contains('e')), "{errors:?}");
+    // The residuals line reads like the report: the demo's rms and reduced χ² are near 1, which
+    // four significant digits show plainly ("1.0014e0" read as an exponent to a newcomer).
+    let residuals = console
+        .lines()
+        .find(|l| l.starts_with("residuals ("))
+        .expect("a residuals line");
+    let numbers: Vec<&str> = residuals
+        .split_whitespace()
+        .filter(|w| w.starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    assert!(numbers.len() >= 3, "{residuals}");
+    assert!(numbers.iter().all(|n| !n.contains('e')), "{residuals}");
 
     // The convergence legend counts what the stage table counts.
     let fit: serde_json::Value =
