@@ -80,7 +80,10 @@ fn a_failed_fit_is_exported_only_with_allow_failed_and_then_with_a_warning() {
     );
     // Past the verdict check (the all-zero fit's scale 0 may still stop the mapping fit, which
     // is that fit's own trouble): the export with sane parameters is the test below.
-    assert!(!all.contains("or pass --allow-failed"), "not refused again: {all}");
+    assert!(
+        !all.contains("or pass --allow-failed"),
+        "not refused again: {all}"
+    );
     assert!(
         allowed.status.success() || all.contains("mapping fit"),
         "--allow-failed got past the verdict check: {all}"
@@ -113,14 +116,24 @@ fn allow_failed_exports_a_failed_fit_with_sane_parameters_and_warns() {
     std::fs::write(&fit_json, serde_json::to_string_pretty(&fit).unwrap()).unwrap();
     let target = tmp.path().join("hair.pbrt");
     let export = |extra: &[&str]| {
-        let mut args = vec!["export", s(&fit_dir), "--to", "pbrt", "--output", s(&target)];
+        let mut args = vec![
+            "export",
+            s(&fit_dir),
+            "--to",
+            "pbrt",
+            "--output",
+            s(&target),
+        ];
         args.extend_from_slice(extra);
         hairfit(&args)
     };
 
     cli::assert_fails_with(
         &export(&[]),
-        &["verdict is failed (no progress from the start point)", "--allow-failed"],
+        &[
+            "verdict is failed (no progress from the start point)",
+            "--allow-failed",
+        ],
     );
     assert!(!target.exists(), "a refused export writes nothing");
 
@@ -133,6 +146,9 @@ fn allow_failed_exports_a_failed_fit_with_sane_parameters_and_warns() {
         "{err}"
     );
     let text = std::fs::read_to_string(&target).unwrap();
-    assert!(text.contains("verdict failed"), "the header says so: {text}");
+    assert!(
+        text.contains("verdict failed"),
+        "the header says so: {text}"
+    );
     assert!(text.contains("MakeNamedMaterial"), "{text}");
 }
