@@ -4,12 +4,14 @@
 //! start-up, outside the timed loops.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use hairfit::chiang::{
+use hairfit::families::chiang::{
     batch_jacobian_static, scattering as chiang_s, scattering_batch, ChiangEffects, ChiangModel,
     ChiangParamName, ChiangParams,
 };
-use hairfit::model::{scattering as marschner_s, Angles, Effects, Lobes, ModelConfig};
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{
+    scattering as marschner_s, Angles, Effects, Lobes, ModelConfig,
+};
 
 const NODE_COUNTS: [usize; 5] = [256, 512, 768, 1024, 2048];
 
@@ -24,8 +26,8 @@ fn chiang_params() -> ChiangParams<f64> {
     }
 }
 
-fn marschner_params() -> hairfit::model::Params<f64> {
-    hairfit::params::ParamFile::load("data/true_1ch.json")
+fn marschner_params() -> hairfit::families::marschner::Params<f64> {
+    hairfit::families::marschner::params::ParamFile::load("data/true_1ch.json")
         .expect("data/true_1ch.json is shipped with the crate")
         .to_params()
 }

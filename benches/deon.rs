@@ -4,10 +4,10 @@
 //! per channel) on the cost ledger's seeded directions.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use hairfit::model::{scattering as marschner_s, Angles};
-use hairfit::params::ParameterFile as _;
-use hairfit::table_family::deon::DEon;
-use hairfit::table_family::{zero_terms, TableFamily, TableParams, TermSet};
+use hairfit::families::deon::DEon;
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{scattering as marschner_s, Angles};
+use hairfit::families::table::{zero_terms, TableFamily, TableParams, TermSet};
 use nalgebra::{Const, U1};
 use num_dual::{Derivative, DualVec64};
 
@@ -24,14 +24,14 @@ fn deon_params(nc: usize, beta_n_deg: f64) -> TableParams<f64> {
 
 fn bench_deon(c: &mut Criterion) {
     let angles: Vec<Angles> = hairfit::cost::representative_angles(512, 0x9E37_79B9);
-    let marschner = hairfit::params::ParamFile::load("data/true_1ch.json")
+    let marschner = hairfit::families::marschner::params::ParamFile::load("data/true_1ch.json")
         .expect("data/true_1ch.json is shipped with the crate")
         .to_params();
     let mut group = c.benchmark_group("per_sample");
     group.sample_size(10);
     group.throughput(Throughput::Elements(angles.len() as u64));
     group.bench_function("marschner_default", |b| {
-        let config = hairfit::model::ModelConfig::default();
+        let config = hairfit::families::marschner::ModelConfig::default();
         b.iter(|| {
             let mut out = [0.0];
             for a in &angles {
@@ -74,7 +74,7 @@ fn bench_deon(c: &mut Criterion) {
         b.iter(|| {
             let mut sum = 0.0;
             for a in &angles {
-                hairfit::table_family::clear_terms(&mut out);
+                hairfit::families::table::clear_terms(&mut out);
                 DEon::scatter(black_box(&pd), a, TermSet::all(4), &mut out);
                 sum += out[0][0].re;
             }

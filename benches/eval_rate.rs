@@ -11,8 +11,8 @@
 
 use std::time::Instant;
 
-use hairfit::model::{scattering_lanes, Angles, ModelConfig};
-use hairfit::params::{ParamFile, ParameterFile as _};
+use hairfit::families::marschner::params::{ParamFile, ParameterFile as _};
+use hairfit::families::marschner::{scattering_lanes, Angles, ModelConfig};
 
 /// `hairfit eval`'s rows per batch (src/eval.rs `EVAL_BATCH`).
 const EVAL_BATCH: usize = 256;

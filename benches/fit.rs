@@ -9,9 +9,9 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use hairfit::demo::synthesize;
+use hairfit::families::marschner::{Angles, ModelConfig, Params};
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::{fit, EffectsChoice, FitOptions};
-use hairfit::model::{Angles, ModelConfig, Params};
 
 fn truth() -> Params<f64> {
     Params {

@@ -3,14 +3,14 @@
 //! exact Jacobian in the six inputs a three-channel fit varies.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use hairfit::fit::family::table::{TableForward, TableParam};
-use hairfit::fit::problem::Forward;
-use hairfit::model::{scattering as marschner_s, Angles, Measurement, ModelConfig};
-use hairfit::params::ParameterFile as _;
-use hairfit::table_family::frostbite::{
+use hairfit::families::frostbite::{
     Frostbite, BASE_COLOR, CUTICLE_ANGLE, RADIAL_SMOOTHNESS, SMOOTHNESS,
 };
-use hairfit::table_family::{DynTable, Table, TableParams, TermSet};
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{scattering as marschner_s, Angles, Measurement, ModelConfig};
+use hairfit::families::table::fit::{TableForward, TableParam};
+use hairfit::families::table::{DynTable, Table, TableParams, TermSet};
+use hairfit::fit::problem::Forward;
 
 const N: usize = 4096;
 
@@ -50,7 +50,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("S+jacobian/3ch/6free", |b| {
         b.iter(|| forward.gradients(black_box(&p), &free, &angles, &mut out, &mut grad))
     });
-    let marschner = hairfit::params::ParamFile::load("data/true_1ch.json")
+    let marschner = hairfit::families::marschner::params::ParamFile::load("data/true_1ch.json")
         .expect("data/true_1ch.json is shipped with the crate")
         .to_params();
     let config = ModelConfig::default();

@@ -4,10 +4,10 @@
 //! Throughput counts samples (direction pairs).
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use hairfit::model::{scattering_batch as marschner_batch, Angles, ModelConfig};
-use hairfit::params::ParameterFile as _;
-use hairfit::table_family::karis::Karis;
-use hairfit::table_family::{DynTable, Table, TableFamily, TableParams};
+use hairfit::families::karis::Karis;
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{scattering_batch as marschner_batch, Angles, ModelConfig};
+use hairfit::families::table::{DynTable, Table, TableFamily, TableParams};
 use nalgebra::{Const, U1};
 use num_dual::{Derivative, DualVec64};
 
@@ -41,15 +41,15 @@ fn bench(c: &mut Criterion) {
     }
     g.bench_function("S+jacobian(5)/3ch", |b| {
         b.iter(|| {
-            let mut terms = hairfit::table_family::zero_terms(3);
+            let mut terms = hairfit::families::table::zero_terms(3);
             for a in &angles {
-                hairfit::table_family::clear_terms(&mut terms);
+                hairfit::families::table::clear_terms(&mut terms);
                 Karis::scatter(black_box(&dual), a, Karis::default_terms(), &mut terms);
             }
             terms
         })
     });
-    let m = hairfit::params::ParamFile::load("data/true_1ch.json")
+    let m = hairfit::families::marschner::params::ParamFile::load("data/true_1ch.json")
         .expect("data/true_1ch.json is shipped with the crate")
         .to_params();
     let config = ModelConfig::default();

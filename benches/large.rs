@@ -10,10 +10,10 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use hairfit::demo::synthesize;
+use hairfit::families::marschner::{Angles, Effects, Measurement, ModelConfig};
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, Space};
-use hairfit::model::{Angles, Effects, Measurement, ModelConfig};
 
 /// `n` random direction pairs (|θ| < 80°).
 fn directions(n: usize) -> Vec<Angles> {

@@ -2,19 +2,19 @@
 //! Each iteration evaluates one batch of `BATCH` angle sets, so throughput = BATCH / time.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use hairfit::fit::{Forward, ModelForward};
-use hairfit::model::{
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{
     scattering, scattering_batch, scattering_jacobian, scattering_lanes, scattering_lanes_on,
     Angles, Effects, LaneKernel, Lobes, Measurement, ModelConfig, ParamName, Params, RootMode,
     StaticJacobian,
 };
-use hairfit::params::ParameterFile as _;
+use hairfit::fit::{Forward, ModelForward};
 
 const BATCH: usize = 1024;
 
 /// MODEL.md's known-values parameter set, as shipped in `data/true_1ch.json`.
 fn params() -> Params<f64> {
-    hairfit::params::ParamFile::load("data/true_1ch.json")
+    hairfit::families::marschner::params::ParamFile::load("data/true_1ch.json")
         .expect("data/true_1ch.json is shipped with the crate")
         .to_params()
 }

@@ -1,9 +1,9 @@
 //! Samples per second of `synthesize` (rig + model + noise, in memory) and of the noise alone.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use hairfit::model::{Measurement, ModelConfig};
-use hairfit::params::ParamFile;
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParamFile;
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{Measurement, ModelConfig};
 use hairfit::synth::{synthesize, Noise, Rig};
 
 const N: usize = 10_000;

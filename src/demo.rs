@@ -5,13 +5,13 @@
 use std::path::Path;
 
 use crate::error::Result;
-use crate::family::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
+use crate::families::marschner::{Angles, ModelConfig, Params};
+use crate::families::table::TableParamFile;
+use crate::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::LoadReport;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_family, FitOptions, FitOutcome};
-use crate::model::{Angles, ModelConfig, Params};
 use crate::report::publish::PublishedFit;
-use crate::table_family::TableParamFile;
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
 pub fn demo_truth() -> Params<f64> {
@@ -77,7 +77,7 @@ pub fn synthesize(
         "in-memory test data",
         &noise,
         scale,
-        crate::model::Measurement::S,
+        crate::families::marschner::Measurement::S,
         seed,
     )
     .expect("valid synthetic inputs");
@@ -96,8 +96,8 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
 
 /// The Chiang demo's true parameters (CHIANG.md's ranges, the same brown-ish absorption; R
 /// toward the root, so `alpha_deg` < 0).
-pub fn chiang_demo_truth() -> crate::chiang::ChiangParams<f64> {
-    crate::chiang::ChiangParams {
+pub fn chiang_demo_truth() -> crate::families::chiang::ChiangParams<f64> {
+    crate::families::chiang::ChiangParams {
         eta: 1.55,
         sigma_a: vec![0.25, 0.45, 0.8],
         beta_m: 0.25,
@@ -119,16 +119,18 @@ pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<Publis
 }
 
 /// The demo's true parameters of `family` as its parameter file: [`demo_truth`],
-/// [`chiang_demo_truth`], or a table family's [`crate::table_family::demo_params`].
+/// [`chiang_demo_truth`], or a table family's [`crate::families::table::demo_params`].
 pub fn demo_truth_file(family: ModelFamily) -> FamilyParams {
     match family {
-        ModelFamily::Marschner => crate::params::ParamFile::from_params(&demo_truth()).into(),
+        ModelFamily::Marschner => {
+            crate::families::marschner::params::ParamFile::from_params(&demo_truth()).into()
+        }
         ModelFamily::Chiang => {
-            crate::chiang::ChiangParamFile::from_params(&chiang_demo_truth()).into()
+            crate::families::chiang::ChiangParamFile::from_params(&chiang_demo_truth()).into()
         }
         other => {
             let table = other.table().expect("every other family is a table");
-            let truth = crate::table_family::demo_params(table.facts(), DEMO_SCALE.len());
+            let truth = crate::families::table::demo_params(table.facts(), DEMO_SCALE.len());
             TableParamFile::from_params(table, &truth).into()
         }
     }

@@ -1,5 +1,5 @@
 //! hairfit: fit hair scattering models (Marschner 2003, Chiang 2016 and the models real-time
-//! renderers use; [`family::ModelFamily::ALL`] lists them) to measured or synthetic
+//! renderers use; [`families::ModelFamily::ALL`] lists them) to measured or synthetic
 //! fiber-scattering data.
 //!
 //! The crate is a library with a thin CLI (`src/main.rs`). Its modules form layers, lowest
@@ -14,15 +14,15 @@
 //! - [`lm`]: Levenberg–Marquardt as an argmin `Solver`, and the covariance of its solution.
 //! - [`plot`]: the plotting kit (chart set-up, scales, SVG + PNG rendering) of report and cost.
 //!
-//! Model families:
-//! - [`model`]: the forward model of `MODEL.md` (one pure function per equation), generic over
-//!   the number type so that forward-mode AD gives exact Jacobians.
-//! - [`chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a whole-fibre S),
-//!   generic over the number type like [`model`].
-//! - [`params`]: the parameter file (`PARAMS.json`) with MODEL.md's names, and its validation.
-//! - [`table_family`]: the families given as a table of terms (Kajiya-Kay, d'Eon, Karis,
-//!   Frostbite).
-//! - [`family`]: every model family (`--model NAME`), and a parameter file of any of them.
+//! Model families ([`families`], one folder each):
+//! - [`families::marschner`]: the forward model of `MODEL.md` (one pure function per equation),
+//!   generic over the number type so that forward-mode AD gives exact Jacobians; its parameter
+//!   file (`PARAMS.json`, [`families::marschner::params`]) and its fit adaptor.
+//! - [`families::chiang`]: the Chiang 2016 model of `CHIANG.md` (pbrt-v4's hair BxDF as a
+//!   whole-fibre S), generic over the number type like Marschner's.
+//! - [`families::table`]: the machinery of the families given as a table of terms
+//!   ([`families::kajiya_kay`], [`families::deon`], [`families::karis`], [`families::frostbite`]).
+//! - [`families`] itself: every model family (`--model NAME`), and a parameter file of any of them.
 //!
 //! Files and samples:
 //! - [`files`]: every result format (fit.json, curves.csv, truth.json, timing.json, the load
@@ -53,7 +53,6 @@
 
 pub mod atomic;
 pub mod batch;
-pub mod chiang;
 pub mod cli;
 pub mod compare;
 pub mod cost;
@@ -62,21 +61,18 @@ pub mod demo;
 pub mod error;
 pub mod eval;
 pub mod export;
-pub mod family;
+pub mod families;
 pub mod files;
 pub mod fit;
 pub mod geometry;
 pub mod json_file;
 pub mod lm;
-pub mod model;
 pub mod outdir;
-pub mod params;
 pub mod plot;
 pub mod report;
 pub mod rng;
 pub mod slices;
 pub mod synth;
-pub mod table_family;
 pub mod trace;
 
 pub use error::{Error, Result};

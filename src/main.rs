@@ -11,7 +11,7 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use hairfit::cli::exit::exit_code;
 use hairfit::cli::ModelArgs;
 use hairfit::eval::{eval_file, output_columns, EvalRequest};
-use hairfit::family::{FamilyModel, FamilyParams};
+use hairfit::families::{FamilyModel, FamilyParams};
 use hairfit::files::Verdict;
 
 /// `eprintln!` without its panic when stderr has gone: see [`hairfit::cli::tell`].
@@ -73,8 +73,8 @@ enum Command {
         out: PathBuf,
         /// `marschner`: its accuracy knobs; `chiang`: its width rule; another family: no knobs of
         /// its own. Every run ends with every family's cost (samples/s/core) side by side.
-        #[arg(long = "model", value_enum, default_value_t = hairfit::family::ModelFamily::Marschner)]
-        family: hairfit::family::ModelFamily,
+        #[arg(long = "model", value_enum, default_value_t = hairfit::families::ModelFamily::Marschner)]
+        family: hairfit::families::ModelFamily,
     },
     /// Fit several model families to the same data and rank them (hairfit::cli::help).
     Compare(hairfit::cli::compare::CompareArgs),

@@ -14,8 +14,8 @@ use pyo3::prelude::*;
 use rayon::prelude::*;
 
 use hairfit::data::AngleUnit;
-use hairfit::family::{FamilyModel, FamilyParams};
-use hairfit::model::Angles;
+use hairfit::families::marschner::Angles;
+use hairfit::families::{FamilyModel, FamilyParams};
 
 use crate::args::{parse, ModelCli};
 use crate::arrays::{angle_unit, check_angles, common_length, unit_name, values_of};
@@ -136,7 +136,7 @@ fn family_params(
     py: Python<'_>,
     text: Option<String>,
     path: Option<PathBuf>,
-    family: hairfit::family::ModelFamily,
+    family: hairfit::families::ModelFamily,
 ) -> PyResult<FamilyParams> {
     let (file, name) = match (text, path) {
         (Some(text), _) => (

@@ -6,7 +6,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 use hairfit::cli::fit::FitArgs;
-use hairfit::family::FamilyParams;
+use hairfit::families::FamilyParams;
 use hairfit::fit::{fit_family, into_fit_data, FitOutcome};
 
 use crate::args::{parse, FitCli};

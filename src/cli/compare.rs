@@ -13,7 +13,7 @@ use super::ModelArgs;
 use crate::compare::CompareEnd;
 use crate::data::LoadOptions;
 use crate::error::{Error, Result};
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 use crate::files::CurvesMode;
 
 /// The families compared when `--models` is not given.
@@ -75,7 +75,10 @@ const FAMILY_OPTIONS: [FamilyOption; 6] = [
     },
     FamilyOption {
         flag: "--lobes",
-        given: |m| crate::model::Effects::parse_lobes(&m.lobes).ok() != Some(Default::default()),
+        given: |m| {
+            crate::families::marschner::Effects::parse_lobes(&m.lobes).ok()
+                != Some(Default::default())
+        },
         reset: |m| m.lobes = "R,TT,TRT".into(),
     },
     FamilyOption {

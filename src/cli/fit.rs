@@ -11,7 +11,7 @@ use clap::Args;
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 use crate::files::CurvesMode;
 use crate::fit::{
     fit_family, into_fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
@@ -112,7 +112,7 @@ impl FitArgs {
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
         self.model.check_family_options()?;
         let cfg = self.model.config()?;
-        let default_lobes = crate::model::Lobes::default();
+        let default_lobes = crate::families::marschner::Lobes::default();
         let explicit = cfg.effects.lobes != default_lobes
             || self.model.no_glints
             || self.model.no_eccentricity;

@@ -6,7 +6,7 @@ use clap::Command;
 
 use super::compare::DEFAULT_MODELS;
 use crate::export::Target;
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 
 /// `marschner: Marschner 2003; chiang: Chiang 2016 (pbrt-v4's hair); …`.
 pub fn family_list() -> String {

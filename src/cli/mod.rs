@@ -15,11 +15,11 @@ pub mod trace;
 
 use clap::Args;
 
-use crate::chiang::{ChiangEffects, ChiangModel, WidthNodes};
 use crate::error::{Error, Result};
-use crate::family::{ModelFamily, ModelSetup};
-use crate::model::{Effects, Measurement, ModelConfig, RootMode};
-use crate::table_family::TermSet;
+use crate::families::chiang::{ChiangEffects, ChiangModel, WidthNodes};
+use crate::families::marschner::{Effects, Measurement, ModelConfig, RootMode};
+use crate::families::table::TermSet;
+use crate::families::{ModelFamily, ModelSetup};
 
 /// Write one line to stderr, as `eprintln!` would, but without its panic when stderr has gone (a
 /// pipe whose reader left): then no one is left to tell, and the exit code still says how the
@@ -139,7 +139,9 @@ impl ModelArgs {
     pub fn marschner_options_given(&self) -> Option<&'static str> {
         if self.mode != RootMode::Cubic {
             Some("--mode")
-        } else if Effects::parse_lobes(&self.lobes).ok() != Some(crate::model::Lobes::default()) {
+        } else if Effects::parse_lobes(&self.lobes).ok()
+            != Some(crate::families::marschner::Lobes::default())
+        {
             Some("--lobes")
         } else if self.no_glints {
             Some("--no-glints")

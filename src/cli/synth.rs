@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use super::{MeasurementArgs, ModelArgs};
 use crate::data::write_csv;
 use crate::error::{Error, Result};
-use crate::family::{FamilyModel, FamilyParams};
+use crate::families::{FamilyModel, FamilyParams};
 use crate::synth::noise::{self, Noise};
 use crate::synth::{
     memory, random, record_truth, synthesize_model, truth_path, Acquisition, Rig, Source,

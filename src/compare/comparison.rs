@@ -9,7 +9,7 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::Result;
-use crate::family::{FamilyParams, ModelFamily};
+use crate::families::{FamilyParams, ModelFamily};
 use crate::files::{ParameterEntry, ScaleEntry, Verdict};
 
 /// What compare.json says about scales.

@@ -9,7 +9,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::error::Result;
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 use crate::files::CurveRow;
 use crate::plot::{cartesian, de, header, range_of, Axes, Figure, Frame, YScale, FONT};
 use crate::slices::decimate::stride_indices;

@@ -3,7 +3,7 @@
 //! ΔBIC, the χ² ratio and the regions where it misses the data most, with numbers.
 
 use super::comparison::{ModelSummary, Ranked, Region, AIC_TIE, BIN_RATIO, SCALE_NOTE};
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 use crate::plot::fmt_num;
 
 /// Bins (of |φ| or θh) named per family in the findings; lobe regions are always named.

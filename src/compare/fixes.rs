@@ -3,7 +3,7 @@
 //! channel indices, once the data load), naming the listed families that lack the parameter.
 
 use crate::error::{Error, Result};
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 use crate::fit::family::family_fit;
 
 use super::findings::and_list;

@@ -11,7 +11,7 @@ use super::comparison::{Comparison, Region, AIC_TIE, BIN_RATIO, MIN_RMS_GAP};
 use super::findings::and_list;
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::family::ModelFamily;
+use crate::families::ModelFamily;
 use crate::plot::{escape, fmt_num, fmt_value_se, FigureInfo};
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1500px;margin:1em auto}\

@@ -27,7 +27,7 @@ pub use comparison::{
 pub use fixes::check_fixes;
 
 use crate::error::{Error, Result};
-use crate::family::{FamilyParams, ModelFamily};
+use crate::families::{FamilyParams, ModelFamily};
 use crate::files::{CurveRow, FitJson, Verdict};
 use crate::fit::{FitData, FitOptions, FitOutcome};
 

@@ -6,8 +6,10 @@
 
 use super::model::{accuracy_row, representative_angles};
 use super::{time_per_call, CostRow, COST_SEED};
-use crate::chiang::{scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
-use crate::model::{Angles, ModelConfig};
+use crate::families::chiang::{
+    scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams,
+};
+use crate::families::marschner::{Angles, ModelConfig};
 
 /// Node counts of the ledger (the reference uses [`REFERENCE_NODES`]).
 pub const NODE_LADDER: [usize; 5] = [256, 512, 768, 1024, 2048];
@@ -74,7 +76,7 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
     let t = time_per_call(min_s, || {
         let mut o = vec![0.0; nc];
         for a in &random {
-            crate::model::scattering(&marschner, &config, a, &mut o);
+            crate::families::marschner::scattering(&marschner, &config, a, &mut o);
         }
     });
     rows.push(CostRow {

@@ -6,9 +6,9 @@
 
 use super::{time_per_call, CostRow};
 use crate::error::Result;
-use crate::family::{FamilyModel, ModelFamily, ModelSetup};
+use crate::families::marschner::Angles;
+use crate::families::{FamilyModel, ModelFamily, ModelSetup};
 use crate::fit::{fit_family, FitOptions};
-use crate::model::Angles;
 
 /// What the error columns would compare: nothing across models.
 const NOT_COMPARABLE: &str = "another model (hairfit compare ranks the families' losses)";

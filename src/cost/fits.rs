@@ -7,9 +7,9 @@ use std::time::Instant;
 use super::{CostRow, COST_SEED};
 use crate::demo::{demo_geometry, demo_truth, synthesize, DEMO_NOISE, DEMO_SCALE};
 use crate::error::Result;
+use crate::families::marschner::{Effects, ModelConfig};
 use crate::fit::bounds::typical_range;
 use crate::fit::{fit, free_parameters, param, EffectsChoice, FitData, FitOptions, Global};
-use crate::model::{Effects, ModelConfig};
 
 /// The seeded synthetic data of the fit section (the demo's geometry, truth, scale and noise).
 pub(super) fn synthetic_data() -> FitData {

@@ -4,8 +4,8 @@
 use super::{time_per_call, CostRow};
 use crate::demo::demo_truth;
 use crate::error::Result;
+use crate::families::marschner::{Effects, Measurement, ModelConfig};
 use crate::fit::{free_parameters, param, Evaluator, FitData, Loss, ModelForward, Space};
-use crate::model::{Effects, Measurement, ModelConfig};
 
 /// Jacobian section: exact forward-mode AD against central finite differences in the solver's
 /// parameters, at the truth, on the synthetic data; error per column relative to the AD column.

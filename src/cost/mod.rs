@@ -41,7 +41,7 @@ pub struct CostOptions {
     pub force: bool,
     /// `chiang`: the Chiang section instead (width nodes × cache against accuracy, with the
     /// Marschner model's time as the yardstick).
-    pub family: crate::family::ModelFamily,
+    pub family: crate::families::ModelFamily,
 }
 
 /// One measured setting of one knob.
@@ -106,13 +106,13 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
     let quick = options.quick;
     let mut rows = Vec::new();
     match options.family {
-        crate::family::ModelFamily::Marschner => {
+        crate::families::ModelFamily::Marschner => {
             rows.extend(model::model_rows(quick));
             let data = fits::synthetic_data();
             rows.extend(jacobian::jacobian_rows(&data, quick)?);
             rows.extend(fits::fit_rows(&data, quick)?);
         }
-        crate::family::ModelFamily::Chiang => rows.extend(chiang::chiang_rows(quick)?),
+        crate::families::ModelFamily::Chiang => rows.extend(chiang::chiang_rows(quick)?),
         // A table family's one knob is its terms: each family's cost below is the ledger.
         _ => {}
     }

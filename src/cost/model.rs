@@ -3,7 +3,9 @@
 
 use super::{time_per_call, CostRow, COST_SEED};
 use crate::demo::demo_truth;
-use crate::model::{scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
+use crate::families::marschner::{
+    scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
+};
 use crate::rng::SplitMix64;
 
 /// A fixed, seeded set of directions: θ uniform in (−80°, 80°) (away from the degenerate ±90°),

@@ -1,4 +1,4 @@
-//! The mapping fit: a renderer's variant of the Chiang model ([`crate::chiang::variant`]) fitted
+//! The mapping fit: a renderer's variant of the Chiang model ([`crate::families::chiang::variant`]) fitted
 //! by least squares in log S to the source fit's `S` over the measured directions plus a dense
 //! sphere, with the project's Levenberg–Marquardt and exact AD Jacobians.
 //!
@@ -13,14 +13,14 @@ use nalgebra::{DMatrix, DVector};
 use num_dual::{DualDVec64, DualNum, DualSVec64};
 
 use super::source::{SourceFit, SourceModel};
-use crate::chiang::variant::{
+use crate::error::{Error, Result};
+use crate::families::chiang::variant::{
     variant_jacobian, variant_jacobian_static, variant_scattering_batch, Formulation, Tilt,
     VariantParams,
 };
-use crate::chiang::{ChiangEffects, ChiangModel, ChiangParams};
-use crate::error::{Error, Result};
+use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParams};
+use crate::families::marschner::Angles;
 use crate::lm::LevenbergMarquardt;
-use crate::model::Angles;
 
 /// Floor of the log residual, relative to the channel's largest source value.
 pub const FLOOR_FRACTION: f64 = 1e-3;
@@ -336,7 +336,7 @@ fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>>
             .map(|&beta_n| VariantParams {
                 chiang: ChiangParams {
                     beta_n,
-                    ..crate::chiang::reference_params(model.n_channels())
+                    ..crate::families::chiang::reference_params(model.n_channels())
                 },
                 gain,
             })

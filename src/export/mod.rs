@@ -22,8 +22,8 @@ use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
 
-use crate::chiang::variant::Formulation;
 use crate::error::{Error, Result};
+use crate::families::chiang::variant::Formulation;
 
 pub use mapping::{dense_sphere, fit_mapping, Mapping};
 pub use source::{SourceFit, SourceModel};

@@ -8,12 +8,12 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
-use crate::family::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily, ModelSetup};
+use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
+use crate::families::marschner::params::ParamFile;
+use crate::families::marschner::{Angles, ModelConfig, Params};
+use crate::families::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::{Curves, ParameterFile};
-use crate::model::{Angles, ModelConfig, Params};
-use crate::params::ParamFile;
 
 /// At most this many measured directions enter a mapping (a 3-channel, 8-variable Jacobian of
 /// 20 000 directions is ≈ 4 MB); larger fits are thinned evenly and the header says so.
@@ -64,13 +64,14 @@ impl SourceModel {
         match self {
             SourceModel::Chiang { params, effects } => {
                 // The fit's terms (its S), at the default width rule (the renderer's reference).
-                let model = ChiangModel::with_width(*effects, crate::chiang::WidthNodes::Auto)
-                    .expect("auto needs no count");
-                crate::chiang::scattering_batch(params, &model, angles, &mut out);
+                let model =
+                    ChiangModel::with_width(*effects, crate::families::chiang::WidthNodes::Auto)
+                        .expect("auto needs no count");
+                crate::families::chiang::scattering_batch(params, &model, angles, &mut out);
             }
             SourceModel::Marschner { params, config } => {
                 for (a, row) in angles.iter().zip(out.chunks_mut(n)) {
-                    crate::model::scattering(params, config, a, row);
+                    crate::families::marschner::scattering(params, config, a, row);
                 }
             }
             SourceModel::Table(model) => model.eval_batch(angles, &mut out),

@@ -12,8 +12,8 @@ use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use super::settings::{Global, Loss, Space};
 use crate::error::Result;
-use crate::family::{ChiangRecord, FamilyParams};
-use crate::model::{Measurement, ModelConfig, RootMode};
+use crate::families::marschner::{Measurement, ModelConfig, RootMode};
+use crate::families::{ChiangRecord, FamilyParams};
 
 /// How a fit (or one solver run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -468,13 +468,13 @@ pub struct FitJson {
 
 impl FitJson {
     /// The model family the fit used.
-    pub fn family(&self) -> crate::family::ModelFamily {
+    pub fn family(&self) -> crate::families::ModelFamily {
         self.params.family()
     }
 
     /// The model configuration the fit used, as its records say.
-    pub fn setup(&self) -> Result<crate::family::ModelSetup> {
-        crate::family::ModelSetup::from_records(
+    pub fn setup(&self) -> Result<crate::families::ModelSetup> {
+        crate::families::ModelSetup::from_records(
             self.family(),
             self.model,
             self.chiang.as_ref(),

@@ -1,7 +1,7 @@
 //! Every on-disk format hairfit writes and reads, one Serialize + Deserialize type each, so a
 //! writer and its reader can never disagree: `fit.json` ([`FitJson`]), `curves.csv`
 //! ([`CurveRow`]), `timing.json` ([`Timing`]), `truth.json` ([`Truth`]), the loader's report
-//! ([`LoadReport`]); `params.json` is [`crate::params::ParamFile`]. Readers name file, line and
+//! ([`LoadReport`]); `params.json` is [`crate::families::marschner::params::ParamFile`]. Readers name file, line and
 //! column on bad input; writers write atomically. This module sits below `fit` and `report`
 //! (both use it) and above the model families whose parameters its records hold; the fit's
 //! settings and test statistics it records are defined here (`settings`, `statistics`).

@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use super::fit_json::ScaleEntry;
 use crate::error::Result;
-use crate::family::{ChiangRecord, FamilyParams};
-use crate::model::{Measurement, ModelConfig};
+use crate::families::marschner::{Measurement, ModelConfig};
+use crate::families::{ChiangRecord, FamilyParams};
 
 /// The sidecar `FILE.truth.json`: the exact inputs of a synthetic dataset.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

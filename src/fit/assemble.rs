@@ -11,7 +11,7 @@ use super::diagnostics::{NULL_WEIGHT, POORLY_DETERMINED};
 use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode};
 use super::FitOutcome;
 use crate::error::Result;
-use crate::family::{FamilyParams, ModelRecords};
+use crate::families::{FamilyParams, ModelRecords};
 use crate::files::CurvesMode;
 use crate::files::{
     finite, ChannelCorrelation, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo,

@@ -7,8 +7,10 @@ use serde::Serialize;
 use super::bounds::reference_params;
 use super::design::subsample;
 use super::problem::FitData;
-use crate::model::eccentricity::cos_2phi_h_spread;
-use crate::model::{scattering, scattering_by_lobe, Effects, Lobes, ModelConfig, RootMode};
+use crate::families::marschner::eccentricity::cos_2phi_h_spread;
+use crate::families::marschner::{
+    scattering, scattering_by_lobe, Effects, Lobes, ModelConfig, RootMode,
+};
 
 /// A contribution counts as measurable above this fraction of S: 1%, the scale of typical
 /// measurement noise (2% in the demo) and well above rounding.

@@ -6,10 +6,10 @@
 use std::f64::consts::PI;
 
 use super::problem::FitData;
-use crate::model::angles::wrap;
-use crate::model::azimuthal::caustic_position;
-use crate::model::bravais::bravais_indices;
-use crate::model::{ParamName, Params, RootMode};
+use crate::families::marschner::angles::wrap;
+use crate::families::marschner::azimuthal::caustic_position;
+use crate::families::marschner::bravais::bravais_indices;
+use crate::families::marschner::{ParamName, Params, RootMode};
 
 /// A standard error above this fraction of the typical range earns a "poorly determined" warning.
 pub const POORLY_DETERMINED: f64 = 0.2;
@@ -91,7 +91,7 @@ pub fn why_undetermined(
             }
         }
         ParamName::Eccentricity => {
-            let spread = crate::model::eccentricity::cos_2phi_h_spread(&data.angles);
+            let spread = crate::families::marschner::eccentricity::cos_2phi_h_spread(&data.angles);
             format!("the samples span cos(2 phi_h) by only {spread:.3}: eccentricity acts through phi_h{tail}")
         }
         ParamName::SigmaA(_) => {

@@ -3,8 +3,8 @@
 //! the suggestions both read it without importing each other.
 
 use super::problem::{Evaluation, Evaluator, FitData, Forward, ParamSet};
+use crate::families::marschner::ModelConfig;
 use crate::files::{FitStatus, ParameterEntry, ScaleEntry, TraceStage};
-use crate::model::ModelConfig;
 
 /// A residual beyond this many robust noise levels is "large" (evidence for a robust loss).
 pub const LARGE_RESIDUAL: f64 = 5.0;

@@ -180,8 +180,8 @@ impl<P: FitParam> FreeSet<P> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chiang::ChiangParamName;
-    use crate::model::ParamName;
+    use crate::families::chiang::ChiangParamName;
+    use crate::families::marschner::ParamName;
 
     fn items(v: &[&str]) -> Vec<String> {
         v.iter().map(|s| s.to_string()).collect()
@@ -227,7 +227,7 @@ mod tests {
 
     #[test]
     fn errors_name_the_item_and_the_family() {
-        let all = crate::chiang::all_parameters(1);
+        let all = crate::families::chiang::all_parameters(1);
         let e = |v: &[&str]| {
             parse_fixes::<ChiangParamName>(&items(v), &all, "Chiang parameter", "beta_n=0.3")
                 .unwrap_err()

@@ -33,9 +33,9 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
+pub use crate::families::marschner::fit::fit;
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
-pub use family::marschner::fit;
 pub use loss::{Loss, LossScale};
 pub use problem::{
     Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
@@ -44,14 +44,14 @@ pub use profile::Intervals;
 
 pub use crate::files::settings::Global;
 
-use crate::chiang::ChiangModel;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::family::{FamilyParams, ModelFamily};
+use crate::families::chiang::ChiangModel;
+use crate::families::marschner::{Effects, Measurement, ParamName, Params, RootMode};
+use crate::families::{FamilyParams, ModelFamily};
 use crate::files::{
     Curves, CurvesMode, FitJson, FitStatus, Floored, LoadReport, OptionsRecord, Timing,
 };
-use crate::model::{Effects, Measurement, ParamName, Params, RootMode};
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -117,7 +117,7 @@ pub struct FitOptions {
     /// The Chiang model's terms and width nodes (`--terms`, `--width-nodes`), for `--model chiang`.
     pub chiang: ChiangModel,
     /// A table family's terms (`--terms`; `None`: all), for the table families.
-    pub terms: Option<crate::table_family::TermSet>,
+    pub terms: Option<crate::families::table::TermSet>,
     /// How much of the curves the fit's directory gets (`--curves`); `None`: auto (full up to
     /// [`AUTO_FULL_CURVES_ROWS`] rows, the summary above).
     pub curves: Option<CurvesMode>,
@@ -171,9 +171,9 @@ pub fn into_fit_data(ds: Dataset) -> FitData {
     }
 }
 
-fn angles_of(ds: &Dataset) -> Vec<crate::model::Angles> {
+fn angles_of(ds: &Dataset) -> Vec<crate::families::marschner::Angles> {
     (0..ds.len())
-        .map(|i| crate::model::Angles {
+        .map(|i| crate::families::marschner::Angles {
             theta_i: ds.theta_i[i],
             phi_i: ds.phi_i[i],
             theta_r: ds.theta_r[i],
@@ -183,9 +183,9 @@ fn angles_of(ds: &Dataset) -> Vec<crate::model::Angles> {
 }
 
 /// Every parameter name in output order (the parameter table's order).
-pub use crate::model::parameters::all_parameters;
+pub use crate::families::marschner::parameters::all_parameters;
 /// The model's parameters that a fit under `effects` varies before `--fix` (from the table).
-pub use crate::model::parameters::fitted_parameters as free_parameters;
+pub use crate::families::marschner::parameters::fitted_parameters as free_parameters;
 
 /// A fit whose every row lies within this relative distance of the data (below 1e-9 of the
 /// channel's peak, within this share of 1e-9·peak) reproduces them to rounding, not noise: float32
@@ -297,7 +297,7 @@ pub struct FitRun<'a, F: Forward> {
     pub free: Vec<F::Param>,
     pub options: OptionsOf<'a>,
     /// What fit.json records of the family's configuration.
-    pub records: crate::family::ModelRecords,
+    pub records: crate::families::ModelRecords,
     pub all: Vec<F::Param>,
     pub why: assemble::WhyUndetermined<'a, F::Param>,
     pub params_file: fn(&ParamSet<F>) -> FamilyParams,

@@ -5,7 +5,7 @@
 
 use nalgebra::DVector;
 
-use crate::model::Angles;
+use crate::families::marschner::Angles;
 
 mod evaluation;
 mod evaluator;

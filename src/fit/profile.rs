@@ -30,8 +30,8 @@ use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
 
 mod record;
+use crate::families::marschner::ParamName;
 use crate::files::{FitStatus, ProfileMethod, StageTiming, Verdict};
-use crate::model::ParamName;
 pub use record::apply;
 
 /// Δχ² of a 68.27% interval for one parameter.

@@ -10,10 +10,10 @@ pub use super::fixes::FreeSet;
 use super::problem::{self, Evaluator, FitData, FitParam, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
 use super::{choose_effects, EffectsChoice, FitOptions, Global};
+use crate::families::marschner::{Effects, ModelConfig};
 use crate::files::{
     EffectsSource, FitStatus, Floored, OptionsRecord, ScaleMethod, StageTiming, TraceStage,
 };
-use crate::model::{Effects, ModelConfig};
 
 /// The model the fit uses and why.
 pub struct ModelChoice {

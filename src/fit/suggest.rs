@@ -8,9 +8,9 @@ use rayon::prelude::*;
 use super::evidence::{Evidence, LARGE_RESIDUAL};
 use super::gof;
 use super::problem::{FitParam, Forward, ScaleMode, Space, CHUNK};
+use crate::families::marschner::{Measurement, RootMode};
 use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
 use crate::fit::Loss;
-use crate::model::{Measurement, RootMode};
 use crate::slices::Slice;
 
 /// A robust loss is suggested when the large residuals are at most this fraction of the data…

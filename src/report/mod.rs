@@ -20,9 +20,9 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::family::FamilyModel;
+use crate::families::marschner::Angles;
+use crate::families::FamilyModel;
 use crate::files::{CurveRow, Curves, CurvesMode, FitJson, ProfileMethod};
-use crate::model::Angles;
 
 use crate::plot::{render, YScale};
 use crate::slices::decimate::stride_indices;
@@ -409,7 +409,7 @@ fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
         .iter()
         .filter(|p| !p.profile.is_empty())
         .map(|p| {
-            let unit = crate::model::ParamName::from_json_name(&p.name)
+            let unit = crate::families::marschner::ParamName::from_json_name(&p.name)
                 .map_or("", |n| n.fact().unit.label());
             ProfilePanel {
                 title: if unit.is_empty() {

@@ -44,7 +44,7 @@ pub fn is_report_file(name: &str) -> bool {
 
 /// A fit published into its output directory with its plotted report.
 #[derive(Debug)]
-pub struct PublishedFit<P = crate::family::FamilyParams> {
+pub struct PublishedFit<P = crate::families::FamilyParams> {
     pub outcome: FitOutcome<P>,
 }
 

@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::families::marschner::params::SigmaA;
 use crate::json_file::ParameterFile;
-use crate::params::SigmaA;
 
 /// Most internal segments a path may be followed for (`max_segments`).
 pub const MAX_SEGMENTS_LIMIT: u32 = 1000;

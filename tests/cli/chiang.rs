@@ -8,7 +8,7 @@ use cli::{failed, hairfit, hairfit_ok, s as p, stdout, write};
 use std::path::Path;
 
 use crate::support::chiang::{model, s, set_a, set_b};
-use hairfit::family::FamilyParams;
+use hairfit::families::FamilyParams;
 use hairfit::files::{FitJson, ParameterFile as _, Truth};
 
 /// (θ_i, φ_i, θ_r, φ_r) in degrees; A: S(i,r), S(r,i); B: S(i,r), S(r,i) (CHIANG.md).
@@ -225,7 +225,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
     assert!(matches!(t.params, FamilyParams::Chiang(_)));
     assert_eq!(
         t.chiang.unwrap().width_nodes,
-        hairfit::chiang::WidthNodes::Fixed(256)
+        hairfit::families::chiang::WidthNodes::Fixed(256)
     );
     let out = dir.path().join("fit");
     let summary = stdout(&hairfit_ok(&[
@@ -243,7 +243,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
     ]));
     assert!(summary.contains("model: chiang"), "{summary}");
     let fit = FitJson::load(&out.join("fit.json")).unwrap();
-    let params = hairfit::chiang::ChiangParamFile::load(out.join("params.json")).unwrap();
+    let params = hairfit::families::chiang::ChiangParamFile::load(out.join("params.json")).unwrap();
     assert_eq!(Some(&params), fit.params.chiang());
     assert_eq!(params.model.as_deref(), Some("chiang"));
     let got = params.to_params();
@@ -326,8 +326,11 @@ fn demo_runs_the_chiang_family() {
     );
     let fit = FitJson::load(&out.join("fit.json")).unwrap();
     let truth = Truth::load(&out.join("truth.json")).unwrap();
-    assert_eq!(fit.family(), hairfit::family::ModelFamily::Chiang);
-    assert_eq!(truth.params.family(), hairfit::family::ModelFamily::Chiang);
+    assert_eq!(fit.family(), hairfit::families::ModelFamily::Chiang);
+    assert_eq!(
+        truth.params.family(),
+        hairfit::families::ModelFamily::Chiang
+    );
     // 2% noise on 2340 samples × 3 channels: β and α land within a few standard errors.
     let beta_n = fit.parameters.iter().find(|p| p.name == "beta_n").unwrap();
     assert!((beta_n.value.unwrap() - 0.35).abs() < 0.02, "{beta_n:?}");
@@ -344,7 +347,7 @@ fn cost_ledger_has_the_chiang_section() {
         &dir.path().join("cost"),
         &hairfit::cost::CostOptions {
             quick: true,
-            family: hairfit::family::ModelFamily::Chiang,
+            family: hairfit::families::ModelFamily::Chiang,
             ..Default::default()
         },
     )
@@ -397,11 +400,11 @@ fn auto_width_rule_fits_like_the_plain_rule() {
     let (auto, plain) = (fit("auto"), fit("1024"));
     assert_eq!(
         auto.chiang.unwrap().width_nodes,
-        hairfit::chiang::WidthNodes::Auto
+        hairfit::families::chiang::WidthNodes::Auto
     );
     assert_eq!(
         plain.chiang.unwrap().width_nodes,
-        hairfit::chiang::WidthNodes::Fixed(1024)
+        hairfit::families::chiang::WidthNodes::Fixed(1024)
     );
     assert_eq!(auto.verdict, plain.verdict);
     assert_eq!(

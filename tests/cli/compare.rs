@@ -9,7 +9,7 @@ use cli::{hairfit_ok, s as p, stdout, write};
 use std::path::Path;
 
 use hairfit::compare::Comparison;
-use hairfit::family::ModelFamily;
+use hairfit::families::ModelFamily;
 use hairfit::plot::escape;
 
 /// Synthesize with `model` and `params`, 2% relative noise, and compare.

@@ -6,11 +6,11 @@ use crate::support::cli;
 
 use cli::{failed, hairfit, hairfit_ok, s as p, stdout, write};
 
-use hairfit::family::{FamilyParams, ModelFamily};
+use hairfit::families::deon::DEon;
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{TableFamily, TermSet};
+use hairfit::families::{FamilyParams, ModelFamily};
 use hairfit::files::{FitJson, Verdict};
-use hairfit::model::Angles;
-use hairfit::table_family::deon::DEon;
-use hairfit::table_family::{TableFamily, TermSet};
 
 const TRUTH: &str = r#"{"model": "deon", "sigma_a": [0.3, 0.7, 1.4], "beta_r_deg": 6,
     "beta_n_deg": 12, "alpha_deg": -2.5}"#;
@@ -109,10 +109,10 @@ fn eval_prints_the_library_value() {
         .map(|l| l.split(',').nth(4).unwrap().parse().unwrap())
         .collect();
     for (r, g) in rows.iter().zip(&got) {
-        let mut out = hairfit::table_family::zero_terms::<f64>(3);
+        let mut out = hairfit::families::table::zero_terms::<f64>(3);
         let a = Angles::from_degrees(r[0], r[1], r[2], r[3]);
         DEon::scatter(&lib, &a, TermSet::all(4), &mut out);
-        let want = hairfit::table_family::total(&out[0]);
+        let want = hairfit::families::table::total(&out[0]);
         assert!((g - want).abs() <= 1e-14 * want, "{g} vs {want}");
     }
 }

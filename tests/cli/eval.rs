@@ -4,10 +4,10 @@
 use crate::support::cli;
 
 use cli::{hairfit, s, write};
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParameterFile as _;
 
-use hairfit::model::{scattering, scattering_lanes, Angles, ModelConfig};
-use hairfit::params::ParamFile;
+use hairfit::families::marschner::params::ParamFile;
+use hairfit::families::marschner::{scattering, scattering_lanes, Angles, ModelConfig};
 
 const PARAMS_1: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
   "w_c_deg": 15, "eccentricity": 0.9}"#;

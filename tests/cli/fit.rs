@@ -3,7 +3,7 @@
 
 use crate::support::cli;
 
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParameterFile as _;
 use std::path::Path;
 
 /// Run hairfit on `threads` rayon threads; it must succeed.
@@ -151,7 +151,8 @@ fn fit_of_the_demo_csv_writes_the_contract_files() {
     assert_eq!(ecc["status"], "fixed");
     assert_eq!(ecc["value"], 0.9);
     // params.json is a plain parameter file that `hairfit eval` accepts.
-    hairfit::params::ParamFile::load(fitdir.join("params.json")).expect("valid ParamFile");
+    hairfit::families::marschner::params::ParamFile::load(fitdir.join("params.json"))
+        .expect("valid ParamFile");
     let curves = std::fs::read_to_string(fitdir.join("curves.csv")).unwrap();
     let mut lines = curves.lines();
     assert_eq!(

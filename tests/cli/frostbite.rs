@@ -58,7 +58,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
         ],
     );
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
-    assert_eq!(t.params.family(), hairfit::family::ModelFamily::Frostbite);
+    assert_eq!(t.params.family(), hairfit::families::ModelFamily::Frostbite);
     let out = dir.path().join("fit");
     let summary = stdout(&frostbite(
         "fit",

@@ -7,7 +7,7 @@ use crate::support::cli;
 
 use cli::{hairfit_ok, root, stdout};
 use hairfit::export::Target;
-use hairfit::family::ModelFamily;
+use hairfit::families::ModelFamily;
 
 /// clap wraps help at the terminal's width; joined on whitespace a name split over two lines
 /// still matches.

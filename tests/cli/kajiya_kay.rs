@@ -6,8 +6,8 @@
 use crate::support::cli;
 
 use cli::{failed, hairfit, hairfit_ok, s as p, stdout, write};
-use hairfit::model::Angles;
-use hairfit::table_family::{by_name, TableParams, TermSet};
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{by_name, TableParams, TermSet};
 
 /// Unit vector of direction (θ, φ) in the fibre frame: u (the tangent) is the first component.
 fn direction(theta: f64, phi: f64) -> [f64; 3] {
@@ -305,15 +305,15 @@ fn command_line() {
         fit.warnings
     );
     // The fit exports: its params.json is a kajiya-kay file the family reads back.
-    let back = hairfit::family::FamilyParams::load(
+    let back = hairfit::families::FamilyParams::load(
         &fit_dir.join("params.json"),
-        hairfit::family::ModelFamily::KajiyaKay,
+        hairfit::families::ModelFamily::KajiyaKay,
     )
     .unwrap();
     assert_eq!(back, fit_params(&fit_dir));
 }
 
-fn fit_params(dir: &std::path::Path) -> hairfit::family::FamilyParams {
+fn fit_params(dir: &std::path::Path) -> hairfit::families::FamilyParams {
     hairfit::files::FitJson::load(&dir.join("fit.json"))
         .unwrap()
         .params

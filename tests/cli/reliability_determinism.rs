@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use crate::support::hard::*;
 use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
-use hairfit::model::ModelConfig;
+use hairfit::families::marschner::ModelConfig;
 
 /// Keys whose values are measured times, not results.
 const TIMES: [&str; 2] = ["wall_s", "wall_time_s"];

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use crate::support::hard::*;
 use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
-use hairfit::model::ModelConfig;
+use hairfit::families::marschner::ModelConfig;
 
 fn mode(path: &Path) -> u32 {
     std::fs::metadata(path).unwrap().permissions().mode() & 0o777

@@ -9,22 +9,20 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use hairfit::chiang::{ChiangEffects, ChiangModel};
 use hairfit::demo::{demo_directions, demo_truth_file, DEMO_SCALE};
-use hairfit::family::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
+use hairfit::families::chiang::fit::{Chiang, ChiangForward};
+use hairfit::families::chiang::{ChiangEffects, ChiangModel};
+use hairfit::families::marschner::fit::Marschner;
+use hairfit::families::marschner::{Angles, Lobes, Measurement, ModelConfig};
+use hairfit::families::table::fit::TableForward;
+use hairfit::families::table::{Table, TableFamily, TermSet};
+use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
+use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use hairfit::files::{FitJson, LoadReport, ParamStatus, Verdict};
-use hairfit::fit::family::chiang::{Chiang, ChiangForward};
-use hairfit::fit::family::marschner::Marschner;
-use hairfit::fit::family::table::TableForward;
 use hairfit::fit::family::Family;
 use hairfit::fit::problem::{FitParam, Forward, ModelForward, ParamSet};
 use hairfit::fit::{fit_family, FitOptions};
-use hairfit::model::{Angles, Lobes, Measurement, ModelConfig};
 use hairfit::synth::{Acquisition, Noise, Source};
-use hairfit::table_family::{
-    deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis, Table, TableFamily,
-    TermSet,
-};
 
 /// Which swap of incidence and exit leaves what unchanged, and for which of `by_lobe`'s
 /// columns (R, TT, TRT), as the family's page states it.
@@ -268,7 +266,7 @@ fn symmetries_where_documented(family: ModelFamily) {
 /// Gauss–Legendre nodes on (−π/2, π/2); φ: `4n` equally spaced points (the midpoint rule,
 /// spectrally accurate for a smooth periodic integrand).
 fn albedo(m: &FamilyModel, theta_r: f64, n: usize) -> [f64; 3] {
-    let gl = hairfit::chiang::quadrature::GaussLegendre::new(n);
+    let gl = hairfit::families::chiang::quadrature::GaussLegendre::new(n);
     let n_phi = 4 * n;
     let mut angles = Vec::with_capacity(n * n_phi);
     let mut weights = Vec::with_capacity(n * n_phi);

@@ -2,11 +2,11 @@
 //! bookkeeping (additivity, parameters that drop out); the Jacobian against central
 //! differences is the family battery's.
 
-use hairfit::chiang::{
+use hairfit::families::chiang::{
     batch_jacobian, batch_jacobian_static, scattering_batch, ChiangEffects, ChiangModel,
     ChiangParamName, ChiangParams,
 };
-use hairfit::model::Angles;
+use hairfit::families::marschner::Angles;
 
 fn three_channels() -> ChiangParams<f64> {
     ChiangParams {

@@ -4,12 +4,12 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use crate::support::chiang::{model, params, s, set_a, set_b};
-use hairfit::chiang::azimuthal::{
+use hairfit::families::chiang::azimuthal::{
     azimuthal_lobe, exit_azimuth, logistic_scale, trimmed_logistic_norm,
 };
-use hairfit::chiang::quadrature::GaussLegendre;
-use hairfit::chiang::{scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
-use hairfit::model::Angles;
+use hairfit::families::chiang::quadrature::GaussLegendre;
+use hairfit::families::chiang::{scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
+use hairfit::families::marschner::Angles;
 
 /// `E(θ_r) = ∫ S cosθ_i dω_i = ∫∫ S cos²θ_i dθ_i dφ`.
 /// φ: trapezoid on 720 points, spectrally accurate for the periodic integrand whose narrowest

@@ -1,7 +1,7 @@
 //! The Chiang parameter file and effect list: names, defaults, unknown keys, domains, model tag.
 
-use hairfit::chiang::{ChiangEffects, ChiangParamFile, ChiangParams};
-use hairfit::params::ParameterFile as _;
+use hairfit::families::chiang::{ChiangEffects, ChiangParamFile, ChiangParams};
+use hairfit::families::marschner::params::ParameterFile as _;
 use hairfit::Error;
 
 fn parse(json: &str) -> Result<ChiangParamFile, Error> {

@@ -2,7 +2,7 @@
 //! 4096-node reference, on hard cases of the domain CHIANG.md sampled.
 
 use crate::support::chiang::{composite_s, model, params, s};
-use hairfit::chiang::ChiangParams;
+use hairfit::families::chiang::ChiangParams;
 
 /// (θ_i, φ_i, θ_r, φ_r) in degrees, with the parameter sets that make the integrand hard:
 /// narrow peaks (β_n = 0.05, β_m = 0.05) and wide wrapped logistics (β_n = 1, kinks at ±π).
@@ -93,7 +93,10 @@ fn random_cases(beta_n: f64, cases: usize) -> Vec<(ChiangParams<f64>, [f64; 4])>
 /// Worst relative error of `S` under the default (automatic) rule and under the plain 1024-node
 /// rule, against the composite rule at 2048 nodes per π with a 1024-node residual.
 fn auto_and_plain_error(beta_n: f64, cases: usize) -> (f64, f64) {
-    let (auto, plain) = (hairfit::chiang::ChiangModel::default(), model(1024));
+    let (auto, plain) = (
+        hairfit::families::chiang::ChiangModel::default(),
+        model(1024),
+    );
     random_cases(beta_n, cases)
         .iter()
         .map(|(p, d)| {

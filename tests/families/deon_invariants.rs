@@ -7,10 +7,10 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use crate::support::deon::{reference, table_params, Set};
-use hairfit::chiang::quadrature::{GaussLegendre, WidthRule};
-use hairfit::model::Angles;
-use hairfit::table_family::deon::{add_azimuthal, longitudinal, variance_r, DEon, Integration};
-use hairfit::table_family::{zero_terms, TableFamily, TermSet};
+use hairfit::families::chiang::quadrature::{GaussLegendre, WidthRule};
+use hairfit::families::deon::{add_azimuthal, longitudinal, variance_r, DEon, Integration};
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{zero_terms, TableFamily, TermSet};
 
 const CLEAR: Set = Set {
     eta: 1.55,

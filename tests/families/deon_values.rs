@@ -5,9 +5,9 @@
 //! γ = asin h (Richardson-extrapolated). Nothing here calls the implementation's helpers.
 
 use crate::support::deon::{reference, table_params, Set};
-use hairfit::model::Angles;
-use hairfit::table_family::deon::DEon;
-use hairfit::table_family::{zero_terms, TableFamily, TermSet};
+use hairfit::families::deon::DEon;
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{zero_terms, TableFamily, TermSet};
 
 const SETS: [Set; 3] = [
     Set {

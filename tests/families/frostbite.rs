@@ -5,9 +5,9 @@
 
 use std::f64::consts::PI;
 
-use hairfit::model::Angles;
-use hairfit::table_family::frostbite::Frostbite;
-use hairfit::table_family::{DynTable, Table, TableParams, TermSet};
+use hairfit::families::frostbite::Frostbite;
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{DynTable, Table, TableParams, TermSet};
 
 /// Unity's inputs: Base Color per channel (linear), Smoothness, Radial Smoothness, Cuticle
 /// Angle (degrees), η.
@@ -279,7 +279,7 @@ fn white_fibre_albedo_is_about_two() {
 /// φ = π where it vanishes.
 #[test]
 fn r_distribution_tends_to_the_smooth_limit() {
-    use hairfit::table_family::frostbite::azimuthal::{inverse_modified_index, lobe, Logistic};
+    use hairfit::families::frostbite::azimuthal::{inverse_modified_index, lobe, Logistic};
     let logistic = Logistic::new(&0.1);
     for phi_deg in [0.0, 20.0, 60.0, 100.0, 150.0] {
         for theta_d in [0.0f64, 0.5, 1.2] {

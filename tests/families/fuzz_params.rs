@@ -1,8 +1,8 @@
 //! Fuzzing the parameter-file parser: arbitrary bytes and near-valid JSON never panic, and every
 //! rejection is an error that names the file (bounded case counts so it runs in CI in seconds).
 
-use hairfit::params::ParamFile;
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParamFile;
+use hairfit::families::marschner::params::ParameterFile as _;
 use proptest::prelude::*;
 
 const VALID: &str = r#"{"eta": 1.55, "sigma_a": [0.2, 0.4], "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#;

@@ -8,9 +8,9 @@
 
 use std::f64::consts::PI;
 
-use hairfit::model::Angles;
-use hairfit::table_family::karis::{self, Karis};
-use hairfit::table_family::{zero_terms, TableFamily, TableParams, TermSet};
+use hairfit::families::karis::{self, Karis};
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{zero_terms, TableFamily, TableParams, TermSet};
 
 /// The engine inputs of one channel, radians for the shift.
 #[derive(Debug, Clone, Copy)]

@@ -1,7 +1,7 @@
 //! Forward-mode AD Jacobians against central finite differences, for every parameter.
 
 use crate::support::model::*;
-use hairfit::model::{
+use hairfit::families::marschner::{
     scattering, scattering_jacobian, Angles, Lobes, ModelConfig, ParamName, Params, RootMode,
     StaticJacobian,
 };

@@ -25,9 +25,9 @@
 use std::f64::consts::PI;
 
 use hairfit::demo::demo_truth;
-use hairfit::model::azimuthal::caustic_position;
-use hairfit::model::eccentricity::eccentric_terms;
-use hairfit::model::{
+use hairfit::families::marschner::azimuthal::caustic_position;
+use hairfit::families::marschner::eccentricity::eccentric_terms;
+use hairfit::families::marschner::{
     scattering_batch, scattering_lanes, scattering_lanes_on, Angles, Effects, LaneKernel, Lobes,
     ModelConfig, Params, RootMode,
 };

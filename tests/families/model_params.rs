@@ -1,8 +1,8 @@
 //! The parameter file: names, defaults, unknown keys, positions in errors, domain, round trip.
 
-use hairfit::model::{Effects, ParamName};
-use hairfit::params::ParamFile;
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParamFile;
+use hairfit::families::marschner::params::ParameterFile as _;
+use hairfit::families::marschner::{Effects, ParamName};
 use hairfit::Error;
 
 const FULL: &str =
@@ -113,7 +113,7 @@ fn json_names_and_lobe_parsing() {
     assert!(Effects::parse_lobes("").is_err());
     assert_eq!(
         "EXACT"
-            .parse::<hairfit::model::RootMode>()
+            .parse::<hairfit::families::marschner::RootMode>()
             .unwrap()
             .to_string(),
         "exact"
@@ -134,7 +134,7 @@ fn json_names_and_lobe_parsing() {
 
 #[test]
 fn angles_on_the_axis_are_rejected() {
-    use hairfit::model::Angles;
+    use hairfit::families::marschner::Angles;
     assert!(Angles::from_degrees(-89.999, 10.0, 45.0, 400.0)
         .validate()
         .is_ok());
@@ -149,7 +149,7 @@ fn angles_on_the_axis_are_rejected() {
 
 #[test]
 fn model_config_serde_defaults() {
-    use hairfit::model::{ModelConfig, RootMode};
+    use hairfit::families::marschner::{ModelConfig, RootMode};
     let c: ModelConfig =
         serde_json::from_str(r#"{"mode": "exact", "effects": {"glints": false}}"#).unwrap();
     assert_eq!(c.mode, RootMode::Exact);
@@ -203,7 +203,9 @@ fn domain_comes_from_the_table_and_names_the_range() {
 
 #[test]
 fn parameter_lists_follow_the_table() {
-    use hairfit::model::parameters::{all_parameters, fitted_parameters, used_parameters};
+    use hairfit::families::marschner::parameters::{
+        all_parameters, fitted_parameters, used_parameters,
+    };
     // Output order: the table's order, σ_a expanded per channel.
     assert_eq!(all_parameters(2), hairfit::fit::all_parameters(2));
     for r in [false, true] {
@@ -212,7 +214,7 @@ fn parameter_lists_follow_the_table() {
                 for glints in [false, true] {
                     for eccentricity in [false, true] {
                         let e = Effects {
-                            lobes: hairfit::model::Lobes { r, tt, trt },
+                            lobes: hairfit::families::marschner::Lobes { r, tt, trt },
                             glints,
                             eccentricity,
                         };
@@ -233,7 +235,7 @@ fn parameter_lists_follow_the_table() {
 
 #[test]
 fn units_come_from_the_table() {
-    use hairfit::model::Unit;
+    use hairfit::families::marschner::Unit;
     assert_eq!(ParamName::SigmaA(2).fact().unit, Unit::PerFiberRadius);
     assert_eq!(ParamName::SigmaA(2).fact().unit.label(), "per fiber radius");
     assert_eq!(ParamName::WC.fact().unit.label(), "deg");
@@ -257,7 +259,7 @@ fn a_parameter_file_that_is_an_array_is_refused_at_its_start() {
         e.starts_with("p.json:2:3:") && e.contains("JSON object"),
         "{e}"
     );
-    let e = hairfit::chiang::file::ChiangParamFile::from_json_str("[1.55]", "c.json")
+    let e = hairfit::families::chiang::file::ChiangParamFile::from_json_str("[1.55]", "c.json")
         .unwrap_err()
         .to_string();
     assert!(

@@ -1,6 +1,8 @@
 //! Property tests over the whole valid domain: S finite and ≥ 0, reciprocity.
 
-use hairfit::model::{scattering_by_lobe, Angles, Effects, Lobes, ModelConfig, Params, RootMode};
+use hairfit::families::marschner::{
+    scattering_by_lobe, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
+};
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 

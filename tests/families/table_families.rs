@@ -1,17 +1,17 @@
-//! What every table family (`hairfit::table_family::ALL`) must do beyond the battery every
+//! What every table family (`hairfit::families::table::ALL`) must do beyond the battery every
 //! registered family runs (`battery.rs`): its page holds its parameter table, a term switched
 //! off fits none of its parameters, and a noisy fit lands within a few standard errors.
 
 use hairfit::demo::{demo_directions, DEMO_SCALE};
-use hairfit::family::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
+use hairfit::families::marschner::Measurement;
+use hairfit::families::table::{
+    demo_params, DynTable, TableFamily, TableParamFile, TableParams, TermSet, ALL,
+};
+use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
+use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use hairfit::files::{FitJson, LoadReport, ParamStatus};
 use hairfit::fit::{fit_family, FitOptions};
-use hairfit::model::Measurement;
 use hairfit::synth::{Acquisition, Noise, Source};
-use hairfit::table_family::{
-    demo_params, deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis, DynTable,
-    TableFamily, TableParamFile, TableParams, TermSet, ALL,
-};
 
 /// The families this file runs its battery on; [`every_family_has_a_battery`] fails when a
 /// family joins `table_family::ALL` without one.
@@ -51,7 +51,7 @@ fn every_family_documents_its_table() {
     for t in ALL {
         let page = format!("docs/{}.md", t.name());
         let text = std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{page}: {e}"));
-        let missing: Vec<String> = hairfit::table_family::markdown_table(t.facts())
+        let missing: Vec<String> = hairfit::families::table::markdown_table(t.facts())
             .into_iter()
             .filter(|row| !text.lines().any(|l| l.trim() == row))
             .collect();
@@ -71,7 +71,7 @@ fn every_family_documents_its_table() {
 }
 
 fn table(name: &str) -> &'static dyn DynTable {
-    hairfit::table_family::by_name(name).unwrap()
+    hairfit::families::table::by_name(name).unwrap()
 }
 
 fn battery<F: TableFamily>() {
@@ -89,7 +89,7 @@ fn switched_off_terms_fit_none_of_their_parameters<F: TableFamily>() {
         if without.0 == 0 {
             continue;
         }
-        let free = hairfit::table_family::fitted(F::PARAMETERS, F::TERMS, without, 3, true);
+        let free = hairfit::families::table::fitted(F::PARAMETERS, F::TERMS, without, 3, true);
         for (i, f) in F::PARAMETERS.iter().enumerate() {
             if f.terms == [F::TERMS[k].name] {
                 assert!(

@@ -5,8 +5,8 @@
 use std::f64::consts::PI;
 
 use crate::support::export::{chiang_fit_dir, marschner_fit_dir, set_a_rgb};
-use hairfit::chiang::ChiangParams;
 use hairfit::export::{export, Renderer};
+use hairfit::families::chiang::ChiangParams;
 
 /// pbrt-v4's `hair` material parameters (materials.cpp: HairMaterial::Create) with the types
 /// pbrt-v4 accepts for them, plus the parameters every material takes.

@@ -4,14 +4,14 @@
 
 use std::path::Path;
 
-use hairfit::family::FamilyParams;
+use hairfit::families::marschner::params::{ParamFile, SigmaA};
+use hairfit::families::marschner::{Angles, ModelConfig};
+use hairfit::families::FamilyParams;
 use hairfit::files::{
     read_curves_csv, write_curves_csv, Correlation, CurveRow, DataInfo, FitJson, FitStatus,
     LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
     TraceStage,
 };
-use hairfit::model::{Angles, ModelConfig};
-use hairfit::params::{ParamFile, SigmaA};
 use hairfit::report::{
     render_report, write_report_with, ReportOptions, ReportSummary, MAX_PANELS, MAX_SCATTER_POINTS,
     MAX_SLICE_POINTS,
@@ -603,7 +603,7 @@ fn report_of_a_real_model_fixture_matches_the_fit_column() {
     let params = fit.params.marschner().unwrap().to_params();
     let config = fit.model;
     let model = |a: &Angles, out: &mut [[f64; 3]]| {
-        hairfit::model::scattering_by_lobe(&params, &config, a, out)
+        hairfit::families::marschner::scattering_by_lobe(&params, &config, a, out)
     };
     let rows = fixture_rows(&measurement_angles(), &model, 3);
     fit.save(&dir.path().join("fit.json")).unwrap();

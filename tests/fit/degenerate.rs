@@ -3,8 +3,8 @@
 
 use crate::support;
 use hairfit::cli::summary::summary;
+use hairfit::families::marschner::Angles;
 use hairfit::fit::{fit, write_outputs, EffectsChoice, FitOptions, FitOutcome};
-use hairfit::model::Angles;
 
 fn fit_angles(angles: Vec<Angles>, effects: EffectsChoice) -> FitOutcome {
     let truth = support::fit::random_params(77, 3);

@@ -11,12 +11,12 @@ use std::time::Duration;
 
 use crate::support::hard::*;
 use hairfit::demo::synthesize;
+use hairfit::families::marschner::azimuthal::caustic_position;
+use hairfit::families::marschner::{Angles, Effects, ModelConfig, Params, RootMode};
 use hairfit::fit::bounds::{reference_params, Bound};
 use hairfit::fit::problem::{Evaluator, FitData, ModelForward, Space};
 use hairfit::fit::solve::run_local;
 use hairfit::fit::{fit, free_parameters, EffectsChoice, FitOptions, Loss};
-use hairfit::model::azimuthal::caustic_position;
-use hairfit::model::{Angles, Effects, ModelConfig, Params, RootMode};
 use proptest::prelude::*;
 
 /// A fit that is short but complete (multi-start, polish, covariance, curves): the subject is

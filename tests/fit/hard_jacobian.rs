@@ -7,12 +7,12 @@
 
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 
-use hairfit::fit::all_parameters;
-use hairfit::fit::bounds::Bound;
-use hairfit::model::azimuthal::caustic_position;
-use hairfit::model::{
+use hairfit::families::marschner::azimuthal::caustic_position;
+use hairfit::families::marschner::{
     scattering_jacobian, Angles, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
 };
+use hairfit::fit::all_parameters;
+use hairfit::fit::bounds::Bound;
 
 const MODES: [RootMode; 2] = [RootMode::Cubic, RootMode::Exact];
 
@@ -299,7 +299,7 @@ fn jacobian_matches_finite_differences_at_bounds() {
                                 return None;
                             }
                             let mut out = vec![0.0; 2];
-                            hairfit::model::scattering(&q, &cfg, a, &mut out);
+                            hairfit::families::marschner::scattering(&q, &cfg, a, &mut out);
                             Some(out)
                         };
                         // Central where the model's domain allows (the fit bounds are narrower

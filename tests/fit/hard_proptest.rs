@@ -8,12 +8,12 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use hairfit::fit::all_parameters;
-use hairfit::fit::bounds::Bound;
-use hairfit::model::{
+use hairfit::families::marschner::{
     scattering_batch, scattering_jacobian, scattering_lanes_on, Angles, Effects, LaneKernel, Lobes,
     ModelConfig, Params, RootMode,
 };
+use hairfit::fit::all_parameters;
+use hairfit::fit::bounds::Bound;
 use proptest::prelude::*;
 
 /// θ strictly inside (−90°, 90°), reaching within ~1e-9 rad of the ends.

@@ -2,9 +2,9 @@
 //! and the robust loss) against central finite differences of its own residual vector.
 
 use crate::support;
+use hairfit::families::marschner::{Effects, Measurement, ModelConfig, RootMode};
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, Space};
-use hairfit::model::{Effects, Measurement, ModelConfig, RootMode};
 
 fn check(space: Space, loss: Loss, mode: RootMode, seed: u64) {
     check_with(space, loss, mode, seed, false, Measurement::S)

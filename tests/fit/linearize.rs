@@ -4,9 +4,9 @@
 //! thread count, and its size does not grow with the number of samples.
 
 use crate::support;
+use hairfit::families::marschner::{Effects, Measurement, ModelConfig};
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, ScaleMode, Space};
-use hairfit::model::{Effects, Measurement, ModelConfig};
 use nalgebra::{DMatrix, DVector};
 
 const NC: usize = 3;

@@ -7,14 +7,14 @@
 use crate::support;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use hairfit::chiang::{ChiangModel, ChiangParamName, ChiangParams};
+use hairfit::families::chiang::fit::ChiangForward;
+use hairfit::families::chiang::{ChiangModel, ChiangParamName, ChiangParams};
+use hairfit::families::marschner::{Angles, Effects, Measurement, ModelConfig};
 use hairfit::fit::bounds::reference_params;
-use hairfit::fit::family::chiang::ChiangForward;
 use hairfit::fit::{
     free_parameters, Evaluator, FitData, FitParam, Forward, Loss, ModelForward, ParamSet,
     ScaleMode, Space,
 };
-use hairfit::model::{Angles, Effects, Measurement, ModelConfig};
 
 /// A forward model that counts the samples it evaluates, by kind of pass.
 struct Counting<F> {

@@ -15,6 +15,7 @@ use crate::support;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
+use hairfit::families::marschner::{Measurement, ParamName, Params};
 use hairfit::files::{FitStatus, ParamStatus, ProfileMethod};
 use hairfit::fit::bounds::report_factor;
 use hairfit::fit::profile::{self, End, Optimum, Profile};
@@ -22,7 +23,6 @@ use hairfit::fit::{
     fit, EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, ModelForward,
     Space,
 };
-use hairfit::model::{Measurement, ParamName, Params};
 
 /// MODEL.md's example hair, one channel.
 fn truth() -> Params<f64> {

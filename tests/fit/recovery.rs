@@ -3,9 +3,9 @@
 //! never from the truth — and every free parameter must come back.
 
 use crate::support;
+use hairfit::families::marschner::{ParamName, Params};
 use hairfit::fit::bounds::{is_angle, report_factor};
 use hairfit::fit::{fit, EffectsChoice, FitOptions, FitOutcome};
-use hairfit::model::{ParamName, Params};
 
 /// Default options, every effect on (the data is synthesised with every effect on).
 fn options() -> FitOptions {

@@ -2,10 +2,10 @@
 //! its linear-noise counterpart, on data synthesized through the library.
 
 use crate::support;
+use hairfit::families::marschner::Params;
 use hairfit::files::DOWN_WEIGHT;
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::{fit, EffectsChoice, FitData, FitOptions, Intervals, Loss, LossScale};
-use hairfit::model::Params;
 
 /// MODEL.md's example hair, one channel.
 fn truth() -> Params<f64> {

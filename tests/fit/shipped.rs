@@ -2,9 +2,9 @@
 //! through the loader exactly as `hairfit fit` reads them.
 
 use hairfit::data::{load, LoadOptions};
+use hairfit::families::marschner::params::ParamFile;
 use hairfit::fit::bounds::report_factor;
 use hairfit::fit::{all_parameters, fit, fit_data, FitOptions, FitOutcome};
-use hairfit::params::ParamFile;
 
 fn fit_file(name: &str, opts: &FitOptions) -> (FitOutcome, ParamFile) {
     let root = env!("CARGO_MANIFEST_DIR");
@@ -94,7 +94,7 @@ fn additive_floor_noise_sphere_in_exact_mode() {
     // Synthesised in exact root mode with additive noise σ = 1e-3: half the readings are not
     // significantly positive and must be fitted linearly inside the log fit.
     let opts = FitOptions {
-        mode: hairfit::model::RootMode::Exact,
+        mode: hairfit::families::marschner::RootMode::Exact,
         ..FitOptions::default()
     };
     let (out, truth) = fit_file("sphere_1ch", &opts);

@@ -1,8 +1,8 @@
 //! Shared helpers of the Chiang tests: CHIANG.md's parameter sets and a one-sample evaluator.
 #![allow(dead_code)]
 
-use hairfit::chiang::{scattering, ChiangEffects, ChiangModel, ChiangParams};
-use hairfit::model::Angles;
+use hairfit::families::chiang::{scattering, ChiangEffects, ChiangModel, ChiangParams};
+use hairfit::families::marschner::Angles;
 
 /// CHIANG.md known-values set A: eta 1.55, sigma_a 0.4, beta_m 0.3, beta_n 0.3, alpha_deg 2.
 pub fn set_a() -> ChiangParams<f64> {
@@ -57,12 +57,12 @@ pub fn composite_s(
     residual_nodes: usize,
     deg: [f64; 4],
 ) -> f64 {
-    use hairfit::chiang::{scattering_from_table, AzimuthalTable, WidthRule, WidthSet};
+    use hairfit::families::chiang::{scattering_from_table, AzimuthalTable, WidthRule, WidthSet};
     let a = Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]);
-    let phi = hairfit::model::angles::wrap(a.phi_r - a.phi_i).abs();
+    let phi = hairfit::families::marschner::angles::wrap(a.phi_r - a.phi_i).abs();
     let effects = ChiangEffects::default();
     let (mut breaks, mut nodes) = (Vec::new(), Vec::new());
-    hairfit::chiang::width::split_nodes(
+    hairfit::families::chiang::width::split_nodes(
         &effects,
         density,
         params.eta,

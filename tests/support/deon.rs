@@ -5,9 +5,9 @@
 
 use std::f64::consts::PI;
 
-use hairfit::model::Angles;
-use hairfit::table_family::deon::DEon;
-use hairfit::table_family::{TableFamily, TableParams};
+use hairfit::families::deon::DEon;
+use hairfit::families::marschner::Angles;
+use hairfit::families::table::{TableFamily, TableParams};
 
 /// One parameter set in file units.
 #[derive(Clone, Copy)]

@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use hairfit::chiang::{ChiangParamFile, ChiangParams};
+use hairfit::families::chiang::{ChiangParamFile, ChiangParams};
 
 /// CHIANG.md's parameter set A with three channels.
 pub fn set_a_rgb() -> ChiangParams<f64> {

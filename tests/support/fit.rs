@@ -4,9 +4,9 @@
 #![allow(dead_code)]
 
 use hairfit::demo::synthesize;
+use hairfit::families::marschner::{Angles, ModelConfig, Params};
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::FitData;
-use hairfit::model::{Angles, ModelConfig, Params};
 
 /// A parameter set drawn uniformly from MODEL.md's typical ranges (η at its default).
 pub fn random_params(seed: u64, nc: usize) -> Params<f64> {
@@ -133,7 +133,7 @@ pub fn synthesized(truth: &Params<f64>, rig: &str, noise: &str, scale: f64, seed
         &Rig::parse(rig).unwrap(),
         &Noise::parse(noise).unwrap(),
         &[scale],
-        hairfit::model::Measurement::S,
+        hairfit::families::marschner::Measurement::S,
         seed,
     )
     .unwrap();

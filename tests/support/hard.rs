@@ -4,7 +4,7 @@
 
 #![allow(dead_code)]
 
-use hairfit::params::ParameterFile as _;
+use hairfit::families::marschner::params::ParameterFile as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output};
 use std::time::Duration;
@@ -119,8 +119,11 @@ pub fn check_fit_dir(dir: &Path, what: &str) -> serde_json::Value {
     );
     let params = std::fs::read_to_string(dir.join("params.json"))
         .unwrap_or_else(|e| panic!("{what}: params.json: {e}"));
-    hairfit::params::ParamFile::from_json_str(&params, dir.join("params.json"))
-        .unwrap_or_else(|e| panic!("{what}: params.json does not load: {e}"));
+    hairfit::families::marschner::params::ParamFile::from_json_str(
+        &params,
+        dir.join("params.json"),
+    )
+    .unwrap_or_else(|e| panic!("{what}: params.json does not load: {e}"));
     assert_params_in_bounds(&fit, what);
     assert_no_temp_files(dir, what);
     fit

@@ -1,10 +1,12 @@
 //! Helpers shared by the model tests: parameter sets and per-lobe azimuthal values.
 #![allow(dead_code)]
 
-use hairfit::model::bravais::bravais_indices;
-use hairfit::model::fresnel::{absorption, chord, cos_gamma_t, fresnel, fresnel_attenuation};
-use hairfit::model::longitudinal::longitudinal;
-use hairfit::model::{
+use hairfit::families::marschner::bravais::bravais_indices;
+use hairfit::families::marschner::fresnel::{
+    absorption, chord, cos_gamma_t, fresnel, fresnel_attenuation,
+};
+use hairfit::families::marschner::longitudinal::longitudinal;
+use hairfit::families::marschner::{
     scattering, scattering_by_lobe, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
 };
 

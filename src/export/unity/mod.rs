@@ -1,7 +1,7 @@
 //! `hairfit export fits/NAME --to unity`: Unity HDRP's Hair material (Material Type Physical)
 //! — Base Color, Smoothness, Radial Smoothness, Cuticle Angle, with the IOR HDRP fixes at 1.55 —
 //! fitted to the fit's `S` through the frostbite family, which evaluates HDRP's physical hair
-//! ([`crate::table_family::frostbite`]), times one shared gain (the light's intensity: the colour
+//! ([`crate::families::frostbite`]), times one shared gain (the light's intensity: the colour
 //! must come from Base Color). Written as a JSON file with the inputs, the HDRP conventions they
 //! follow, the mapping's error and the source fit, and a C# editor script beside it
 //! ([`script`]) that sets them on a material.
@@ -16,15 +16,15 @@ use super::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
 use super::mapping::{max as largest, MappingTarget};
 use super::source::{SourceFit, SourceModel};
 use crate::error::Result;
-use crate::family::FamilyModel;
-use crate::fit::family::table::{TableForward, TableParam};
-use crate::fit::problem::Forward;
-use crate::model::{Angles, Measurement};
-use crate::table_family::frostbite::{
+use crate::families::frostbite::{
     absorption_denominator, Frostbite, BASE_COLOR, BASE_COLOR_MIN, CUTICLE_ANGLE, ETA,
     RADIAL_SMOOTHNESS, RADIAL_SMOOTHNESS_MAX, SMOOTHNESS, SMOOTHNESS_MAX,
 };
-use crate::table_family::{TableFamily, TableParams, TermSet};
+use crate::families::marschner::{Angles, Measurement};
+use crate::families::table::fit::{TableForward, TableParam};
+use crate::families::table::{TableFamily, TableParams, TermSet};
+use crate::families::FamilyModel;
+use crate::fit::problem::Forward;
 use script::{csharp_identifier, script};
 
 /// The HDRP behaviour the inputs are fitted to (docs/frostbite.md, "Which HDRP").

@@ -10,7 +10,7 @@ use super::{ENGINE_VERSION, MODEL_NAME, PARAMETERS};
 use crate::export::mapping::FLOOR_FRACTION;
 use crate::export::source::SourceFit;
 use crate::export::writers::{material_name, rgb};
-use crate::table_family::karis::{ENGINE_ETA, ENGINE_SHIFT};
+use crate::families::karis::{ENGINE_ETA, ENGINE_SHIFT};
 
 /// Where a parent material lives unless the script is told otherwise.
 pub const DEFAULT_PARENT: &str = "/Game/Hairfit/M_HairfitHair";

@@ -15,15 +15,15 @@ use crate::error::{Error, Result};
 use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
 use crate::export::mapping::{max, rms, MappingTarget};
 use crate::export::source::{SourceFit, SourceModel};
-use crate::family::FamilyModel;
-use crate::model::Angles;
-use crate::table_family::karis::{
+use crate::families::karis::{
     Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS, SCATTER,
     SCATTER_TERM, SHIFT, SPECULAR,
 };
-use crate::table_family::{
+use crate::families::marschner::Angles;
+use crate::families::table::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
 };
+use crate::families::FamilyModel;
 
 /// The smallest Base Color the fit reaches (the engine takes `ln C`).
 pub const MIN_BASE_COLOR: f64 = 1e-4;

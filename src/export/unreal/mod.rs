@@ -1,7 +1,7 @@
 //! `hairfit export --to unreal`: Unreal Engine 5's Hair shading model inputs (Base Color,
 //! Roughness, Specular, Backlit, Scatter) FITTED to the fit's `S` with one shared gain (the
 //! light's intensity), never converted by formula — the same philosophy as the renderer exports.
-//! The engine's BSDF is the Karis family ([`crate::table_family::karis`]); [`fit`] fits its
+//! The engine's BSDF is the Karis family ([`crate::families::karis`]); [`fit`] fits its
 //! inputs, [`files`] writes the JSON of the inputs with the mapping's quality and the source fit,
 //! and a Python script that creates a material instance of a hair material in the editor.
 

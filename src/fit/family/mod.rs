@@ -3,17 +3,13 @@
 //! shared stages ([`super::fit_with`]) — and [`family_fit`], the one place where a `--model`
 //! name meets its type. The shared stages, verdicts, intervals and reports never name a family.
 
-pub mod chiang;
-pub mod marschner;
-pub mod table;
-
 use crate::error::Result;
-use crate::family::{FamilyParams, ModelFamily};
+use crate::families::table::Table;
+use crate::families::{chiang, marschner};
+use crate::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
+use crate::families::{FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 use crate::fit::{FitData, FitOptions, FitOutcome, FitParam};
-use crate::table_family::{
-    deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis, Table,
-};
 
 /// What a fit is given: the samples, the file they came from (for messages and fit.json), the
 /// loader's report of that file, and the options.
@@ -87,8 +83,8 @@ impl<F: Family> FamilyFit for F {
 /// The fit of `family`.
 pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
     match family {
-        ModelFamily::Marschner => &marschner::Marschner,
-        ModelFamily::Chiang => &chiang::Chiang,
+        ModelFamily::Marschner => &marschner::fit::Marschner,
+        ModelFamily::Chiang => &chiang::fit::Chiang,
         ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
         ModelFamily::DEon => &Table::<DEon>::NEW,
         ModelFamily::Karis => &Table::<Karis>::NEW,

@@ -1,17 +1,17 @@
 //! The forward model as the fit sees it: the [`Forward`] trait (model values and exact
 //! gradients for a chunk of samples, over one model family's parameters [`FitParam`]), its
 //! implementation by the Marschner model under one configuration, and the Marschner gradients
-//! by forward-mode AD ([`gradients`]). The Chiang model implements it in `crate::chiang::forward`.
+//! by forward-mode AD ([`gradients`]). The Chiang model implements it in `crate::families::chiang::forward`.
 
 use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
-use crate::fit::bounds::Bound;
-use crate::model::jacobian::seeded;
-use crate::model::{
+use crate::families::marschner::jacobian::seeded;
+use crate::families::marschner::{
     scattering_batch, scattering_by_lobe, Angles, Measurement, ModelConfig, ModelNum, ParamName,
     Params,
 };
+use crate::fit::bounds::Bound;
 
 /// One parameter of a model family as the fit handles it: read and set in the family's
 /// parameter set (natural units, radians for angles), its bounds and its reporting facts, all
@@ -144,7 +144,7 @@ pub trait Forward: Sync {
     }
 }
 
-/// The Marschner model of [`crate::model`] under one configuration, as the data measure it:
+/// The Marschner model of [`crate::families::marschner`] under one configuration, as the data measure it:
 /// `S`, or `S · cos θ_i` for radiance ([`Measurement`]).
 #[derive(Debug, Clone, Copy)]
 pub struct ModelForward {
@@ -205,12 +205,12 @@ impl Forward for ModelForward {
         self.measurement
     }
     fn exact_values(&self, p: &Params<f64>, angles: &[Angles], out: &mut [f64]) -> bool {
-        if self.config.mode == crate::model::RootMode::Exact {
+        if self.config.mode == crate::families::marschner::RootMode::Exact {
             return false;
         }
         let exact = ModelForward {
             config: ModelConfig {
-                mode: crate::model::RootMode::Exact,
+                mode: crate::families::marschner::RootMode::Exact,
                 ..self.config
             },
             measurement: self.measurement,

@@ -20,8 +20,8 @@ use super::quadrature::WidthNode;
 use super::{
     combine, ChiangEffects, ChiangModel, ChiangParamName, ChiangParams, WidthScratch, WidthSet,
 };
-use crate::model::angles::wrap;
-use crate::model::Angles;
+use crate::families::marschner::angles::wrap;
+use crate::families::marschner::Angles;
 
 /// `x` wrapped to [−π, π] by subtracting the nearest whole turn, not `rem_euclid` (whose fmod
 /// was a tenth of a fit's time): the arguments are within a few turns of 0, where this loses
@@ -427,7 +427,7 @@ pub fn batch(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chiang::{batch_jacobian, scattering_batch};
+    use crate::families::chiang::{batch_jacobian, scattering_batch};
 
     fn angles() -> Vec<Angles> {
         let mut v = Vec::new();

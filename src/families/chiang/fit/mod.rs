@@ -7,19 +7,19 @@ pub mod forward;
 
 use std::time::Instant;
 
-use super::{Family, FitInput};
-use crate::chiang::{
+use crate::error::Result;
+use crate::families::chiang::{
     all_parameters, lobes_config, reference_params, ChiangEffects, ChiangModel, ChiangParamFile,
     ChiangParamName, ChiangParams, WidthNodes,
 };
-use crate::error::Result;
-use crate::family::{ChiangRecord, FamilyParams};
+use crate::families::marschner::angles::wrap;
+use crate::families::{ChiangRecord, FamilyParams};
 use crate::files::{Floored, LoadReport};
+use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
 use crate::geometry::Fitted;
-use crate::model::angles::wrap;
 pub use forward::ChiangForward;
 
 /// The Chiang 2016 family (CHIANG.md).
@@ -162,7 +162,7 @@ pub fn fit_chiang(
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
-            records: crate::family::ModelRecords {
+            records: crate::families::ModelRecords {
                 config: lobes_config(&effects),
                 chiang: Some(ChiangRecord {
                     effects,

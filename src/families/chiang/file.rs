@@ -6,8 +6,8 @@ use serde::{Deserialize, Serialize};
 
 use super::ChiangParams;
 use crate::error::{Error, Result};
+use crate::families::marschner::params::SigmaA;
 pub use crate::json_file::ParameterFile;
-use crate::params::SigmaA;
 
 /// The model tag a Chiang file may carry.
 pub const MODEL_TAG: &str = "chiang";

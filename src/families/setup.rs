@@ -5,10 +5,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::ModelFamily;
-use crate::chiang::{ChiangEffects, ChiangModel, WidthNodes};
 use crate::error::Result;
-use crate::model::ModelConfig;
-use crate::table_family::{self, DynTable, TermSet};
+use crate::families::chiang::{ChiangEffects, ChiangModel, WidthNodes};
+use crate::families::marschner::ModelConfig;
+use crate::families::table::{self, DynTable, TermSet};
 
 /// What the command line configures of each family's model (`--mode`, `--lobes`, … for
 /// Marschner; `--terms`, `--width-nodes` for Chiang; `--terms` for a table family): a command
@@ -28,14 +28,14 @@ impl ModelSetup {
         if let Some(table) = family.table() {
             let on = self.table_terms(table);
             return ModelRecords {
-                config: table_family::lobes_config(table.terms(), on),
+                config: table::lobes_config(table.terms(), on),
                 chiang: None,
                 terms: Some(on.names(table.terms())),
             };
         }
         match family {
             ModelFamily::Chiang => ModelRecords {
-                config: crate::chiang::lobes_config(&self.chiang.effects),
+                config: crate::families::chiang::lobes_config(&self.chiang.effects),
                 chiang: Some(ChiangRecord {
                     effects: self.chiang.effects,
                     width_nodes: self.chiang.width(),

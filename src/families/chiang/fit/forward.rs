@@ -1,16 +1,16 @@
 //! The Chiang model as the fit sees it: [`FitParam`] for [`ChiangParamName`] (bounds and
-//! reporting facts from [`crate::chiang::PARAMETERS`]) and [`ChiangForward`], whose values and exact
+//! reporting facts from [`crate::families::chiang::PARAMETERS`]) and [`ChiangForward`], whose values and exact
 //! Jacobians come from the batch evaluators, so a chunk pays the width integral once per exit
 //! direction: with η fixed (the default) the plain-f64 [`fixed_eta`] path, with `--free eta`
 //! stack duals for every realistic parameter count.
 
-use crate::chiang::evaluator::scattering_by_lobe;
-use crate::chiang::{
+use crate::families::chiang::evaluator::scattering_by_lobe;
+use crate::families::chiang::{
     batch_jacobian, batch_jacobian_static, fixed_eta, ChiangModel, ChiangParamName, ChiangParams,
 };
+use crate::families::marschner::{Angles, Measurement};
 use crate::fit::bounds::Bound;
 use crate::fit::problem::{FitParam, Forward};
-use crate::model::{Angles, Measurement};
 
 impl ChiangParamName {
     /// Factor from the model's value to the file's (180/π for α, else 1).
@@ -148,7 +148,7 @@ impl ChiangForward {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chiang::{all_parameters, reference_params, ChiangEffects};
+    use crate::families::chiang::{all_parameters, reference_params, ChiangEffects};
 
     /// Eight channels with η free is 12 parameters, past the stack-dual dispatch: the heap-dual
     /// branch must give the same derivatives as one-parameter stack duals column by column.

@@ -4,18 +4,18 @@
 
 use std::time::Instant;
 
-use super::{Family, FitInput};
 use crate::error::Result;
-use crate::family::FamilyParams;
+use crate::families::marschner::params::ParamFile;
+use crate::families::marschner::{Effects, ParamName, Params};
+use crate::families::FamilyParams;
 use crate::files::LoadReport;
 use crate::fit::bounds;
+use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
 use crate::fit::{
     all_parameters, diagnostics, fit_with, free_parameters, require_samples, stages, FitData,
     FitOptions, FitOutcome, FitRun, ModelForward,
 };
-use crate::model::{Effects, ParamName, Params};
-use crate::params::ParamFile;
 
 /// The Marschner 2003 family (MODEL.md).
 pub struct Marschner;
@@ -69,7 +69,7 @@ pub fn fit(
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
-            records: crate::family::ModelRecords {
+            records: crate::families::ModelRecords {
                 config: choice.config,
                 chiang: None,
                 terms: None,

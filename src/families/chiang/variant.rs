@@ -17,7 +17,7 @@ use super::evaluator::for_each_with_table;
 use super::jacobian::split_duals;
 use super::longitudinal::{base_variance, lobe_variance, longitudinal, longitudinal_lobe};
 use super::{combine, ChiangModel, ChiangParams};
-use crate::model::Angles;
+use crate::families::marschner::Angles;
 
 /// Tilt of the incidence per lobe in units of α for the θ_i-tilt renderers:
 /// `θ'_i = θ_i + INCIDENCE_TILT[p]·α` (R +2α, TT −α, TRT −4α, residual 0).
@@ -190,7 +190,7 @@ pub fn variant_jacobian_static<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chiang::{scattering_batch, ChiangEffects};
+    use crate::families::chiang::{scattering_batch, ChiangEffects};
 
     fn params(alpha_deg: f64) -> ChiangParams<f64> {
         ChiangParams {

@@ -4,8 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::model::parameters::{NAMES, TABLE};
-use crate::model::{ParamName, Params};
+use crate::families::marschner::parameters::{NAMES, TABLE};
+use crate::families::marschner::{ParamName, Params};
 
 /// The parameter table's default of `name` (file units), for serde's `default = ...`.
 fn table_default(name: ParamName) -> f64 {

@@ -17,10 +17,12 @@ use std::f64::consts::PI;
 
 use num_dual::DualNum;
 
-use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::families::marschner::angles::wrap;
+use crate::families::marschner::Angles;
+use crate::families::table::{
+    LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
+};
 use crate::geometry::{Fitted, Interval, Unit};
-use crate::model::angles::wrap;
-use crate::model::Angles;
 
 /// The Karis / Unreal family.
 pub struct Karis;

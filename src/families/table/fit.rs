@@ -1,4 +1,4 @@
-//! `hairfit fit --model NAME` for every table family ([`crate::table_family`]), written once:
+//! `hairfit fit --model NAME` for every table family ([`crate::families::table`]), written once:
 //! its parameters as the fit sees them ([`TableParam`], facts from the family's table), its
 //! forward model with exact derivatives by forward-mode dual numbers ([`TableForward`]), and
 //! its part of a fit (free parameters from the terms in play, `--fix` names, the words for an
@@ -10,20 +10,20 @@ use std::time::Instant;
 use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
-use super::{Family, FitInput};
 use crate::error::Result;
-use crate::family::{FamilyParams, ModelRecords};
+use crate::families::marschner::{Angles, Measurement};
+use crate::families::table::{
+    by_name, clear_terms, every_parameter, fitted, lobes_config, param_name, total, zero_terms,
+    DynTable, ParamFact, Table, TableFamily, TableParamFile, TableParams, TermSet,
+};
+use crate::families::{FamilyParams, ModelRecords};
 use crate::files::{EffectsSource, Floored};
 use crate::fit::bounds::Bound;
+use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
 use crate::fit::problem::{FitData, FitParam, Forward};
 use crate::fit::stages::{options_record, ModelChoice};
 use crate::fit::{diagnostics, fit_with, require_samples, FitOutcome, FitRun};
-use crate::model::{Angles, Measurement};
-use crate::table_family::{
-    by_name, clear_terms, every_parameter, fitted, lobes_config, param_name, total, zero_terms,
-    DynTable, ParamFact, Table, TableFamily, TableParamFile, TableParams, TermSet,
-};
 
 /// One parameter of the table family `F`: a line of its table and, for a per-channel line,
 /// the channel.

@@ -20,10 +20,12 @@ use std::f64::consts::PI;
 
 use num_dual::DualNum;
 
-use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::families::marschner::angles::wrap;
+use crate::families::marschner::Angles;
+use crate::families::table::{
+    LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
+};
 use crate::geometry::{Fitted, Interval, Unit};
-use crate::model::angles::wrap;
-use crate::model::Angles;
 use azimuthal::{Logistic, BETA_N_MIN};
 
 /// The Frostbite/HDRP family.
@@ -84,7 +86,7 @@ pub fn schlick<T: DualNum<f64>>(f0: &T, cos: f64) -> T {
 /// where R's Fresnel is taken (d'Eon 2011's half angle, as HDRP writes it). Computed as
 /// `√(sin²θ_h + cos θ_i cos θ_r cos²(φ/2))`, which does not cancel as L → −V.
 pub fn half_angle_cosine(a: &Angles) -> f64 {
-    use crate::table_family::karis;
+    use crate::families::karis;
     karis::half_angle_cosine(
         a.theta_i,
         a.theta_r,

@@ -18,6 +18,7 @@ pub mod bravais;
 pub mod chain;
 pub mod eccentricity;
 pub mod exit_angle;
+pub mod fit;
 pub mod fresnel;
 pub mod instrument;
 pub mod jacobian;
@@ -25,6 +26,7 @@ pub mod lanes;
 pub mod longitudinal;
 pub mod measurement;
 pub mod parameters;
+pub mod params;
 pub mod roots;
 
 pub use crate::geometry::{angles, fact, Angles};

@@ -30,9 +30,9 @@ use std::sync::OnceLock;
 
 use num_dual::DualNum;
 
-use crate::chiang::azimuthal::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
-use crate::chiang::quadrature::{GaussLegendre, WidthRule};
-use crate::model::angles::wrap;
+use crate::families::chiang::azimuthal::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
+use crate::families::chiang::quadrature::{GaussLegendre, WidthRule};
+use crate::families::marschner::angles::wrap;
 
 /// Smallest azimuthal roughness β_N the family accepts (radial smoothness 0.95): the accuracy
 /// of [`lobe`] is tested down to here (tests/families/frostbite_table.rs).

@@ -3,27 +3,34 @@
 //! params.json and truth.json hold), what the command line configures of each
 //! ([`ModelSetup`]) and a family's model ready to evaluate ([`FamilyModel`]). Commands load and
 //! evaluate through these, so each command's contract holds for every family. Marschner and
-//! Chiang have their own types; every other family is a [`crate::table_family`].
+//! Chiang have their own types; every other family is a [`crate::families::table`].
 
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::chiang::{self, scattering_batch, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::error::{Error, Result};
-use crate::json_file::ParameterFile;
-use crate::model::{
+use crate::families::chiang::{scattering_batch, ChiangModel, ChiangParamFile, ChiangParams};
+use crate::families::marschner::params::ParamFile;
+use crate::families::marschner::{
     scattering_batch as marschner_batch, scattering_by_lobe, scattering_lanes, Angles, ModelConfig,
     Params,
 };
-use crate::params::ParamFile;
-use crate::table_family::{self, DynTable, TableParamFile, TableParams, TermSet};
+use crate::families::table::{DynTable, TableParamFile, TableParams, TermSet};
+use crate::json_file::ParameterFile;
 
+pub mod chiang;
+pub mod deon;
+pub mod frostbite;
+pub mod kajiya_kay;
+pub mod karis;
+pub mod marschner;
 mod setup;
+pub mod table;
 pub use setup::{ChiangRecord, ModelRecords, ModelSetup};
 
 /// A model family: Marschner 2003 (MODEL.md), Chiang 2016 (CHIANG.md), or a table family
-/// ([`crate::table_family`]).
+/// ([`crate::families::table`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 pub enum ModelFamily {
     #[default]
@@ -94,9 +101,8 @@ impl ModelFamily {
 
     /// The table family this is, or `None` for Marschner and Chiang.
     pub fn table(self) -> Option<&'static dyn DynTable> {
-        use table_family::{
-            deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis, Table,
-        };
+        use table::Table;
+        use {deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
         match self {
             ModelFamily::Marschner | ModelFamily::Chiang => None,
             ModelFamily::KajiyaKay => Some(&Table::<KajiyaKay>::NEW),
@@ -110,9 +116,11 @@ impl ModelFamily {
     /// (`sigma_a[1]` included): `deg`, `per fiber radius`, or empty.
     pub fn unit_label(self, json_name: &str) -> &'static str {
         match self {
-            ModelFamily::Marschner => crate::model::ParamName::from_json_name(json_name)
-                .map_or("", |n| n.fact().unit.label()),
-            ModelFamily::Chiang => crate::chiang::chiang_unit_label(json_name),
+            ModelFamily::Marschner => {
+                crate::families::marschner::ParamName::from_json_name(json_name)
+                    .map_or("", |n| n.fact().unit.label())
+            }
+            ModelFamily::Chiang => crate::families::chiang::chiang_unit_label(json_name),
             table => {
                 let base = json_name.split('[').next().unwrap_or(json_name);
                 let facts = table.table().map_or(&[][..], |t| t.facts());
@@ -328,7 +336,7 @@ impl FamilyParams {
             FamilyParams::Chiang(p) => &p.sigma_a,
             FamilyParams::Table(p) => return p.is_scalar(),
         };
-        matches!(s, crate::params::SigmaA::Scalar(_))
+        matches!(s, crate::families::marschner::params::SigmaA::Scalar(_))
     }
 
     /// Write every per-channel value given once as `n` values (`hairfit synth --channels n`);
@@ -338,7 +346,7 @@ impl FamilyParams {
         &mut self,
         n: usize,
     ) -> std::result::Result<Option<String>, (&'static str, usize)> {
-        use crate::params::SigmaA;
+        use crate::families::marschner::params::SigmaA;
         let sigma_a = match self {
             FamilyParams::Marschner(p) => &mut p.sigma_a,
             FamilyParams::Chiang(p) => &mut p.sigma_a,
@@ -574,7 +582,7 @@ impl FamilyModel {
     }
 
     /// [`Self::eval_batch`] the fastest way, for `hairfit eval`: Marschner's cubic mode four
-    /// samples per vector ([`crate::model::scattering_lanes`], ~1e-13 relative from the
+    /// samples per vector ([`crate::families::marschner::scattering_lanes`], ~1e-13 relative from the
     /// reference).
     pub fn eval_batch_fast(&self, angles: &[Angles], out: &mut [f64]) {
         match self {

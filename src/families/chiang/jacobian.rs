@@ -7,7 +7,7 @@ use num_dual::{DualDVec64, DualNum, DualSVec64};
 
 use super::evaluator::scattering_batch;
 use super::{ChiangModel, ChiangParamName, ChiangParams};
-use crate::model::Angles;
+use crate::families::marschner::Angles;
 
 /// `params` as dual numbers, parameter `which[j]` seeded as direction j.
 /// Panics if `which` names a channel that `params` does not have.

@@ -13,9 +13,9 @@
 //! - [`jacobian`]: seeding dual numbers, Jacobians of a batch;
 //!
 //! The fit's side of the family (its `Forward`, free parameters, `--fix` names) is
-//! `crate::fit::family::chiang`.
+//! `crate::families::chiang::fit`.
 //!
-//! Angles reuse [`crate::model::Angles`]: the frame and sign conventions are MODEL.md's.
+//! Angles reuse [`crate::families::marschner::Angles`]: the frame and sign conventions are MODEL.md's.
 
 use std::fmt;
 use std::sync::{Arc, OnceLock};
@@ -24,14 +24,15 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::families::marschner::{Angles, Effects, Lobes, ModelConfig};
 pub use crate::geometry::ParamFact;
 use crate::geometry::{Fitted, Interval, Unit};
-use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub mod azimuthal;
 pub mod bessel;
 pub mod evaluator;
 pub mod file;
+pub mod fit;
 pub mod fixed_eta;
 pub mod jacobian;
 pub mod longitudinal;
@@ -321,7 +322,7 @@ impl<T: Clone> ChiangParams<T> {
 impl ChiangParams<f64> {
     /// Check CHIANG.md's domains; the error names the parameter (file name and units) and range.
     pub fn validate(&self) -> Result<()> {
-        crate::model::require_channels(&self.sigma_a)?;
+        crate::families::marschner::require_channels(&self.sigma_a)?;
         let mut checks = vec![
             (ChiangParamName::Eta, self.eta),
             (ChiangParamName::BetaM, self.beta_m),

@@ -12,9 +12,11 @@
 
 use num_dual::DualNum;
 
-use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
+use crate::families::marschner::Angles;
+use crate::families::table::{
+    LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
+};
 use crate::geometry::{Fitted, Interval, Unit};
-use crate::model::Angles;
 
 /// The Kajiya–Kay family.
 pub struct KajiyaKay;

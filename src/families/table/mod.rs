@@ -4,25 +4,22 @@
 //! parameter's name, unit, domain, fit bounds, typical range and default in one line) and
 //! `scatter`, generic over the number type so dual numbers give exact derivatives. Everything
 //! else is written once for all of them: the parameter file ([`file`]), evaluation
-//! ([`DynTable`], what commands hold), and, in `crate::fit::family::table`, the fit.
+//! ([`DynTable`], what commands hold), and, in `crate::families::table::fit`, the fit.
 //!
 //! What a term switch turns off is not computed, and a parameter only the switched-off terms
 //! read is not fitted ([`ParamFact::terms`]).
 
-pub mod deon;
 pub mod file;
-pub mod frostbite;
-pub mod kajiya_kay;
-pub mod karis;
+pub mod fit;
 
 use std::marker::PhantomData;
 
 use num_dual::DualNum;
 
 use crate::error::{Error, Result};
+use crate::families::marschner::{Angles, Effects, Lobes, ModelConfig};
 use crate::geometry::Fitted;
 pub use crate::geometry::ParamFact;
-use crate::model::{Angles, Effects, Lobes, ModelConfig};
 
 pub use file::TableParamFile;
 
@@ -353,10 +350,10 @@ impl std::fmt::Debug for dyn DynTable {
 
 /// Every table family, in `--model` order.
 pub const ALL: [&dyn DynTable; 4] = [
-    &Table::<kajiya_kay::KajiyaKay>::NEW,
-    &Table::<deon::DEon>::NEW,
-    &Table::<karis::Karis>::NEW,
-    &Table::<frostbite::Frostbite>::NEW,
+    &Table::<crate::families::kajiya_kay::KajiyaKay>::NEW,
+    &Table::<crate::families::deon::DEon>::NEW,
+    &Table::<crate::families::karis::Karis>::NEW,
+    &Table::<crate::families::frostbite::Frostbite>::NEW,
 ];
 
 /// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,

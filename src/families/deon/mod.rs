@@ -3,7 +3,7 @@
 //! paper's Eq. 7, the same function Chiang 2016 uses) times an azimuthal lobe
 //! `N_p(φ) = ½∫₋₁¹ A_p(h) D(φ − Φ_p(h)) dh` whose detector `D` is a Gaussian wrapped around the
 //! circle (Eqs. 10–11). This module owns the family's table, the wrapped Gaussian and the
-//! h-integral; `M_p`, Fresnel, `A_p`, `Φ_p` and the Gauss–Legendre rule are `crate::chiang`'s.
+//! h-integral; `M_p`, Fresnel, `A_p`, `Φ_p` and the Gauss–Legendre rule are `crate::families::chiang`'s.
 //!
 //! The lobe sum is what a renderer multiplies by the light's irradiance (the paper's `f`, no
 //! `1/cos²θ_d`), so `S = Σ_p M_p N_p / cos θ_i`.
@@ -13,14 +13,16 @@ use std::sync::{Arc, OnceLock};
 
 use num_dual::DualNum;
 
-use super::{LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms};
-use crate::chiang::azimuthal::ExitRefraction;
-use crate::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
-use crate::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
-use crate::chiang::quadrature::WidthRule;
+use crate::families::chiang::azimuthal::ExitRefraction;
+use crate::families::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
+use crate::families::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
+use crate::families::chiang::quadrature::WidthRule;
+use crate::families::marschner::angles::{wrap, wrap_t};
+use crate::families::marschner::Angles;
+use crate::families::table::{
+    LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
+};
 use crate::geometry::{Fitted, Interval, Unit};
-use crate::model::angles::{wrap, wrap_t};
-use crate::model::Angles;
 
 /// The d'Eon 2011 family.
 pub struct DEon;

@@ -139,7 +139,7 @@ pub fn split_nodes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::chiang::azimuthal::exit_azimuth;
+    use crate::families::chiang::azimuthal::exit_azimuth;
     use std::f64::consts::{PI, TAU};
 
     #[test]
