@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -527,11 +528,19 @@ def export(
             names the JSON; the C# editor script goes beside it).
         output: a file to write (atomically); when None the text is returned.
         allow_failed: export a fit whose verdict is ``failed`` (refused otherwise: its
-            parameters are not a fit); the summary warns that they are not.
+            parameters are not a fit); the summary warns that they are not (without
+            ``output``, a Python warning does).
 
     Returns:
         The file's text when ``output`` is None, else the command's summary line (the mapping's
         error and where it wrote).
     """
     summary, text = _native.export([os.fspath(fit_dir)] + _flags(to=to, output=output, allow_failed=allow_failed))
-    return text if text is not None else summary
+    if text is None:
+        return summary
+    # The summary is not returned with the text: its warnings (a failed fit exported with
+    # allow_failed, an interrupted fit) go to Python's warnings instead of being lost.
+    for line in summary.splitlines():
+        if line.startswith("warning: "):
+            warnings.warn(line[len("warning: "):], stacklevel=2)
+    return text

@@ -64,3 +64,26 @@ def test_engine_exports_equal_the_cli(cli, tmp_path):
             doc.pop("material_instance", None)
         assert a == b
         assert ours.with_suffix(script).is_file() and theirs.with_suffix(script).is_file()
+
+
+def test_export_allow_failed_exports_a_failed_fit_and_warns(tmp_path):
+    """A fit with sane parameters whose fit.json says `failed` (a saved fit with its verdict
+    tampered): refused by default with the CLI's message, exported with allow_failed=True and
+    a warning that the parameters are not a fit, both to a file and as text."""
+    fit_dir = tmp_path / "fit"
+    hairfit.fit(str(DATA / "azimuthal_rgb.csv"), starts=2, intervals="linear").save(fit_dir)
+    fit_json = fit_dir / "fit.json"
+    doc = json.loads(fit_json.read_text())
+    doc["verdict"] = "failed"
+    doc["reasons"] = ["no progress from the start point"]
+    fit_json.write_text(json.dumps(doc, indent=2))
+
+    with pytest.raises(hairfit.HairfitError, match="verdict is failed .*--allow-failed"):
+        hairfit.export(fit_dir, to="pbrt")
+    target = tmp_path / "hair.pbrt"
+    summary = hairfit.export(fit_dir, to="pbrt", output=target, allow_failed=True)
+    assert "exported because of --allow-failed: these parameters are not a fit" in summary
+    assert "verdict failed" in target.read_text()
+    with pytest.warns(UserWarning, match="these parameters are not a fit"):
+        text = hairfit.export(fit_dir, to="pbrt", allow_failed=True)
+    assert "MakeNamedMaterial" in text and "verdict failed" in text
