@@ -9,9 +9,8 @@ use hairfit::families::chiang::{
     ChiangParamName, ChiangParams,
 };
 use hairfit::families::marschner::params::ParameterFile as _;
-use hairfit::families::marschner::{
-    scattering as marschner_s, Angles, Effects, Lobes, ModelConfig,
-};
+use hairfit::families::marschner::{scattering as marschner_s, Effects, Lobes, ModelConfig};
+use hairfit::geometry::Angles;
 
 const NODE_COUNTS: [usize; 5] = [256, 512, 768, 1024, 2048];
 

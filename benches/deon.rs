@@ -6,8 +6,9 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use hairfit::families::deon::DEon;
 use hairfit::families::marschner::params::ParameterFile as _;
-use hairfit::families::marschner::{scattering as marschner_s, Angles};
+use hairfit::families::marschner::scattering as marschner_s;
 use hairfit::families::table::{zero_terms, TableFamily, TableParams, TermSet};
+use hairfit::geometry::Angles;
 use nalgebra::{Const, U1};
 use num_dual::{Derivative, DualVec64};
 

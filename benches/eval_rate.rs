@@ -12,7 +12,8 @@
 use std::time::Instant;
 
 use hairfit::families::marschner::params::{ParamFile, ParameterFile as _};
-use hairfit::families::marschner::{scattering_lanes, Angles, ModelConfig};
+use hairfit::families::marschner::{scattering_lanes, ModelConfig};
+use hairfit::geometry::Angles;
 
 /// `hairfit eval`'s rows per batch (src/eval.rs `EVAL_BATCH`).
 const EVAL_BATCH: usize = 256;

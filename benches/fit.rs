@@ -9,9 +9,11 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use hairfit::demo::synthesize;
-use hairfit::families::marschner::{Angles, ModelConfig, Params};
+use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::{ModelConfig, Params};
 use hairfit::fit::design::SplitMix64;
-use hairfit::fit::{fit, EffectsChoice, FitOptions};
+use hairfit::fit::{EffectsChoice, FitOptions};
+use hairfit::geometry::Angles;
 
 fn truth() -> Params<f64> {
     Params {

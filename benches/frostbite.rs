@@ -7,10 +7,11 @@ use hairfit::families::frostbite::{
     Frostbite, BASE_COLOR, CUTICLE_ANGLE, RADIAL_SMOOTHNESS, SMOOTHNESS,
 };
 use hairfit::families::marschner::params::ParameterFile as _;
-use hairfit::families::marschner::{scattering as marschner_s, Angles, Measurement, ModelConfig};
+use hairfit::families::marschner::{scattering as marschner_s, ModelConfig};
 use hairfit::families::table::fit::{TableForward, TableParam};
 use hairfit::families::table::{DynTable, Table, TableParams, TermSet};
 use hairfit::fit::problem::Forward;
+use hairfit::geometry::{Angles, Measurement};
 
 const N: usize = 4096;
 

@@ -6,8 +6,9 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use hairfit::families::karis::Karis;
 use hairfit::families::marschner::params::ParameterFile as _;
-use hairfit::families::marschner::{scattering_batch as marschner_batch, Angles, ModelConfig};
+use hairfit::families::marschner::{scattering_batch as marschner_batch, ModelConfig};
 use hairfit::families::table::{DynTable, Table, TableFamily, TableParams};
+use hairfit::geometry::Angles;
 use nalgebra::{Const, U1};
 use num_dual::{Derivative, DualVec64};
 

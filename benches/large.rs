@@ -10,10 +10,12 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use hairfit::demo::synthesize;
-use hairfit::families::marschner::{Angles, Effects, Measurement, ModelConfig};
+use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::{Effects, ModelConfig};
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::design::SplitMix64;
-use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, Space};
+use hairfit::fit::{Evaluator, Loss, ModelForward, Space};
+use hairfit::geometry::{Angles, Measurement};
 
 /// `n` random direction pairs (|θ| < 80°).
 fn directions(n: usize) -> Vec<Angles> {
@@ -46,7 +48,7 @@ fn bench(c: &mut Criterion) {
             0.02,
             7,
         );
-        let free = free_parameters(&Effects::default(), nc, true);
+        let free = fitted_parameters(&Effects::default(), nc, true);
         let (ev, _) = Evaluator::new(
             &fwd,
             &data,

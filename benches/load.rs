@@ -14,8 +14,8 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode, Throughput};
 use hairfit::data::{load, LoadOptions};
 use hairfit::eval::{eval_stream, eval_stream_with, output_columns, EvalRequest};
-use hairfit::families::marschner::Angles;
 use hairfit::families::{FamilyModel, FamilyParams, ModelFamily};
+use hairfit::geometry::Angles;
 
 const ROWS: u64 = 10_000_000;
 

@@ -5,10 +5,10 @@ use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criteri
 use hairfit::families::marschner::params::ParameterFile as _;
 use hairfit::families::marschner::{
     scattering, scattering_batch, scattering_jacobian, scattering_lanes, scattering_lanes_on,
-    Angles, Effects, LaneKernel, Lobes, Measurement, ModelConfig, ParamName, Params, RootMode,
-    StaticJacobian,
+    Effects, LaneKernel, Lobes, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
 };
 use hairfit::fit::{Forward, ModelForward};
+use hairfit::geometry::{Angles, Measurement};
 
 const BATCH: usize = 1024;
 

@@ -3,7 +3,8 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use hairfit::families::marschner::params::ParamFile;
 use hairfit::families::marschner::params::ParameterFile as _;
-use hairfit::families::marschner::{Measurement, ModelConfig};
+use hairfit::families::marschner::ModelConfig;
+use hairfit::geometry::Measurement;
 use hairfit::synth::{synthesize, Noise, Rig};
 
 const N: usize = 10_000;

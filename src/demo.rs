@@ -5,12 +5,14 @@
 use std::path::Path;
 
 use crate::error::Result;
-use crate::families::marschner::{Angles, ModelConfig, Params};
+use crate::families::marschner::{ModelConfig, Params};
 use crate::families::table::TableParamFile;
 use crate::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::LoadReport;
 use crate::fit::problem::FitData;
-use crate::fit::{fit_family, FitOptions, FitOutcome};
+use crate::fit::registry::fit_family;
+use crate::fit::{FitOptions, FitOutcome};
+use crate::geometry::Angles;
 use crate::report::publish::PublishedFit;
 
 /// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
@@ -77,7 +79,7 @@ pub fn synthesize(
         "in-memory test data",
         &noise,
         scale,
-        crate::families::marschner::Measurement::S,
+        crate::geometry::Measurement::S,
         seed,
     )
     .expect("valid synthetic inputs");
@@ -112,7 +114,7 @@ pub fn chiang_demo_truth() -> crate::families::chiang::ChiangParams<f64> {
 /// `hairfit fit --force`).
 pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<PublishedFit> {
     // A bad --fix is an error about the option, before anything touches the output directory.
-    crate::fit::family::family_fit(opts.family).check_fixes(&opts.fix, DEMO_SCALE.len())?;
+    crate::fit::registry::family_fit(opts.family).check_fixes(&opts.fix, DEMO_SCALE.len())?;
     crate::report::publish::publish_fit(out, "hairfit demo", force, &[], |staging| {
         demo_into(opts, out, staging)
     })

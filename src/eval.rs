@@ -16,8 +16,8 @@ use crate::data::records::{needs_csv_parser, Blocks};
 use crate::data::unit::{RadiansEvidence, UnitLine};
 use crate::data::{repeated_column, repeated_column_message, AngleUnit};
 use crate::error::{Error, Result};
-use crate::families::marschner::Angles;
 use crate::families::{FamilyModel, FamilyParams};
+use crate::geometry::Angles;
 
 mod angles;
 mod plain_row;

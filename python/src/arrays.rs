@@ -8,7 +8,7 @@ use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 use hairfit::data::AngleUnit;
-use hairfit::families::marschner::Angles;
+use hairfit::geometry::Angles;
 
 use crate::errors::HairfitError;
 

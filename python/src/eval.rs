@@ -14,8 +14,8 @@ use pyo3::prelude::*;
 use rayon::prelude::*;
 
 use hairfit::data::AngleUnit;
-use hairfit::families::marschner::Angles;
 use hairfit::families::{FamilyModel, FamilyParams};
+use hairfit::geometry::Angles;
 
 use crate::args::{parse, ModelCli};
 use crate::arrays::{angle_unit, check_angles, common_length, unit_name, values_of};

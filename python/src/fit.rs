@@ -7,7 +7,8 @@ use pyo3::prelude::*;
 
 use hairfit::cli::fit::FitArgs;
 use hairfit::families::FamilyParams;
-use hairfit::fit::{fit_family, into_fit_data, FitOutcome};
+use hairfit::fit::registry::fit_family;
+use hairfit::fit::{into_fit_data, FitOutcome};
 
 use crate::args::{parse, FitCli};
 use crate::errors::{hf, HairfitError};

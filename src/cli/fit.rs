@@ -13,8 +13,9 @@ use crate::data::{load, LoadOptions};
 use crate::error::{Error, Result};
 use crate::families::ModelFamily;
 use crate::files::CurvesMode;
+use crate::fit::registry::fit_family;
 use crate::fit::{
-    fit_family, into_fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
+    into_fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
 use crate::report::publish::{publish_fit, PublishedFit};
 
@@ -105,7 +106,7 @@ impl FitArgs {
 
     /// Check every `--fix` against data of `nc` channels (names, values, channel indices).
     pub fn check_fixes(&self, nc: usize) -> Result<()> {
-        crate::fit::family::family_fit(self.model.family).check_fixes(&self.fix, nc)
+        crate::fit::registry::family_fit(self.model.family).check_fixes(&self.fix, nc)
     }
 
     /// The fit options these arguments ask for.

@@ -17,9 +17,10 @@ use clap::Args;
 
 use crate::error::{Error, Result};
 use crate::families::chiang::{ChiangEffects, ChiangModel, WidthNodes};
-use crate::families::marschner::{Effects, Measurement, ModelConfig, RootMode};
+use crate::families::marschner::{Effects, ModelConfig, RootMode};
 use crate::families::table::TermSet;
 use crate::families::{ModelFamily, ModelSetup};
+use crate::geometry::Measurement;
 
 /// Write one line to stderr, as `eprintln!` would, but without its panic when stderr has gone (a
 /// pipe whose reader left): then no one is left to tell, and the exit code still says how the

@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
-use crate::families::marschner::Measurement;
 use crate::fit::FitOutcome;
+use crate::geometry::Measurement;
 use crate::plot::{fmt_interval, fmt_num, fmt_value_se};
 
 /// `v ± e`, both to the error's second significant digit (the report's format,

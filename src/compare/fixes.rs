@@ -4,7 +4,7 @@
 
 use crate::error::{Error, Result};
 use crate::families::ModelFamily;
-use crate::fit::family::family_fit;
+use crate::fit::registry::family_fit;
 
 use super::findings::and_list;
 

@@ -229,7 +229,7 @@ pub fn compare_command(
     };
     for opts in fits {
         let name = opts.family.as_str();
-        let mut outcome = crate::fit::fit_family(&data, &file, report.clone(), opts)?;
+        let mut outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
         // A ranking of interrupted fits would be a ranking of best-so-far points.
         if outcome.json.verdict == Verdict::Interrupted || stopped() {
             return interrupted(format!("while fitting {name}"));

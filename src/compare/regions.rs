@@ -16,9 +16,9 @@
 //! The lobes overlap, so a region is where its lobe dominates, not where only it is present.
 
 use super::comparison::{degrees, PerFamily, Region};
-use crate::families::marschner::angles::wrap_deg;
 use crate::families::ModelFamily;
 use crate::files::CurveRow;
+use crate::geometry::angles::wrap_deg;
 
 /// Half-width of the specular cone's band in θh, degrees.
 pub const CONE_DEG: f64 = 10.0;

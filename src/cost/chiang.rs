@@ -9,7 +9,8 @@ use super::{time_per_call, CostRow, COST_SEED};
 use crate::families::chiang::{
     scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams,
 };
-use crate::families::marschner::{Angles, ModelConfig};
+use crate::families::marschner::ModelConfig;
+use crate::geometry::Angles;
 
 /// Node counts of the ledger (the reference uses [`REFERENCE_NODES`]).
 pub const NODE_LADDER: [usize; 5] = [256, 512, 768, 1024, 2048];

@@ -6,9 +6,10 @@
 
 use super::{time_per_call, CostRow};
 use crate::error::Result;
-use crate::families::marschner::Angles;
 use crate::families::{FamilyModel, ModelFamily, ModelSetup};
-use crate::fit::{fit_family, FitOptions};
+use crate::fit::registry::fit_family;
+use crate::fit::FitOptions;
+use crate::geometry::Angles;
 
 /// What the error columns would compare: nothing across models.
 const NOT_COMPARABLE: &str = "another model (hairfit compare ranks the families' losses)";

@@ -7,9 +7,11 @@ use std::time::Instant;
 use super::{CostRow, COST_SEED};
 use crate::demo::{demo_geometry, demo_truth, synthesize, DEMO_NOISE, DEMO_SCALE};
 use crate::error::Result;
+use crate::families::marschner::fit::fit;
+use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::{Effects, ModelConfig};
 use crate::fit::bounds::typical_range;
-use crate::fit::{fit, free_parameters, param, EffectsChoice, FitData, FitOptions, Global};
+use crate::fit::{param, EffectsChoice, FitData, FitOptions, Global};
 
 /// The seeded synthetic data of the fit section (the demo's geometry, truth, scale and noise).
 pub(super) fn synthetic_data() -> FitData {
@@ -85,7 +87,7 @@ pub(super) fn fit_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>> {
         let t0 = Instant::now();
         let out = fit(&d, "synthetic", Default::default(), &opts)?;
         let wall = t0.elapsed().as_secs_f64();
-        let free = free_parameters(&Effects::default(), d.n_channels(), false);
+        let free = fitted_parameters(&Effects::default(), d.n_channels(), false);
         let mut errs: Vec<(f64, String)> = free
             .iter()
             .map(|&p| {

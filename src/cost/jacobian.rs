@@ -4,8 +4,10 @@
 use super::{time_per_call, CostRow};
 use crate::demo::demo_truth;
 use crate::error::Result;
-use crate::families::marschner::{Effects, Measurement, ModelConfig};
-use crate::fit::{free_parameters, param, Evaluator, FitData, Loss, ModelForward, Space};
+use crate::families::marschner::parameters::fitted_parameters;
+use crate::families::marschner::{Effects, ModelConfig};
+use crate::fit::{param, Evaluator, FitData, Loss, ModelForward, Space};
+use crate::geometry::Measurement;
 
 /// Jacobian section: exact forward-mode AD against central finite differences in the solver's
 /// parameters, at the truth, on the synthetic data; error per column relative to the AD column.
@@ -13,7 +15,7 @@ pub(super) fn jacobian_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>>
     let min_s = if quick { 0.1 } else { 1.0 };
     let truth = demo_truth();
     let nc = data.n_channels();
-    let free = free_parameters(&Effects::default(), nc, false);
+    let free = fitted_parameters(&Effects::default(), nc, false);
     let forward = ModelForward {
         config: ModelConfig::default(),
         measurement: Measurement::S,

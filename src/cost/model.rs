@@ -3,9 +3,8 @@
 
 use super::{time_per_call, CostRow, COST_SEED};
 use crate::demo::demo_truth;
-use crate::families::marschner::{
-    scattering, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
-};
+use crate::families::marschner::{scattering, Effects, Lobes, ModelConfig, Params, RootMode};
+use crate::geometry::Angles;
 use crate::rng::SplitMix64;
 
 /// A fixed, seeded set of directions: θ uniform in (−80°, 80°) (away from the degenerate ±90°),

@@ -8,7 +8,7 @@ use super::{Fields, ANGLE_COLUMNS};
 use crate::data::records::parse_f64;
 use crate::data::AngleUnit;
 use crate::error::{Error, Result};
-use crate::families::marschner::Angles;
+use crate::geometry::Angles;
 
 /// Indices of the four angle columns, or an error naming the missing ones.
 pub(super) fn locate_angle_columns(

@@ -19,7 +19,7 @@ use crate::families::chiang::variant::{
     VariantParams,
 };
 use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParams};
-use crate::families::marschner::Angles;
+use crate::geometry::Angles;
 use crate::lm::LevenbergMarquardt;
 
 /// Floor of the log residual, relative to the channel's largest source value.

@@ -11,9 +11,10 @@ use serde_json::Value;
 use crate::error::{Error, Result};
 use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::{Angles, ModelConfig, Params};
+use crate::families::marschner::{ModelConfig, Params};
 use crate::families::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::{Curves, ParameterFile};
+use crate::geometry::Angles;
 
 /// At most this many measured directions enter a mapping (a 3-channel, 8-variable Jacobian of
 /// 20 000 directions is ≈ 4 MB); larger fits are thinned evenly and the header says so.

@@ -13,10 +13,10 @@ use crate::error::{Error, Result};
 use crate::families::chiang::{scattering_batch, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::families::marschner::params::ParamFile;
 use crate::families::marschner::{
-    scattering_batch as marschner_batch, scattering_by_lobe, scattering_lanes, Angles, ModelConfig,
-    Params,
+    scattering_batch as marschner_batch, scattering_by_lobe, scattering_lanes, ModelConfig, Params,
 };
 use crate::families::table::{DynTable, TableParamFile, TableParams, TermSet};
+use crate::geometry::Angles;
 use crate::json_file::ParameterFile;
 
 pub mod chiang;
@@ -236,9 +236,24 @@ impl<'de> Deserialize<'de> for FamilyParams {
             Some(chiang::file::MODEL_TAG) => ChiangParamFile::deserialize(&value)
                 .map(FamilyParams::Chiang)
                 .map_err(err),
-            Some(_) => TableParamFile::deserialize(&value)
-                .map(FamilyParams::Table)
-                .map_err(err),
+            Some(t) => {
+                let family = ModelFamily::parse(t).map_err(|_| {
+                    D::Error::custom(format!(
+                        "\"model\": \"{t}\" is not a model family: use one of {}",
+                        ModelFamily::names()
+                    ))
+                })?;
+                let table = family.table().ok_or_else(|| {
+                    D::Error::custom(format!(
+                        "\"model\": \"{t}\": a {} parameter file is written without \"model\" \
+                         (remove the key)",
+                        family.title()
+                    ))
+                })?;
+                TableParamFile::from_value(table, &value)
+                    .map(FamilyParams::Table)
+                    .map_err(err)
+            }
         }
     }
 }

@@ -12,8 +12,9 @@ use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use super::settings::{Global, Loss, Space};
 use crate::error::Result;
-use crate::families::marschner::{Measurement, ModelConfig, RootMode};
+use crate::families::marschner::{ModelConfig, RootMode};
 use crate::families::{ChiangRecord, FamilyParams};
+use crate::geometry::Measurement;
 
 /// How a fit (or one solver run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -7,8 +7,9 @@ use serde::{Deserialize, Serialize};
 
 use super::fit_json::ScaleEntry;
 use crate::error::Result;
-use crate::families::marschner::{Measurement, ModelConfig};
+use crate::families::marschner::ModelConfig;
 use crate::families::{ChiangRecord, FamilyParams};
+use crate::geometry::Measurement;
 
 /// The sidecar `FILE.truth.json`: the exact inputs of a synthetic dataset.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -2,7 +2,8 @@
 //! Bounds, typical ranges, reporting factors and reference values are read from the model's
 //! parameter table (`model::parameters`); this module only turns them into transforms.
 
-use crate::families::marschner::{ParamName, Params, Unit};
+use crate::families::marschner::{ParamName, Params};
+use crate::geometry::Unit;
 
 /// The bounds of one parameter in its natural (model, radian) units.
 #[derive(Debug, Clone, Copy, PartialEq)]

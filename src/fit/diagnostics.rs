@@ -6,10 +6,10 @@
 use std::f64::consts::PI;
 
 use super::problem::FitData;
-use crate::families::marschner::angles::wrap;
 use crate::families::marschner::azimuthal::caustic_position;
 use crate::families::marschner::bravais::bravais_indices;
 use crate::families::marschner::{ParamName, Params, RootMode};
+use crate::geometry::angles::wrap;
 
 /// A standard error above this fraction of the typical range earns a "poorly determined" warning.
 pub const POORLY_DETERMINED: f64 = 0.2;

@@ -189,7 +189,7 @@ mod tests {
 
     #[test]
     fn a_channel_beyond_the_data_is_named_as_such() {
-        let all = crate::fit::all_parameters(3);
+        let all = crate::families::marschner::parameters::all_parameters(3);
         let e = parse_fixes(&items(&["sigma_a[5]=0.3"]), &all, "parameter", "")
             .unwrap_err()
             .to_string();
@@ -208,7 +208,7 @@ mod tests {
 
     #[test]
     fn sigma_a_fixes_every_channel_and_degrees_convert() {
-        let all = crate::fit::all_parameters(3);
+        let all = crate::families::marschner::parameters::all_parameters(3);
         let fixes = parse_fixes(
             &items(&["sigma_a=0.5", "alpha_r_deg=-7"]),
             &all,
@@ -245,7 +245,7 @@ mod tests {
     /// the domain rather than the fit bound.
     #[test]
     fn a_fix_may_lie_anywhere_in_the_domain() {
-        let all = crate::fit::all_parameters(1);
+        let all = crate::families::marschner::parameters::all_parameters(1);
         let fixes = parse_fixes(&items(&["eta=3", "sigma_a=60"]), &all, "parameter", "").unwrap();
         assert_eq!(fixes[0], (ParamName::Eta, 3.0));
         assert_eq!(fixes[1], (ParamName::SigmaA(0), 60.0));
@@ -258,7 +258,7 @@ mod tests {
 
     #[test]
     fn the_free_set_drops_fixed_and_warns_about_unused_parameters() {
-        let all = crate::fit::all_parameters(1);
+        let all = crate::families::marschner::parameters::all_parameters(1);
         let fixes = parse_fixes(&items(&["k_g=2"]), &all, "parameter", "").unwrap();
         let mut warnings = Vec::new();
         let set = FreeSet::new(

@@ -22,6 +22,7 @@ pub mod gof;
 pub mod loss;
 pub mod problem;
 pub mod profile;
+pub mod registry;
 pub mod scan_design;
 pub mod solve;
 pub mod stages;
@@ -33,7 +34,6 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Instant;
 
-pub use crate::families::marschner::fit::fit;
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
 pub use loss::{Loss, LossScale};
@@ -47,11 +47,12 @@ pub use crate::files::settings::Global;
 use crate::data::Dataset;
 use crate::error::{Error, Result};
 use crate::families::chiang::ChiangModel;
-use crate::families::marschner::{Effects, Measurement, ParamName, Params, RootMode};
+use crate::families::marschner::{Effects, ParamName, Params, RootMode};
 use crate::families::{FamilyParams, ModelFamily};
 use crate::files::{
     Curves, CurvesMode, FitJson, FitStatus, Floored, LoadReport, OptionsRecord, Timing,
 };
+use crate::geometry::Measurement;
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
 /// best subsample cost (25: a 5-standard-error gap along one direction).
@@ -171,9 +172,9 @@ pub fn into_fit_data(ds: Dataset) -> FitData {
     }
 }
 
-fn angles_of(ds: &Dataset) -> Vec<crate::families::marschner::Angles> {
+fn angles_of(ds: &Dataset) -> Vec<crate::geometry::Angles> {
     (0..ds.len())
-        .map(|i| crate::families::marschner::Angles {
+        .map(|i| crate::geometry::Angles {
             theta_i: ds.theta_i[i],
             phi_i: ds.phi_i[i],
             theta_r: ds.theta_r[i],
@@ -181,11 +182,6 @@ fn angles_of(ds: &Dataset) -> Vec<crate::families::marschner::Angles> {
         })
         .collect()
 }
-
-/// Every parameter name in output order (the parameter table's order).
-pub use crate::families::marschner::parameters::all_parameters;
-/// The model's parameters that a fit under `effects` varies before `--fix` (from the table).
-pub use crate::families::marschner::parameters::fitted_parameters as free_parameters;
 
 /// A fit whose every row lies within this relative distance of the data (below 1e-9 of the
 /// channel's peak, within this share of 1e-9·peak) reproduces them to rounding, not noise: float32
@@ -249,22 +245,6 @@ pub fn written_curves<P>(out: &FitOutcome<P>) -> Option<std::borrow::Cow<'_, Cur
         CurvesMode::Full | CurvesMode::Summary => Some(std::borrow::Cow::Borrowed(&out.curves)),
         CurvesMode::None => None,
     }
-}
-
-/// Fit `data` with the model family `opts.family` (through its [`family::FamilyFit`]); the
-/// outcome's parameters as a parameter file of that family.
-pub fn fit_family(
-    data: &FitData,
-    file: &str,
-    load_report: LoadReport,
-    opts: &FitOptions,
-) -> Result<FitOutcome<FamilyParams>> {
-    family::family_fit(opts.family).fit(family::FitInput {
-        data,
-        file,
-        load_report,
-        opts,
-    })
 }
 
 /// The number of channels of `data`, or an error when there is nothing to fit.

@@ -5,7 +5,7 @@
 
 use nalgebra::DVector;
 
-use crate::families::marschner::Angles;
+use crate::geometry::Angles;
 
 mod evaluation;
 mod evaluator;

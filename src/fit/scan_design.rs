@@ -9,9 +9,9 @@
 //! example hair `data/true_1ch.json`, default fit options with `--intervals profile`); the
 //! README's "Coverage on single scans" section lists the commands and the full tables.
 
-use crate::families::marschner::angles::wrap_deg;
 use crate::files::{FitJson, ParamStatus, Suggestion, Verdict};
 use crate::fit::FitData;
+use crate::geometry::angles::wrap_deg;
 // Degrees in a reason: at most two decimals, no trailing zeros (as the report's titles).
 use crate::slices::short as deg;
 

@@ -8,9 +8,10 @@ use rayon::prelude::*;
 use super::evidence::{Evidence, LARGE_RESIDUAL};
 use super::gof;
 use super::problem::{FitParam, Forward, ScaleMode, Space, CHUNK};
-use crate::families::marschner::{Measurement, RootMode};
+use crate::families::marschner::RootMode;
 use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
 use crate::fit::Loss;
+use crate::geometry::Measurement;
 use crate::slices::Slice;
 
 /// A robust loss is suggested when the large residuals are at most this fraction of the data…

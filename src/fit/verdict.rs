@@ -563,12 +563,10 @@ fn poisson_upper_tail(k: usize, lambda: f64) -> f64 {
 /// order of first appearance, and each group's size. Sorting keys rather than hashing them: a
 /// million samples group in a parallel sort, where a map of (direction, channel) keys took
 /// seconds and ~200 MB.
-fn direction_groups(angles: &[crate::families::marschner::Angles]) -> (Vec<usize>, Vec<usize>) {
+fn direction_groups(angles: &[crate::geometry::Angles]) -> (Vec<usize>, Vec<usize>) {
     // |wrap(φ)| ≤ 180° is at most 1.8e8 units of 1e-6°: an i32 (20 bytes per sample with its
     // index, 200 MB at 10M samples where (i64 × 4, usize) took 400 MB).
-    let key = |v: f64| {
-        (crate::families::marschner::angles::wrap_deg(v.to_degrees()) * 1e6).round() as i32
-    };
+    let key = |v: f64| (crate::geometry::angles::wrap_deg(v.to_degrees()) * 1e6).round() as i32;
     // Sample indices fit u32: the curves table numbers samples in u32 too.
     let mut keyed: Vec<([i32; 4], u32)> = angles
         .par_iter()

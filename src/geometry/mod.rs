@@ -1,11 +1,13 @@
 //! What every model family shares and none owns: the fibre frame's angles ([`Angles`], wrapping
-//! and half/difference angles), the units and domains of parameters ([`units`]) and the one
+//! and half/difference angles), the units and domains of parameters ([`units`]), what a data file's values are ([`Measurement`]) and the one
 //! parameter-fact type every family's table is made of ([`fact::ParamFact`]).
 
 pub mod angles;
 pub mod fact;
+pub mod measurement;
 pub mod units;
 
 pub use angles::Angles;
 pub use fact::{Fitted, ParamFact};
+pub use measurement::Measurement;
 pub use units::{Interval, Unit};

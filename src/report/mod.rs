@@ -20,9 +20,9 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::families::marschner::Angles;
 use crate::families::FamilyModel;
 use crate::files::{CurveRow, Curves, CurvesMode, FitJson, ProfileMethod};
+use crate::geometry::Angles;
 
 use crate::plot::{render, YScale};
 use crate::slices::decimate::stride_indices;

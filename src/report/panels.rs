@@ -7,8 +7,8 @@ use rayon::prelude::*;
 
 use super::figures::{ChannelSeries, DataVsFitFigure, Point, ResidualsFigure, SlicePanel};
 use super::{LobeModel, ReportSummary, DENSE_POINTS, MAX_SCATTER_POINTS, MAX_SLICE_POINTS};
-use crate::families::marschner::Angles;
 use crate::files::{Curves, FitJson};
+use crate::geometry::Angles;
 use crate::plot::{fmt_num, YScale};
 use crate::slices::decimate::{envelope_indices, stride_indices};
 use crate::slices::{theta_h_deg, wrap_deg, Sample, Slice};

@@ -90,7 +90,7 @@ pub fn short(v: f64) -> String {
 }
 
 /// MODEL.md's `wrap`, in degrees: to (−180, 180] (the model's one implementation).
-pub use crate::families::marschner::angles::wrap_deg;
+pub use crate::geometry::angles::wrap_deg;
 
 /// θ_h = (θ_i + θ_r)/2 in degrees.
 pub fn theta_h_deg(angles: &[f64; 4]) -> f64 {

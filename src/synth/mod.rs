@@ -18,9 +18,10 @@ use rayon::prelude::*;
 use crate::data::{round_trip_degrees, Dataset};
 use crate::error::{Error, Result};
 use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::{Angles, Measurement, ModelConfig, Params};
+use crate::families::marschner::{ModelConfig, Params};
 use crate::families::{FamilyModel, FamilyParams, ModelRecords};
 pub use crate::files::{ScaleEntry, Truth};
+use crate::geometry::{Angles, Measurement};
 
 pub use self::noise::{Noise, Noisy, OutlierKind, OUTLIER_FACTOR};
 pub use self::rig::{Rig, MAX_THETA_DEG};

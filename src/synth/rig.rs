@@ -282,7 +282,7 @@ fn fiber_frame_direction(d: [f64; 3], bend: f64) -> (f64, f64) {
     let theta = du.clamp(-1.0, 1.0).asin().to_degrees();
     (
         theta,
-        crate::families::marschner::angles::wrap_deg(d[2].atan2(dv).to_degrees()),
+        crate::geometry::angles::wrap_deg(d[2].atan2(dv).to_degrees()),
     )
 }
 

@@ -7,10 +7,10 @@ use crate::support::cli;
 use cli::{failed, hairfit, hairfit_ok, s as p, stdout, write};
 
 use hairfit::families::deon::DEon;
-use hairfit::families::marschner::Angles;
 use hairfit::families::table::{TableFamily, TermSet};
 use hairfit::families::{FamilyParams, ModelFamily};
 use hairfit::files::{FitJson, Verdict};
+use hairfit::geometry::Angles;
 
 const TRUTH: &str = r#"{"model": "deon", "sigma_a": [0.3, 0.7, 1.4], "beta_r_deg": 6,
     "beta_n_deg": 12, "alpha_deg": -2.5}"#;

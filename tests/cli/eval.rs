@@ -7,7 +7,8 @@ use cli::{hairfit, s, write};
 use hairfit::families::marschner::params::ParameterFile as _;
 
 use hairfit::families::marschner::params::ParamFile;
-use hairfit::families::marschner::{scattering, scattering_lanes, Angles, ModelConfig};
+use hairfit::families::marschner::{scattering, scattering_lanes, ModelConfig};
+use hairfit::geometry::Angles;
 
 const PARAMS_1: &str = r#"{"sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
   "w_c_deg": 15, "eccentricity": 0.9}"#;

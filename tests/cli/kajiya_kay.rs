@@ -6,8 +6,9 @@
 use crate::support::cli;
 
 use cli::{failed, hairfit, hairfit_ok, s as p, stdout, write};
-use hairfit::families::marschner::Angles;
-use hairfit::families::table::{by_name, TableParams, TermSet};
+use hairfit::families::table::{TableParams, TermSet};
+use hairfit::families::ModelFamily;
+use hairfit::geometry::Angles;
 
 /// Unit vector of direction (θ, φ) in the fibre frame: u (the tangent) is the first component.
 fn direction(theta: f64, phi: f64) -> [f64; 3] {
@@ -47,7 +48,8 @@ fn params(k_d: &[f64], k_s: f64, p: f64) -> TableParams<f64> {
 
 fn s(p: &TableParams<f64>, on: TermSet, a: &Angles) -> Vec<f64> {
     let mut out = vec![0.0; p.n_channels];
-    by_name("kajiya-kay")
+    ModelFamily::KajiyaKay
+        .table()
         .unwrap()
         .eval_batch(p, on, std::slice::from_ref(a), &mut out);
     out

@@ -12,8 +12,9 @@ use std::time::{Duration, Instant};
 
 use crate::support::hard::*;
 use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
-use hairfit::families::marschner::{Angles, ModelConfig};
+use hairfit::families::marschner::ModelConfig;
 use hairfit::fit::design::SplitMix64;
+use hairfit::geometry::Angles;
 
 /// ~100k samples × 3 channels: the demo scan repeated with jittered azimuths, 2% noise.
 fn big_dataset(path: &Path) {

@@ -10,9 +10,8 @@ use std::process::Output;
 
 use hairfit::data::{load, write_csv, LoadOptions};
 use hairfit::families::marschner::params::{ParamFile, SigmaA};
-use hairfit::families::marschner::{
-    scattering, Angles, Effects, Measurement, ModelConfig, RootMode,
-};
+use hairfit::families::marschner::{scattering, Effects, ModelConfig, RootMode};
+use hairfit::geometry::{Angles, Measurement};
 use hairfit::synth::{synthesize, synthesize_directions, truth_path, Noise, Rig, Truth};
 
 const PARAMS_3: &str = r#"{"eta": 1.55, "sigma_a": [0.2, 0.4, 0.8], "alpha_r_deg": -7,

@@ -13,7 +13,7 @@ use hairfit::demo::{demo_directions, demo_truth_file, DEMO_SCALE};
 use hairfit::families::chiang::fit::{Chiang, ChiangForward};
 use hairfit::families::chiang::{ChiangEffects, ChiangModel};
 use hairfit::families::marschner::fit::Marschner;
-use hairfit::families::marschner::{Angles, Lobes, Measurement, ModelConfig};
+use hairfit::families::marschner::{Lobes, ModelConfig};
 use hairfit::families::table::fit::TableForward;
 use hairfit::families::table::{Table, TableFamily, TermSet};
 use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
@@ -21,7 +21,9 @@ use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use hairfit::files::{FitJson, LoadReport, ParamStatus, Verdict};
 use hairfit::fit::family::Family;
 use hairfit::fit::problem::{FitParam, Forward, ModelForward, ParamSet};
-use hairfit::fit::{fit_family, FitOptions};
+use hairfit::fit::registry::fit_family;
+use hairfit::fit::FitOptions;
+use hairfit::geometry::{Angles, Measurement};
 use hairfit::synth::{Acquisition, Noise, Source};
 
 /// Which swap of incidence and exit leaves what unchanged, and for which of `by_lobe`'s

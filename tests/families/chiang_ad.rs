@@ -6,7 +6,7 @@ use hairfit::families::chiang::{
     batch_jacobian, batch_jacobian_static, scattering_batch, ChiangEffects, ChiangModel,
     ChiangParamName, ChiangParams,
 };
-use hairfit::families::marschner::Angles;
+use hairfit::geometry::Angles;
 
 fn three_channels() -> ChiangParams<f64> {
     ChiangParams {

@@ -9,7 +9,7 @@ use hairfit::families::chiang::azimuthal::{
 };
 use hairfit::families::chiang::quadrature::GaussLegendre;
 use hairfit::families::chiang::{scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
-use hairfit::families::marschner::Angles;
+use hairfit::geometry::Angles;
 
 /// `E(θ_r) = ∫ S cosθ_i dω_i = ∫∫ S cos²θ_i dθ_i dφ`.
 /// φ: trapezoid on 720 points, spectrally accurate for the periodic integrand whose narrowest

@@ -6,8 +6,8 @@
 
 use crate::support::deon::{reference, table_params, Set};
 use hairfit::families::deon::DEon;
-use hairfit::families::marschner::Angles;
 use hairfit::families::table::{zero_terms, TableFamily, TermSet};
+use hairfit::geometry::Angles;
 
 const SETS: [Set; 3] = [
     Set {

@@ -6,8 +6,8 @@
 use std::path::Path;
 
 use hairfit::eval::{eval_stream_with, output_columns, EvalRequest};
-use hairfit::families::marschner::Angles;
 use hairfit::families::{FamilyModel, FamilyParams, ModelFamily};
+use hairfit::geometry::Angles;
 
 fn request() -> EvalRequest {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/example_params.json");

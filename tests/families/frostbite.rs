@@ -6,8 +6,8 @@
 use std::f64::consts::PI;
 
 use hairfit::families::frostbite::Frostbite;
-use hairfit::families::marschner::Angles;
 use hairfit::families::table::{DynTable, Table, TableParams, TermSet};
+use hairfit::geometry::Angles;
 
 /// Unity's inputs: Base Color per channel (linear), Smoothness, Radial Smoothness, Cuticle
 /// Angle (degrees), η.

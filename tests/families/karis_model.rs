@@ -9,8 +9,8 @@
 use std::f64::consts::PI;
 
 use hairfit::families::karis::{self, Karis};
-use hairfit::families::marschner::Angles;
 use hairfit::families::table::{zero_terms, TableFamily, TableParams, TermSet};
+use hairfit::geometry::Angles;
 
 /// The engine inputs of one channel, radians for the shift.
 #[derive(Debug, Clone, Copy)]

@@ -2,9 +2,10 @@
 
 use crate::support::model::*;
 use hairfit::families::marschner::{
-    scattering, scattering_jacobian, Angles, Lobes, ModelConfig, ParamName, Params, RootMode,
+    scattering, scattering_jacobian, Lobes, ModelConfig, ParamName, Params, RootMode,
     StaticJacobian,
 };
+use hairfit::geometry::Angles;
 use num_dual::DualSVec64;
 
 fn with_value(params: &Params<f64>, name: ParamName, v: f64) -> Params<f64> {

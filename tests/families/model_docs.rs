@@ -1,8 +1,9 @@
 //! docs/model.md stays in step with the code: every line of the parameter table appears in it with
 //! its unit, domain, bounds, typical range and default, and no doc links outside the repository.
 
-use hairfit::families::marschner::parameters::{Fitted, ParamFact, NAMES, TABLE};
+use hairfit::families::marschner::parameters::{NAMES, TABLE};
 use hairfit::families::marschner::ParamName;
+use hairfit::geometry::{Fitted, ParamFact};
 
 const DOCS: &str = include_str!("../../docs/model.md");
 

@@ -5,9 +5,10 @@ use hairfit::families::marschner::azimuthal::caustic_position;
 use hairfit::families::marschner::exit_angle::ExitMap;
 use hairfit::families::marschner::roots::exit_roots;
 use hairfit::families::marschner::{
-    instrument, scattering, scattering_by_lobe, scattering_jacobian, Angles, Effects, Lobes,
-    ModelConfig, ParamName, Params, RootMode,
+    instrument, scattering, scattering_by_lobe, scattering_jacobian, Effects, Lobes, ModelConfig,
+    ParamName, Params, RootMode,
 };
+use hairfit::geometry::Angles;
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
 
 /// A change to a parameter set.
@@ -524,7 +525,7 @@ fn cubic_with_vanishing_leading_coefficient_degrades_to_linear() {
         for phi in [-3.0, -1.0, 0.5, 3.1, if p == 2 { 0.0 } else { 1.0 }] {
             let r = exit_roots(&map, phi);
             assert_eq!(r.n, 1, "p={p} φ={phi}");
-            let lin = hairfit::families::marschner::angles::wrap(p as f64 * PI - phi) / 2.0;
+            let lin = hairfit::geometry::angles::wrap(p as f64 * PI - phi) / 2.0;
             // Roots of −2γ + O(1e-16): agree with the linear solution to ~1e-15.
             assert!(
                 (r.gamma[0] - lin).abs() < 1e-13,
@@ -553,7 +554,7 @@ fn exact_tt_root_matches_closed_form() {
             assert!((r.gamma[0].sin() - h).abs() < 1e-12, "η'={eta_p} φ={phi}");
             // And the root solves MODEL.md's exact map 2·asin(h/η') − 2·asin(h) + π ≡ φ.
             let phi_out = 2.0 * (h / eta_p).asin() - 2.0 * h.asin() + PI;
-            let miss = hairfit::families::marschner::angles::wrap(phi_out - phi);
+            let miss = hairfit::geometry::angles::wrap(phi_out - phi);
             assert!(miss.abs() < 1e-12, "η'={eta_p} φ={phi}: Φ misses by {miss}");
         }
     }
@@ -587,9 +588,7 @@ fn roots_solve_the_map_to_machine_precision() {
             for eta_p in [1.05, 1.3, 1.55, 1.99, 2.0, 2.2, 5.0, 1e4] {
                 let map = ExitMap::new(mode, p, eta_p);
                 for i in 0..=720 {
-                    let phi = hairfit::families::marschner::angles::wrap(
-                        -PI + i as f64 * PI / 360.0 + 1e-7,
-                    );
+                    let phi = hairfit::geometry::angles::wrap(-PI + i as f64 * PI / 360.0 + 1e-7);
                     let r = exit_roots(&map, phi);
                     for k in 0..r.n {
                         let g = r.gamma[k];
@@ -599,10 +598,7 @@ fn roots_solve_the_map_to_machine_precision() {
                             miss.abs() <= 1e-13 && g.abs() <= std::f64::consts::FRAC_PI_2,
                             "{mode} p={p} η'={eta_p} φ={phi}: root {g} misses by {miss}"
                         );
-                        assert!(
-                            hairfit::families::marschner::angles::wrap(r.target[k] - phi).abs()
-                                < 1e-12
-                        );
+                        assert!(hairfit::geometry::angles::wrap(r.target[k] - phi).abs() < 1e-12);
                     }
                 }
             }

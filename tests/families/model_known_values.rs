@@ -1,7 +1,8 @@
 //! MODEL.md "Known values" table, both root modes.
 
 use crate::support::model::table_params;
-use hairfit::families::marschner::{scattering, Angles, ModelConfig, RootMode};
+use hairfit::families::marschner::{scattering, ModelConfig, RootMode};
+use hairfit::geometry::Angles;
 
 /// (θ_i, φ_i, θ_r, φ_r) in degrees, S cubic, S exact — MODEL.md's table.
 const TABLE: [([f64; 4], f64, f64); 4] = [

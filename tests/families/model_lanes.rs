@@ -28,9 +28,10 @@ use hairfit::demo::demo_truth;
 use hairfit::families::marschner::azimuthal::caustic_position;
 use hairfit::families::marschner::eccentricity::eccentric_terms;
 use hairfit::families::marschner::{
-    scattering_batch, scattering_lanes, scattering_lanes_on, Angles, Effects, LaneKernel, Lobes,
+    scattering_batch, scattering_lanes, scattering_lanes_on, Effects, LaneKernel, Lobes,
     ModelConfig, Params, RootMode,
 };
+use hairfit::geometry::Angles;
 
 const TOLERANCE: f64 = 1e-11;
 

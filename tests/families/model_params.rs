@@ -134,7 +134,7 @@ fn json_names_and_lobe_parsing() {
 
 #[test]
 fn angles_on_the_axis_are_rejected() {
-    use hairfit::families::marschner::Angles;
+    use hairfit::geometry::Angles;
     assert!(Angles::from_degrees(-89.999, 10.0, 45.0, 400.0)
         .validate()
         .is_ok());
@@ -207,7 +207,10 @@ fn parameter_lists_follow_the_table() {
         all_parameters, fitted_parameters, used_parameters,
     };
     // Output order: the table's order, σ_a expanded per channel.
-    assert_eq!(all_parameters(2), hairfit::fit::all_parameters(2));
+    assert_eq!(
+        all_parameters(2),
+        hairfit::families::marschner::parameters::all_parameters(2)
+    );
     for r in [false, true] {
         for tt in [false, true] {
             for trt in [false, true] {
@@ -222,7 +225,9 @@ fn parameter_lists_follow_the_table() {
                         for free_eta in [false, true] {
                             assert_eq!(
                                 fitted_parameters(&e, 3, free_eta),
-                                hairfit::fit::free_parameters(&e, 3, free_eta),
+                                hairfit::families::marschner::parameters::fitted_parameters(
+                                    &e, 3, free_eta
+                                ),
                                 "{e:?} free_eta={free_eta}"
                             );
                         }
@@ -235,7 +240,7 @@ fn parameter_lists_follow_the_table() {
 
 #[test]
 fn units_come_from_the_table() {
-    use hairfit::families::marschner::Unit;
+    use hairfit::geometry::Unit;
     assert_eq!(ParamName::SigmaA(2).fact().unit, Unit::PerFiberRadius);
     assert_eq!(ParamName::SigmaA(2).fact().unit.label(), "per fiber radius");
     assert_eq!(ParamName::WC.fact().unit.label(), "deg");

@@ -1,8 +1,9 @@
 //! Property tests over the whole valid domain: S finite and ≥ 0, reciprocity.
 
 use hairfit::families::marschner::{
-    scattering_by_lobe, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
+    scattering_by_lobe, Effects, Lobes, ModelConfig, Params, RootMode,
 };
+use hairfit::geometry::Angles;
 use proptest::prelude::*;
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 

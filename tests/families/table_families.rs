@@ -1,25 +1,31 @@
-//! What every table family (`hairfit::families::table::ALL`) must do beyond the battery every
+//! What every table family (`ModelFamily::table` of `ModelFamily::ALL`) must do beyond the battery every
 //! registered family runs (`battery.rs`): its page holds its parameter table, a term switched
 //! off fits none of its parameters, and a noisy fit lands within a few standard errors.
 
 use hairfit::demo::{demo_directions, DEMO_SCALE};
-use hairfit::families::marschner::Measurement;
 use hairfit::families::table::{
-    demo_params, DynTable, TableFamily, TableParamFile, TableParams, TermSet, ALL,
+    demo_params, DynTable, TableFamily, TableParamFile, TableParams, TermSet,
 };
 use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
 use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use hairfit::files::{FitJson, LoadReport, ParamStatus};
-use hairfit::fit::{fit_family, FitOptions};
+use hairfit::fit::registry::fit_family;
+use hairfit::fit::FitOptions;
+use hairfit::geometry::Measurement;
 use hairfit::synth::{Acquisition, Noise, Source};
 
 /// The families this file runs its battery on; [`every_family_has_a_battery`] fails when a
-/// family joins `table_family::ALL` without one.
+/// table family joins the registry (`ModelFamily::ALL`) without one.
 const BATTERIES: &[&str] = &["kajiya-kay", "deon", "karis", "frostbite"];
+
+/// Every table family of the registry, in `--model` order.
+fn tables() -> Vec<&'static dyn DynTable> {
+    ModelFamily::ALL.iter().filter_map(|f| f.table()).collect()
+}
 
 #[test]
 fn every_family_has_a_battery() {
-    let all: Vec<&str> = ALL.iter().map(|t| t.name()).collect();
+    let all: Vec<&str> = tables().iter().map(|t| t.name()).collect();
     assert_eq!(all, BATTERIES, "add the new family's battery test below");
 }
 
@@ -48,7 +54,7 @@ fn frostbite() {
 #[test]
 fn every_family_documents_its_table() {
     let index = std::fs::read_to_string("docs/README.md").unwrap();
-    for t in ALL {
+    for t in tables() {
         let page = format!("docs/{}.md", t.name());
         let text = std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{page}: {e}"));
         let missing: Vec<String> = hairfit::families::table::markdown_table(t.facts())
@@ -71,7 +77,10 @@ fn every_family_documents_its_table() {
 }
 
 fn table(name: &str) -> &'static dyn DynTable {
-    hairfit::families::table::by_name(name).unwrap()
+    hairfit::families::ModelFamily::parse(name)
+        .unwrap()
+        .table()
+        .unwrap()
 }
 
 fn battery<F: TableFamily>() {

@@ -282,34 +282,10 @@ fn the_checker_sees_a_cycle_and_an_import_through_a_group() {
     assert_eq!(cycles(&edges), vec![vec!["a".to_string(), "b".into()]]);
 }
 
-/// Cycles that predate the one-folder-per-family layout and that it only made visible: the
-/// table machinery lists its four families (`table::ALL`) while each implements its trait, and
-/// `fit` re-exports Marschner's fit while Marschner's adaptor uses the fit's stages. Before the
-/// move both were relative paths (`deon::DEon`, `family::marschner::fit`) this reader skips. The
-/// registry is to own both lists; until then they are named here so no new cycle slips in.
-const KNOWN_CYCLES: &[&[&str]] = &[
-    &[
-        "families::deon",
-        "families::frostbite",
-        "families::kajiya_kay",
-        "families::karis",
-        "families::table",
-    ],
-    &[
-        "families::marschner::fit",
-        "fit",
-        "fit::family",
-        "fit::stages",
-    ],
-];
-
 #[test]
 fn no_file_module_imports_form_a_cycle() {
     let tree = tree();
-    let found: Vec<Vec<String>> = cycles(&tree.edges)
-        .into_iter()
-        .filter(|c| !KNOWN_CYCLES.iter().any(|k| c.iter().eq(k.iter())))
-        .collect();
+    let found = cycles(&tree.edges);
     assert!(
         found.is_empty(),
         "modules that import each other: {found:?}"

@@ -5,13 +5,14 @@
 use std::path::Path;
 
 use hairfit::families::marschner::params::{ParamFile, SigmaA};
-use hairfit::families::marschner::{Angles, ModelConfig};
+use hairfit::families::marschner::ModelConfig;
 use hairfit::families::FamilyParams;
 use hairfit::files::{
     read_curves_csv, write_curves_csv, Correlation, CurveRow, DataInfo, FitJson, FitStatus,
     LoadReport, OptionsRecord, ParamStatus, ParameterEntry, ResidualSummary, ScaleEntry,
     TraceStage,
 };
+use hairfit::geometry::Angles;
 use hairfit::report::{
     render_report, write_report_with, ReportOptions, ReportSummary, MAX_PANELS, MAX_SCATTER_POINTS,
     MAX_SLICE_POINTS,

@@ -3,8 +3,9 @@
 
 use crate::support;
 use hairfit::cli::summary::summary;
-use hairfit::families::marschner::Angles;
-use hairfit::fit::{fit, write_outputs, EffectsChoice, FitOptions, FitOutcome};
+use hairfit::families::marschner::fit::fit;
+use hairfit::fit::{write_outputs, EffectsChoice, FitOptions, FitOutcome};
+use hairfit::geometry::Angles;
 
 fn fit_angles(angles: Vec<Angles>, effects: EffectsChoice) -> FitOutcome {
     let truth = support::fit::random_params(77, 3);

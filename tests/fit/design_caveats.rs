@@ -7,10 +7,12 @@ use crate::support;
 use crate::support::cli;
 
 use cli::{hairfit_ok, root, s, stderr, stdout};
-use hairfit::families::marschner::{Measurement, ModelConfig};
+use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::ModelConfig;
 use hairfit::files::{FitJson, Verdict};
 use hairfit::fit::scan_design::{caveats, Design, SingleScan};
-use hairfit::fit::{fit, fit_data, FitOptions, FitOutcome, Intervals};
+use hairfit::fit::{fit_data, FitOptions, FitOutcome, Intervals};
+use hairfit::geometry::Measurement;
 use hairfit::synth::{synthesize, Noise, Rig};
 
 /// A fit of `rig` at 10% relative noise with default options (linearised intervals: fast).

@@ -12,11 +12,14 @@ use std::time::Duration;
 use crate::support::hard::*;
 use hairfit::demo::synthesize;
 use hairfit::families::marschner::azimuthal::caustic_position;
-use hairfit::families::marschner::{Angles, Effects, ModelConfig, Params, RootMode};
+use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::{Effects, ModelConfig, Params, RootMode};
 use hairfit::fit::bounds::{reference_params, Bound};
 use hairfit::fit::problem::{Evaluator, FitData, ModelForward, Space};
 use hairfit::fit::solve::run_local;
-use hairfit::fit::{fit, free_parameters, EffectsChoice, FitOptions, Loss};
+use hairfit::fit::{EffectsChoice, FitOptions, Loss};
+use hairfit::geometry::Angles;
 use proptest::prelude::*;
 
 /// A fit that is short but complete (multi-start, polish, covariance, curves): the subject is
@@ -305,7 +308,7 @@ fn local_runs_started_on_the_bounds_stay_finite_and_inside() {
         config: ModelConfig::default(),
         measurement: Default::default(),
     };
-    let free = free_parameters(&Effects::default(), 1, true);
+    let free = fitted_parameters(&Effects::default(), 1, true);
     let (ev, _) = Evaluator::new(
         &forward,
         &data,
@@ -490,7 +493,7 @@ proptest! {
         let outcome = fit(&data, "prop", Default::default(), &opts).unwrap();
         let j = serde_json::to_value(&outcome.json).unwrap();
         assert_params_in_bounds(&j, "proptest fit");
-        for name in hairfit::fit::all_parameters(1) {
+        for name in hairfit::families::marschner::parameters::all_parameters(1) {
             let v = hairfit::fit::param(&outcome.params, name);
             prop_assert_eq!(Bound::of(name).clamp(v), v, "{} = {}", name.json_name(), v);
         }

@@ -8,11 +8,12 @@
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 
 use hairfit::families::marschner::azimuthal::caustic_position;
+use hairfit::families::marschner::parameters::all_parameters;
 use hairfit::families::marschner::{
-    scattering_jacobian, Angles, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
+    scattering_jacobian, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
 };
-use hairfit::fit::all_parameters;
 use hairfit::fit::bounds::Bound;
+use hairfit::geometry::Angles;
 
 const MODES: [RootMode; 2] = [RootMode::Cubic, RootMode::Exact];
 

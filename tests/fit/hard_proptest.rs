@@ -8,12 +8,13 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
+use hairfit::families::marschner::parameters::all_parameters;
 use hairfit::families::marschner::{
-    scattering_batch, scattering_jacobian, scattering_lanes_on, Angles, Effects, LaneKernel, Lobes,
+    scattering_batch, scattering_jacobian, scattering_lanes_on, Effects, LaneKernel, Lobes,
     ModelConfig, Params, RootMode,
 };
-use hairfit::fit::all_parameters;
 use hairfit::fit::bounds::Bound;
+use hairfit::geometry::Angles;
 use proptest::prelude::*;
 
 /// θ strictly inside (−90°, 90°), reaching within ~1e-9 rad of the ends.

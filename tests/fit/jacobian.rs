@@ -2,9 +2,11 @@
 //! and the robust loss) against central finite differences of its own residual vector.
 
 use crate::support;
-use hairfit::families::marschner::{Effects, Measurement, ModelConfig, RootMode};
+use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::{Effects, ModelConfig, RootMode};
 use hairfit::fit::bounds::reference_params;
-use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, Space};
+use hairfit::fit::{Evaluator, Loss, ModelForward, Space};
+use hairfit::geometry::Measurement;
 
 fn check(space: Space, loss: Loss, mode: RootMode, seed: u64) {
     check_with(space, loss, mode, seed, false, Measurement::S)
@@ -38,7 +40,7 @@ fn check_with(
         },
         measurement,
     };
-    let free = free_parameters(&Effects::default(), 3, true);
+    let free = fitted_parameters(&Effects::default(), 3, true);
     let (ev, _) = Evaluator::new(&fwd, &data, space, loss, 0.5, reference_params(3), free).unwrap();
     // An interior point away from the truth: residuals are O(1), so every term of the chain
     // rule (projection included) is exercised.

@@ -4,9 +4,11 @@
 //! thread count, and its size does not grow with the number of samples.
 
 use crate::support;
-use hairfit::families::marschner::{Effects, Measurement, ModelConfig};
+use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::{Effects, ModelConfig};
 use hairfit::fit::bounds::reference_params;
-use hairfit::fit::{free_parameters, Evaluator, Loss, ModelForward, ScaleMode, Space};
+use hairfit::fit::{Evaluator, Loss, ModelForward, ScaleMode, Space};
+use hairfit::geometry::Measurement;
 use nalgebra::{DMatrix, DVector};
 
 const NC: usize = 3;
@@ -54,7 +56,7 @@ fn assert_gram_close(a: &DMatrix<f64>, b: &DMatrix<f64>, what: &str) {
 fn check(space: Space, loss: Loss, fixed: bool) {
     let d = data(700, space == Space::Log);
     let fwd = forward();
-    let free = free_parameters(&Effects::default(), NC, true);
+    let free = fitted_parameters(&Effects::default(), NC, true);
     let (ev, _) = Evaluator::new(&fwd, &d, space, loss, 0.5, reference_params(NC), free).unwrap();
     let p = support::fit::random_params(104, NC);
     let x: Vec<f64> = ev
@@ -144,7 +146,7 @@ fn fixed_scale_columns_for_standard_errors_match_the_dense_jacobian() {
 #[test]
 fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_with_samples() {
     let fwd = forward();
-    let free = free_parameters(&Effects::default(), NC, true);
+    let free = fitted_parameters(&Effects::default(), NC, true);
     let run = |samples: usize, threads: usize| {
         let d = data(samples, false);
         let (ev, _) = Evaluator::new(
@@ -197,7 +199,7 @@ fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_wi
 fn extra_columns_keep_their_inner_products_with_the_jacobian() {
     let d = data(700, true);
     let fwd = forward();
-    let free = free_parameters(&Effects::default(), NC, true);
+    let free = fitted_parameters(&Effects::default(), NC, true);
     let (ev, _) = Evaluator::new(
         &fwd,
         &d,

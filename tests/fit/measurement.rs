@@ -7,8 +7,8 @@ use crate::support::cli;
 use cli::s as path;
 use std::path::Path;
 
-use hairfit::families::marschner::Measurement;
 use hairfit::files::{read_curves_csv, FitJson};
+use hairfit::geometry::Measurement;
 use hairfit::report::{write_report_with, ReportOptions};
 use hairfit::synth::Truth;
 

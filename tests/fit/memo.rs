@@ -9,12 +9,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use hairfit::families::chiang::fit::ChiangForward;
 use hairfit::families::chiang::{ChiangModel, ChiangParamName, ChiangParams};
-use hairfit::families::marschner::{Angles, Effects, Measurement, ModelConfig};
+use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::{Effects, ModelConfig};
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{
-    free_parameters, Evaluator, FitData, FitParam, Forward, Loss, ModelForward, ParamSet,
-    ScaleMode, Space,
+    Evaluator, FitData, FitParam, Forward, Loss, ModelForward, ParamSet, ScaleMode, Space,
 };
+use hairfit::geometry::{Angles, Measurement};
 
 /// A forward model that counts the samples it evaluates, by kind of pass.
 struct Counting<F> {
@@ -209,7 +210,7 @@ fn marschner_passes_reuse_the_gradient_and_value_passes() {
     });
     let truth = support::fit::random_params(5, nc);
     let d = data(&forward.inner, &truth, nc, N);
-    let free = free_parameters(&Effects::default(), nc, true);
+    let free = fitted_parameters(&Effects::default(), nc, true);
     let x: Vec<f64> = free.iter().map(|&p| p.get(&truth) * 1.01 + 1e-3).collect();
     let ev = evaluator(&forward, &d, reference_params(nc), free.clone(), None);
     let kept = passes(&ev, &x);

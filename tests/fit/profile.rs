@@ -15,14 +15,15 @@ use crate::support;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use hairfit::families::marschner::{Measurement, ParamName, Params};
+use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::{ParamName, Params};
 use hairfit::files::{FitStatus, ParamStatus, ProfileMethod};
 use hairfit::fit::bounds::report_factor;
 use hairfit::fit::profile::{self, End, Optimum, Profile};
 use hairfit::fit::{
-    fit, EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, ModelForward,
-    Space,
+    EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, ModelForward, Space,
 };
+use hairfit::geometry::Measurement;
 
 /// MODEL.md's example hair, one channel.
 fn truth() -> Params<f64> {

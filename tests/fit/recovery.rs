@@ -3,9 +3,10 @@
 //! never from the truth — and every free parameter must come back.
 
 use crate::support;
+use hairfit::families::marschner::fit::fit;
 use hairfit::families::marschner::{ParamName, Params};
 use hairfit::fit::bounds::{is_angle, report_factor};
-use hairfit::fit::{fit, EffectsChoice, FitOptions, FitOutcome};
+use hairfit::fit::{EffectsChoice, FitOptions, FitOutcome};
 
 /// Default options, every effect on (the data is synthesised with every effect on).
 fn options() -> FitOptions {
@@ -35,7 +36,7 @@ fn reported(out: &FitOutcome, p: ParamName) -> (f64, Option<f64>, String) {
 
 fn free(out: &FitOutcome) -> Vec<ParamName> {
     let nc = out.json.data.channels.len();
-    hairfit::fit::all_parameters(nc)
+    hairfit::families::marschner::parameters::all_parameters(nc)
         .into_iter()
         .filter(|p| {
             out.json

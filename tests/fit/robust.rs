@@ -2,10 +2,11 @@
 //! its linear-noise counterpart, on data synthesized through the library.
 
 use crate::support;
+use hairfit::families::marschner::fit::fit;
 use hairfit::families::marschner::Params;
 use hairfit::files::DOWN_WEIGHT;
 use hairfit::fit::design::SplitMix64;
-use hairfit::fit::{fit, EffectsChoice, FitData, FitOptions, Intervals, Loss, LossScale};
+use hairfit::fit::{EffectsChoice, FitData, FitOptions, Intervals, Loss, LossScale};
 
 /// MODEL.md's example hair, one channel.
 fn truth() -> Params<f64> {

@@ -2,9 +2,11 @@
 //! through the loader exactly as `hairfit fit` reads them.
 
 use hairfit::data::{load, LoadOptions};
+use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::parameters::all_parameters;
 use hairfit::families::marschner::params::ParamFile;
 use hairfit::fit::bounds::report_factor;
-use hairfit::fit::{all_parameters, fit, fit_data, FitOptions, FitOutcome};
+use hairfit::fit::{fit_data, FitOptions, FitOutcome};
 
 fn fit_file(name: &str, opts: &FitOptions) -> (FitOutcome, ParamFile) {
     let root = env!("CARGO_MANIFEST_DIR");

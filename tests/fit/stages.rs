@@ -5,8 +5,9 @@
 use crate::support;
 use std::time::Instant;
 
+use hairfit::families::marschner::fit::fit;
 use hairfit::fit::solve::PREDICTED_CHI2;
-use hairfit::fit::{fit, EffectsChoice, FitOptions, Global};
+use hairfit::fit::{EffectsChoice, FitOptions, Global};
 
 fn base() -> FitOptions {
     FitOptions {

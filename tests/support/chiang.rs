@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use hairfit::families::chiang::{scattering, ChiangEffects, ChiangModel, ChiangParams};
-use hairfit::families::marschner::Angles;
+use hairfit::geometry::Angles;
 
 /// CHIANG.md known-values set A: eta 1.55, sigma_a 0.4, beta_m 0.3, beta_n 0.3, alpha_deg 2.
 pub fn set_a() -> ChiangParams<f64> {
@@ -59,7 +59,7 @@ pub fn composite_s(
 ) -> f64 {
     use hairfit::families::chiang::{scattering_from_table, AzimuthalTable, WidthRule, WidthSet};
     let a = Angles::from_degrees(deg[0], deg[1], deg[2], deg[3]);
-    let phi = hairfit::families::marschner::angles::wrap(a.phi_r - a.phi_i).abs();
+    let phi = hairfit::geometry::angles::wrap(a.phi_r - a.phi_i).abs();
     let effects = ChiangEffects::default();
     let (mut breaks, mut nodes) = (Vec::new(), Vec::new());
     hairfit::families::chiang::width::split_nodes(

@@ -6,8 +6,8 @@
 use std::f64::consts::PI;
 
 use hairfit::families::deon::DEon;
-use hairfit::families::marschner::Angles;
 use hairfit::families::table::{TableFamily, TableParams};
+use hairfit::geometry::Angles;
 
 /// One parameter set in file units.
 #[derive(Clone, Copy)]

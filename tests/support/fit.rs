@@ -4,9 +4,10 @@
 #![allow(dead_code)]
 
 use hairfit::demo::synthesize;
-use hairfit::families::marschner::{Angles, ModelConfig, Params};
+use hairfit::families::marschner::{ModelConfig, Params};
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::FitData;
+use hairfit::geometry::Angles;
 
 /// A parameter set drawn uniformly from MODEL.md's typical ranges (η at its default).
 pub fn random_params(seed: u64, nc: usize) -> Params<f64> {
@@ -133,7 +134,7 @@ pub fn synthesized(truth: &Params<f64>, rig: &str, noise: &str, scale: f64, seed
         &Rig::parse(rig).unwrap(),
         &Noise::parse(noise).unwrap(),
         &[scale],
-        hairfit::families::marschner::Measurement::S,
+        hairfit::geometry::Measurement::S,
         seed,
     )
     .unwrap();

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output};
 use std::time::Duration;
 
-use hairfit::fit::all_parameters;
+use hairfit::families::marschner::parameters::all_parameters;
 use hairfit::fit::bounds::{report_factor, Bound};
 use hairfit::fit::problem::FitData;
 

@@ -7,8 +7,9 @@ use hairfit::families::marschner::fresnel::{
 };
 use hairfit::families::marschner::longitudinal::longitudinal;
 use hairfit::families::marschner::{
-    scattering, scattering_by_lobe, Angles, Effects, Lobes, ModelConfig, Params, RootMode,
+    scattering, scattering_by_lobe, Effects, Lobes, ModelConfig, Params, RootMode,
 };
+use hairfit::geometry::Angles;
 
 /// MODEL.md's known-values parameter set.
 pub fn table_params() -> Params<f64> {

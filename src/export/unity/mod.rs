@@ -20,11 +20,11 @@ use crate::families::frostbite::{
     absorption_denominator, Frostbite, BASE_COLOR, BASE_COLOR_MIN, CUTICLE_ANGLE, ETA,
     RADIAL_SMOOTHNESS, RADIAL_SMOOTHNESS_MAX, SMOOTHNESS, SMOOTHNESS_MAX,
 };
-use crate::families::marschner::{Angles, Measurement};
 use crate::families::table::fit::{TableForward, TableParam};
 use crate::families::table::{TableFamily, TableParams, TermSet};
 use crate::families::FamilyModel;
 use crate::fit::problem::Forward;
+use crate::geometry::{Angles, Measurement};
 use script::{csharp_identifier, script};
 
 /// The HDRP behaviour the inputs are fitted to (docs/frostbite.md, "Which HDRP").

@@ -19,11 +19,11 @@ use crate::families::karis::{
     Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS, SCATTER,
     SCATTER_TERM, SHIFT, SPECULAR,
 };
-use crate::families::marschner::Angles;
 use crate::families::table::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
 };
 use crate::families::FamilyModel;
+use crate::geometry::Angles;
 
 /// The smallest Base Color the fit reaches (the engine takes `ln C`).
 pub const MIN_BASE_COLOR: f64 = 1e-4;

@@ -10,7 +10,7 @@ use num_dual::DualNum;
 
 use super::quadrature::WidthNode;
 use super::{ChiangEffects, ChiangParams};
-use crate::families::marschner::angles::wrap_t;
+use crate::geometry::angles::wrap_t;
 
 /// `s = √(π/8)(0.265β_n + 1.194β_n² + 5.372β_n²²)`.
 #[inline]

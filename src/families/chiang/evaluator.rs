@@ -12,8 +12,8 @@ use num_dual::DualNum;
 use super::azimuthal::AzimuthalTable;
 use super::longitudinal::{base_variance, longitudinal};
 use super::{combine, ChiangEffects, ChiangModel, ChiangParams, WidthScratch};
-use crate::families::marschner::angles::wrap;
-use crate::families::marschner::Angles;
+use crate::geometry::angles::wrap;
+use crate::geometry::Angles;
 
 /// `M_p(θ_i, θ_r)` for p = 0..3, 0 where the term is off (and then not computed).
 #[inline]

@@ -20,8 +20,8 @@ use super::quadrature::WidthNode;
 use super::{
     combine, ChiangEffects, ChiangModel, ChiangParamName, ChiangParams, WidthScratch, WidthSet,
 };
-use crate::families::marschner::angles::wrap;
-use crate::families::marschner::Angles;
+use crate::geometry::angles::wrap;
+use crate::geometry::Angles;
 
 /// `x` wrapped to [−π, π] by subtracting the nearest whole turn, not `rem_euclid` (whose fmod
 /// was a tenth of a fit's time): the arguments are within a few turns of 0, where this loses

@@ -7,7 +7,7 @@ use num_dual::{DualDVec64, DualNum, DualSVec64};
 
 use super::evaluator::scattering_batch;
 use super::{ChiangModel, ChiangParamName, ChiangParams};
-use crate::families::marschner::Angles;
+use crate::geometry::Angles;
 
 /// `params` as dual numbers, parameter `which[j]` seeded as direction j.
 /// Panics if `which` names a channel that `params` does not have.

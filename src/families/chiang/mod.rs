@@ -15,7 +15,7 @@
 //! The fit's side of the family (its `Forward`, free parameters, `--fix` names) is
 //! `crate::families::chiang::fit`.
 //!
-//! Angles reuse [`crate::families::marschner::Angles`]: the frame and sign conventions are MODEL.md's.
+//! Angles reuse [`crate::geometry::Angles`]: the frame and sign conventions are MODEL.md's.
 
 use std::fmt;
 use std::sync::{Arc, OnceLock};
@@ -24,7 +24,8 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::families::marschner::{Angles, Effects, Lobes, ModelConfig};
+use crate::families::marschner::{Effects, Lobes, ModelConfig};
+use crate::geometry::Angles;
 pub use crate::geometry::ParamFact;
 use crate::geometry::{Fitted, Interval, Unit};
 

@@ -17,7 +17,7 @@ use super::evaluator::for_each_with_table;
 use super::jacobian::split_duals;
 use super::longitudinal::{base_variance, lobe_variance, longitudinal, longitudinal_lobe};
 use super::{combine, ChiangModel, ChiangParams};
-use crate::families::marschner::Angles;
+use crate::geometry::Angles;
 
 /// Tilt of the incidence per lobe in units of α for the θ_i-tilt renderers:
 /// `θ'_i = θ_i + INCIDENCE_TILT[p]·α` (R +2α, TT −α, TRT −4α, residual 0).

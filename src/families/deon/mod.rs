@@ -17,11 +17,11 @@ use crate::families::chiang::azimuthal::ExitRefraction;
 use crate::families::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
 use crate::families::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
 use crate::families::chiang::quadrature::WidthRule;
-use crate::families::marschner::angles::{wrap, wrap_t};
-use crate::families::marschner::Angles;
 use crate::families::table::{
     LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
 };
+use crate::geometry::angles::{wrap, wrap_t};
+use crate::geometry::Angles;
 use crate::geometry::{Fitted, Interval, Unit};
 
 /// The d'Eon 2011 family.

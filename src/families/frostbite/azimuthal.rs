@@ -32,7 +32,7 @@ use num_dual::DualNum;
 
 use crate::families::chiang::azimuthal::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
 use crate::families::chiang::quadrature::{GaussLegendre, WidthRule};
-use crate::families::marschner::angles::wrap;
+use crate::geometry::angles::wrap;
 
 /// Smallest azimuthal roughness β_N the family accepts (radial smoothness 0.95): the accuracy
 /// of [`lobe`] is tested down to here (tests/families/frostbite_table.rs).

@@ -20,11 +20,11 @@ use std::f64::consts::PI;
 
 use num_dual::DualNum;
 
-use crate::families::marschner::angles::wrap;
-use crate::families::marschner::Angles;
 use crate::families::table::{
     LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
 };
+use crate::geometry::angles::wrap;
+use crate::geometry::Angles;
 use crate::geometry::{Fitted, Interval, Unit};
 use azimuthal::{Logistic, BETA_N_MIN};
 

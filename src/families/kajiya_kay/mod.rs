@@ -12,10 +12,10 @@
 
 use num_dual::DualNum;
 
-use crate::families::marschner::Angles;
 use crate::families::table::{
     LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
 };
+use crate::geometry::Angles;
 use crate::geometry::{Fitted, Interval, Unit};
 
 /// The Kajiya–Kay family.

@@ -5,6 +5,8 @@
 use std::time::Instant;
 
 use crate::error::Result;
+use crate::families::marschner::parameters::all_parameters;
+use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::params::ParamFile;
 use crate::families::marschner::{Effects, ParamName, Params};
 use crate::families::FamilyParams;
@@ -13,8 +15,8 @@ use crate::fit::bounds;
 use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
 use crate::fit::{
-    all_parameters, diagnostics, fit_with, free_parameters, require_samples, stages, FitData,
-    FitOptions, FitOutcome, FitRun, ModelForward,
+    diagnostics, fit_with, require_samples, stages, FitData, FitOptions, FitOutcome, FitRun,
+    ModelForward,
 };
 
 /// The Marschner 2003 family (MODEL.md).
@@ -36,7 +38,7 @@ impl Family for Marschner {
 }
 
 /// Fit `data` (from file `file`, loader report `load_report`) with `opts`, the Marschner model
-/// (`opts.family` is not consulted: [`crate::fit::fit_family`] dispatches on it).
+/// (`opts.family` is not consulted: [`crate::fit::registry::fit_family`] dispatches on it).
 pub fn fit(
     data: &FitData,
     file: &str,
@@ -93,8 +95,8 @@ fn free_set(
     Ok(FreeSet::new(
         Marschner::parse_fixes(&opts.fix, nc)?,
         bounds::reference_params(nc),
-        free_parameters(effects, nc, opts.free_eta),
-        free_parameters(&Effects::default(), nc, opts.free_eta),
+        fitted_parameters(effects, nc, opts.free_eta),
+        fitted_parameters(&Effects::default(), nc, opts.free_eta),
         "the effects in play do not depend on it; see options.effects_reasons",
         warnings,
     ))

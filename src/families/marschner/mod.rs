@@ -24,12 +24,11 @@ pub mod instrument;
 pub mod jacobian;
 pub mod lanes;
 pub mod longitudinal;
-pub mod measurement;
 pub mod parameters;
 pub mod params;
 pub mod roots;
 
-pub use crate::geometry::{angles, fact, Angles};
+use crate::geometry::{angles, Angles};
 use angles::half_angles;
 use azimuthal::{add_r, add_root_sum, add_trt_with_glints, GlintParams, Sink};
 use bravais::bravais_indices;
@@ -42,8 +41,6 @@ pub use jacobian::{scattering_jacobian, StaticJacobian};
 pub use lanes::scattering_lanes;
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
-pub use measurement::Measurement;
-pub use parameters::{ParamFact, Unit};
 
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -11,8 +11,8 @@
 use std::f64::consts::FRAC_1_SQRT_2;
 
 use super::{Effects, ParamName};
-pub use crate::geometry::fact::{Fitted, ParamFact};
-pub use crate::geometry::units::{Interval, Unit};
+use crate::geometry::fact::{Fitted, ParamFact};
+use crate::geometry::units::{Interval, Unit};
 
 /// Lowest eccentricity: `η*_1 = 2(η − 1)a² − η + 2 > 1` exactly when `a > 1/√2`.
 pub const MIN_ECCENTRICITY: f64 = FRAC_1_SQRT_2;

@@ -10,7 +10,7 @@ use serde::de::{DeserializeSeed, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::{by_name, DynTable, TableParams, ALL};
+use super::{DynTable, TableParams};
 use crate::error::{Error, Result};
 use crate::geometry::Fitted;
 
@@ -94,7 +94,7 @@ impl TableParamFile {
     ) -> Result<TableParamFile> {
         let hint = hint(table);
         let mut de = serde_json::Deserializer::from_str(text);
-        let file = FileSeed(Some(table))
+        let file = FileSeed(table)
             .deserialize(&mut de)
             .and_then(|f| de.end().map(|()| f))
             .map_err(|e| Error::json(path, &e, Some(&hint)))?;
@@ -144,14 +144,19 @@ impl Serialize for TableParamFile {
     }
 }
 
-impl<'de> Deserialize<'de> for TableParamFile {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        FileSeed(None).deserialize(d)
+impl TableParamFile {
+    /// Read a parameter file of `table` from parsed JSON (`"model"`, when present, must name it):
+    /// how a file whose tag named its family is read once the registry has found the family.
+    pub fn from_value(
+        table: &'static dyn DynTable,
+        value: &serde_json::Value,
+    ) -> std::result::Result<TableParamFile, serde_json::Error> {
+        FileSeed(table).deserialize(value)
     }
 }
 
-/// Reads a file; `Some(table)`: the family `--model` named (the file's tag may be left out).
-struct FileSeed(Option<&'static dyn DynTable>);
+/// Reads a file of the family `--model` or the file's tag named (the tag may be left out).
+struct FileSeed(&'static dyn DynTable);
 
 /// A value as written: one number, or an array of them.
 struct Written(Vec<f64>, bool);
@@ -222,25 +227,15 @@ impl<'de> Visitor<'de> for FileSeed {
                 entries.push((key, value));
             }
         }
-        let table = match (&tag, self.0) {
-            (Some(t), Some(table)) if t != table.name() => {
-                return Err(A::Error::custom(format!(
+        let table = self.0;
+        if let Some(t) = tag.as_deref().filter(|t| *t != table.name()) {
+            return Err(A::Error::custom(format!(
                 "the file says \"model\": \"{t}\" but it is read as a {} file: pass --model {t} \
                      (or write \"model\": \"{}\")",
                 table.name(),
                 table.name()
-            )))
-            }
-            (_, Some(table)) => table,
-            (Some(t), None) => by_name(t).ok_or_else(|| {
-                let names: Vec<&str> = ALL.iter().map(|t| t.name()).collect();
-                A::Error::custom(format!(
-                    "\"model\": \"{t}\" is not a table family ({})",
-                    names.join(", ")
-                ))
-            })?,
-            (None, None) => return Err(A::Error::custom("missing \"model\": which family")),
-        };
+            )));
+        }
         resolve(table, entries).map_err(A::Error::custom)
     }
 }

@@ -11,10 +11,9 @@ use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::error::Result;
-use crate::families::marschner::{Angles, Measurement};
 use crate::families::table::{
-    by_name, clear_terms, every_parameter, fitted, lobes_config, param_name, total, zero_terms,
-    DynTable, ParamFact, Table, TableFamily, TableParamFile, TableParams, TermSet,
+    clear_terms, every_parameter, fitted, lobes_config, param_name, total, zero_terms, DynTable,
+    ParamFact, Table, TableFamily, TableParamFile, TableParams, TermSet,
 };
 use crate::families::{FamilyParams, ModelRecords};
 use crate::files::{EffectsSource, Floored};
@@ -24,6 +23,7 @@ use crate::fit::fixes::FreeSet;
 use crate::fit::problem::{FitData, FitParam, Forward};
 use crate::fit::stages::{options_record, ModelChoice};
 use crate::fit::{diagnostics, fit_with, require_samples, FitOutcome, FitRun};
+use crate::geometry::{Angles, Measurement};
 
 /// One parameter of the table family `F`: a line of its table and, for a per-channel line,
 /// the channel.
@@ -204,7 +204,7 @@ impl<F: TableFamily> Forward for TableForward<F> {
 
 /// `F` as the table family commands hold.
 fn table<F: TableFamily>() -> &'static dyn DynTable {
-    by_name(F::NAME).expect("every table family is listed in table_family::ALL")
+    const { &Table::<F>::NEW }
 }
 
 impl<F: TableFamily> Family for Table<F> {

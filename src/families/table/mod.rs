@@ -17,7 +17,8 @@ use std::marker::PhantomData;
 use num_dual::DualNum;
 
 use crate::error::{Error, Result};
-use crate::families::marschner::{Angles, Effects, Lobes, ModelConfig};
+use crate::families::marschner::{Effects, Lobes, ModelConfig};
+use crate::geometry::Angles;
 use crate::geometry::Fitted;
 pub use crate::geometry::ParamFact;
 
@@ -348,14 +349,6 @@ impl std::fmt::Debug for dyn DynTable {
     }
 }
 
-/// Every table family, in `--model` order.
-pub const ALL: [&dyn DynTable; 4] = [
-    &Table::<crate::families::kajiya_kay::KajiyaKay>::NEW,
-    &Table::<crate::families::deon::DEon>::NEW,
-    &Table::<crate::families::karis::Karis>::NEW,
-    &Table::<crate::families::frostbite::Frostbite>::NEW,
-];
-
 /// The Marschner-shaped record of which lobe columns the terms `on` fill (fit.json `model`,
 /// what the report draws): no glints, no eccentricity.
 pub fn lobes_config(terms: &[Term], on: TermSet) -> ModelConfig {
@@ -377,11 +370,6 @@ pub fn lobes_config(terms: &[Term], on: TermSet) -> ModelConfig {
             eccentricity: false,
         },
     }
-}
-
-/// The table family called `name` (a `--model` spelling).
-pub fn by_name(name: &str) -> Option<&'static dyn DynTable> {
-    ALL.into_iter().find(|t| t.name() == name)
 }
 
 /// The parameters (table index, channel) a fit of `facts` under the terms `on` varies before

@@ -1,13 +1,10 @@
 //! The model families as the fit sees them: one type per family implementing [`Family`] —
 //! its free parameters, `--fix` names, forward model and the records it writes, handed to the
-//! shared stages ([`super::fit_with`]) — and [`family_fit`], the one place where a `--model`
-//! name meets its type. The shared stages, verdicts, intervals and reports never name a family.
+//! shared stages ([`super::fit_with`]). `crate::fit::registry` is where a `--model` name meets
+//! its type; the shared stages, verdicts, intervals and reports never name a family.
 
 use crate::error::Result;
-use crate::families::table::Table;
-use crate::families::{chiang, marschner};
-use crate::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
-use crate::families::{FamilyParams, ModelFamily};
+use crate::families::FamilyParams;
 use crate::files::LoadReport;
 use crate::fit::{FitData, FitOptions, FitOutcome, FitParam};
 
@@ -50,7 +47,7 @@ pub trait Family: Sync + 'static {
     fn fit(input: FitInput<'_>) -> Result<FitOutcome<FamilyParams>>;
 }
 
-/// A family as the commands hold it (`--model NAME` picks one at run time: [`family_fit`]).
+/// A family as the commands hold it (`--model NAME` picks one at run time: `crate::fit::registry::family_fit`).
 pub trait FamilyFit: Sync {
     /// Fit `input`; the parameters come back as this family's parameter file.
     fn fit(&self, input: FitInput<'_>) -> Result<FitOutcome<FamilyParams>>;
@@ -77,17 +74,5 @@ impl<F: Family> FamilyFit for F {
 
     fn check_fixes(&self, fix: &[String], nc: usize) -> Result<()> {
         F::parse_fixes(fix, nc).map(drop)
-    }
-}
-
-/// The fit of `family`.
-pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
-    match family {
-        ModelFamily::Marschner => &marschner::fit::Marschner,
-        ModelFamily::Chiang => &chiang::fit::Chiang,
-        ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
-        ModelFamily::DEon => &Table::<DEon>::NEW,
-        ModelFamily::Karis => &Table::<Karis>::NEW,
-        ModelFamily::Frostbite => &Table::<Frostbite>::NEW,
     }
 }

@@ -6,9 +6,9 @@ use super::evaluation::{Evaluation, ScaleMode};
 use super::forward::{FitParam, Forward, ParamSet};
 use super::memo::PassMemo;
 use super::FitData;
-use crate::families::marschner::Angles;
 use crate::fit::bounds::Bound;
 use crate::fit::loss::Loss;
+use crate::geometry::Angles;
 
 pub use crate::files::settings::Space;
 

@@ -8,10 +8,10 @@ use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::families::marschner::jacobian::seeded;
 use crate::families::marschner::{
-    scattering_batch, scattering_by_lobe, Angles, Measurement, ModelConfig, ModelNum, ParamName,
-    Params,
+    scattering_batch, scattering_by_lobe, ModelConfig, ModelNum, ParamName, Params,
 };
 use crate::fit::bounds::Bound;
+use crate::geometry::{Angles, Measurement};
 
 /// One parameter of a model family as the fit handles it: read and set in the family's
 /// parameter set (natural units, radians for angles), its bounds and its reporting facts, all

@@ -8,9 +8,9 @@ use crate::families::chiang::evaluator::scattering_by_lobe;
 use crate::families::chiang::{
     batch_jacobian, batch_jacobian_static, fixed_eta, ChiangModel, ChiangParamName, ChiangParams,
 };
-use crate::families::marschner::{Angles, Measurement};
 use crate::fit::bounds::Bound;
 use crate::fit::problem::{FitParam, Forward};
+use crate::geometry::{Angles, Measurement};
 
 impl ChiangParamName {
     /// Factor from the model's value to the file's (180/π for α, else 1).

@@ -12,13 +12,13 @@ use crate::families::chiang::{
     all_parameters, lobes_config, reference_params, ChiangEffects, ChiangModel, ChiangParamFile,
     ChiangParamName, ChiangParams, WidthNodes,
 };
-use crate::families::marschner::angles::wrap;
 use crate::families::{ChiangRecord, FamilyParams};
 use crate::files::{Floored, LoadReport};
 use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
 use crate::fit::problem::FitData;
 use crate::fit::{fit_with, require_samples, FitOptions, FitOutcome, FitRun};
+use crate::geometry::angles::wrap;
 use crate::geometry::Fitted;
 pub use forward::ChiangForward;
 
