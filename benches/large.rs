@@ -10,11 +10,12 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use hairfit::demo::synthesize;
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::{Effects, ModelConfig};
 use hairfit::fit::bounds::reference_params;
 use hairfit::fit::design::SplitMix64;
-use hairfit::fit::{Evaluator, Loss, ModelForward, Space};
+use hairfit::fit::{Evaluator, Loss, Space};
 use hairfit::geometry::{Angles, Measurement};
 
 /// `n` random direction pairs (|θ| < 80°).
@@ -29,7 +30,7 @@ fn directions(n: usize) -> Vec<Angles> {
 }
 
 fn bench(c: &mut Criterion) {
-    let fwd = ModelForward {
+    let fwd = MarschnerForward {
         config: ModelConfig::default(),
         measurement: Measurement::S,
     };

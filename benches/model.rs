@@ -2,12 +2,13 @@
 //! Each iteration evaluates one batch of `BATCH` angle sets, so throughput = BATCH / time.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::params::ParameterFile as _;
 use hairfit::families::marschner::{
     scattering, scattering_batch, scattering_jacobian, scattering_lanes, scattering_lanes_on,
     Effects, LaneKernel, Lobes, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
 };
-use hairfit::fit::{Forward, ModelForward};
+use hairfit::fit::Forward;
 use hairfit::geometry::{Angles, Measurement};
 
 const BATCH: usize = 1024;
@@ -122,7 +123,7 @@ fn bench_batch(c: &mut Criterion) {
     let mut p = params();
     p.sigma_a = vec![0.2, 0.4, 0.8];
     let angles = angle_set();
-    let fwd = ModelForward {
+    let fwd = MarschnerForward {
         config: ModelConfig::default(),
         measurement: Measurement::S,
     };

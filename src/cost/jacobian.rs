@@ -4,9 +4,10 @@
 use super::{time_per_call, CostRow};
 use crate::demo::demo_truth;
 use crate::error::Result;
+use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::{Effects, ModelConfig};
-use crate::fit::{param, Evaluator, FitData, Loss, ModelForward, Space};
+use crate::fit::{param, Evaluator, FitData, Loss, Space};
 use crate::geometry::Measurement;
 
 /// Jacobian section: exact forward-mode AD against central finite differences in the solver's
@@ -16,7 +17,7 @@ pub(super) fn jacobian_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>>
     let truth = demo_truth();
     let nc = data.n_channels();
     let free = fitted_parameters(&Effects::default(), nc, false);
-    let forward = ModelForward {
+    let forward = MarschnerForward {
         config: ModelConfig::default(),
         measurement: Measurement::S,
     };

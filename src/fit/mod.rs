@@ -37,9 +37,7 @@ use std::time::Instant;
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
 pub use loss::{Loss, LossScale};
-pub use problem::{
-    Evaluator, FitData, FitParam, Forward, ModelForward, ParamSet, ScaleMode, Space,
-};
+pub use problem::{Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode, Space};
 pub use profile::Intervals;
 
 pub use crate::files::settings::Global;

@@ -18,7 +18,7 @@ mod residual;
 
 pub use evaluation::{chunked_sum, Evaluation, ScaleMode, CHUNK};
 pub use evaluator::{Evaluator, Floored, Space, LOG_MIN_SNR};
-pub use forward::{gradients, FitParam, Forward, ModelForward, ParamSet};
+pub use forward::{FitParam, Forward, ParamSet};
 pub use linearize::Linearization;
 
 /// Samples to fit: angles (radians) and values row-major `i * n_channels + c`.

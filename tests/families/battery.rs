@@ -12,6 +12,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use hairfit::demo::{demo_directions, demo_truth_file, DEMO_SCALE};
 use hairfit::families::chiang::fit::{Chiang, ChiangForward};
 use hairfit::families::chiang::{ChiangEffects, ChiangModel};
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::fit::Marschner;
 use hairfit::families::marschner::{Lobes, ModelConfig};
 use hairfit::families::table::fit::TableForward;
@@ -20,7 +21,7 @@ use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay,
 use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use hairfit::files::{FitJson, LoadReport, ParamStatus, Verdict};
 use hairfit::fit::family::Family;
-use hairfit::fit::problem::{FitParam, Forward, ModelForward, ParamSet};
+use hairfit::fit::problem::{FitParam, Forward, ParamSet};
 use hairfit::fit::registry::fit_family;
 use hairfit::fit::FitOptions;
 use hairfit::geometry::{Angles, Measurement};
@@ -340,7 +341,7 @@ fn ad_matches_finite_differences(family: ModelFamily) {
     let file = demo_truth_file(family);
     match family {
         ModelFamily::Marschner => {
-            let forward = ModelForward {
+            let forward = MarschnerForward {
                 config: ModelConfig::default(),
                 measurement: Measurement::S,
             };

@@ -13,10 +13,11 @@ use crate::support::hard::*;
 use hairfit::demo::synthesize;
 use hairfit::families::marschner::azimuthal::caustic_position;
 use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::{Effects, ModelConfig, Params, RootMode};
 use hairfit::fit::bounds::{reference_params, Bound};
-use hairfit::fit::problem::{Evaluator, FitData, ModelForward, Space};
+use hairfit::fit::problem::{Evaluator, FitData, Space};
 use hairfit::fit::solve::run_local;
 use hairfit::fit::{EffectsChoice, FitOptions, Loss};
 use hairfit::geometry::Angles;
@@ -304,7 +305,7 @@ fn empty_data_is_a_clear_error() {
 #[test]
 fn local_runs_started_on_the_bounds_stay_finite_and_inside() {
     let data = model_data(grid());
-    let forward = ModelForward {
+    let forward = MarschnerForward {
         config: ModelConfig::default(),
         measurement: Default::default(),
     };

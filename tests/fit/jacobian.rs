@@ -2,10 +2,11 @@
 //! and the robust loss) against central finite differences of its own residual vector.
 
 use crate::support;
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::{Effects, ModelConfig, RootMode};
 use hairfit::fit::bounds::reference_params;
-use hairfit::fit::{Evaluator, Loss, ModelForward, Space};
+use hairfit::fit::{Evaluator, Loss, Space};
 use hairfit::geometry::Measurement;
 
 fn check(space: Space, loss: Loss, mode: RootMode, seed: u64) {
@@ -33,7 +34,7 @@ fn check_with(
             }
         }
     }
-    let fwd = ModelForward {
+    let fwd = MarschnerForward {
         config: ModelConfig {
             mode,
             effects: Effects::default(),

@@ -4,17 +4,18 @@
 //! thread count, and its size does not grow with the number of samples.
 
 use crate::support;
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::{Effects, ModelConfig};
 use hairfit::fit::bounds::reference_params;
-use hairfit::fit::{Evaluator, Loss, ModelForward, ScaleMode, Space};
+use hairfit::fit::{Evaluator, Loss, ScaleMode, Space};
 use hairfit::geometry::Measurement;
 use nalgebra::{DMatrix, DVector};
 
 const NC: usize = 3;
 
-fn forward() -> ModelForward {
-    ModelForward {
+fn forward() -> MarschnerForward {
+    MarschnerForward {
         config: ModelConfig::default(),
         measurement: Measurement::S,
     }

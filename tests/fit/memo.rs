@@ -9,12 +9,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use hairfit::families::chiang::fit::ChiangForward;
 use hairfit::families::chiang::{ChiangModel, ChiangParamName, ChiangParams};
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::{Effects, ModelConfig};
 use hairfit::fit::bounds::reference_params;
-use hairfit::fit::{
-    Evaluator, FitData, FitParam, Forward, Loss, ModelForward, ParamSet, ScaleMode, Space,
-};
+use hairfit::fit::{Evaluator, FitData, FitParam, Forward, Loss, ParamSet, ScaleMode, Space};
 use hairfit::geometry::{Angles, Measurement};
 
 /// A forward model that counts the samples it evaluates, by kind of pass.
@@ -204,7 +203,7 @@ fn chiang_passes_at_one_point_run_the_model_once() {
 #[test]
 fn marschner_passes_reuse_the_gradient_and_value_passes() {
     let nc = 3;
-    let forward = Counting::new(ModelForward {
+    let forward = Counting::new(MarschnerForward {
         config: ModelConfig::default(),
         measurement: Measurement::S,
     });

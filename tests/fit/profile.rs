@@ -16,12 +16,13 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::{ParamName, Params};
 use hairfit::files::{FitStatus, ParamStatus, ProfileMethod};
 use hairfit::fit::bounds::report_factor;
 use hairfit::fit::profile::{self, End, Optimum, Profile};
 use hairfit::fit::{
-    EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, ModelForward, Space,
+    EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, Space,
 };
 use hairfit::geometry::Measurement;
 
@@ -315,11 +316,11 @@ fn intervals_bracket_the_value_and_match_the_se_where_the_cost_is_nearly_quadrat
 
 /// The optimum of an l2 fit as profiling sees it.
 fn optimum<'a>(
-    forward: &'a ModelForward,
+    forward: &'a MarschnerForward,
     data: &'a FitData,
     out: &FitOutcome,
     cancel: Option<Arc<AtomicBool>>,
-) -> Optimum<'a, ModelForward> {
+) -> Optimum<'a, MarschnerForward> {
     let free: Vec<ParamName> = out
         .json
         .parameters
@@ -370,7 +371,7 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
     .unwrap();
     assert_eq!(out.json.options.intervals, "linear");
     assert!(out.json.parameters.iter().all(|e| e.interval_68.is_none()));
-    let forward = ModelForward {
+    let forward = MarschnerForward {
         config: out.json.model,
         measurement: Measurement::S,
     };

@@ -1,10 +1,14 @@
 //! `hairfit fit --model marschner`: the Marschner family's part of a fit — the effects the data
 //! call for, its free parameters and `--fix` names, the words for an undetermined parameter —
-//! handed to the shared stages ([`crate::fit::fit_with`]).
+//! handed to the shared stages ([`crate::fit::fit_with`]) — and its model as the fit evaluates
+//! it ([`forward`]).
+
+pub mod forward;
 
 use std::time::Instant;
 
 use crate::error::Result;
+use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::all_parameters;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::params::ParamFile;
@@ -16,7 +20,6 @@ use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
 use crate::fit::{
     diagnostics, fit_with, require_samples, stages, FitData, FitOptions, FitOutcome, FitRun,
-    ModelForward,
 };
 
 /// The Marschner 2003 family (MODEL.md).
@@ -49,7 +52,7 @@ pub fn fit(
     let nc = require_samples(data, file)?;
     let mut warnings = Vec::new();
     let choice = stages::choose_model(data, opts);
-    let forward = ModelForward {
+    let forward = MarschnerForward {
         config: choice.config,
         measurement: opts.measurement,
     };
