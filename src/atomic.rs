@@ -154,24 +154,21 @@ where
     refuse_when_stopping(path)?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     refuse_when_stopping(path)?;
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".hairfit-").suffix(".tmp");
-    // tempfile creates 0600; an output is an ordinary file: 0666 minus the umask, as File::create.
-    #[cfg(unix)]
+    remove_dead_temporaries(&target);
+    let mut staged = StagedFiles::new();
+    let tmp = staged.stage_resolved(target.clone());
     {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(dir, e))?;
-    let _in_flight = InFlight::new(tmp.path());
-    {
-        let mut out = BufWriter::new(tmp.as_file());
+        let file = std::fs::File::create_new(&tmp).map_err(|e| Error::io(dir, e))?;
+        let mut out = BufWriter::new(&file);
         fill(&mut out)?;
         out.flush().map_err(|e| Error::io(path, e))?;
+        drop(out);
+        file.sync_all().map_err(|e| Error::io(path, e))?;
     }
-    tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(&target).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+    staged.publish().map_err(|e| match e {
+        Error::Io { source, .. } => Error::io(path, source),
+        other => other,
+    })
 }
 
 /// Write a device, FIFO or socket through an ordinary open (no create, no truncation, no fsync:
@@ -243,6 +240,53 @@ fn temporary_beside(target: &Path, what: &str) -> PathBuf {
     ))
 }
 
+/// Remove the temporary files of `target` ([`temporary_beside`]) that a process no longer
+/// running left beside it: a SIGKILL or a power cut runs no cleanup, and nothing else would
+/// ever remove them. Files of a live process (or of a pid this one cannot tell) are left.
+fn remove_dead_temporaries(target: &Path) {
+    let (Some(dir), Some(name)) = (target.parent(), target.file_name()) else {
+        return;
+    };
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let prefix = format!(".hairfit-{}-", name.to_string_lossy());
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let Some(pid) = file_name
+            .to_str()
+            .and_then(|n| n.strip_prefix(&prefix))
+            .filter(|rest| rest.ends_with(".tmp"))
+            .and_then(|rest| rest.split_once('-'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_file && !process_alive(pid) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// False only when no process `pid` exists (`kill(pid, 0)` fails with ESRCH).
+fn process_alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    let Ok(pid) = libc::pid_t::try_from(pid) else {
+        return true;
+    };
+    // SAFETY: signal 0 only checks that the process exists; nothing is sent.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+}
+
 impl StagedFiles {
     pub fn new() -> StagedFiles {
         StagedFiles::default()
@@ -259,10 +303,16 @@ impl StagedFiles {
                 target.display()
             )));
         };
-        let tmp = temporary_beside(&resolved, "");
+        remove_dead_temporaries(&resolved);
+        Ok(self.stage_resolved(resolved))
+    }
+
+    /// [`StagedFiles::stage`] for a target already resolved to a file path.
+    fn stage_resolved(&mut self, target: PathBuf) -> PathBuf {
+        let tmp = temporary_beside(&target, "");
         self._in_flight.push(InFlight::new(&tmp));
-        self.pairs.push((tmp.clone(), resolved));
-        Ok(tmp)
+        self.pairs.push((tmp.clone(), target));
+        tmp
     }
 
     /// Rename every staged file onto its target. If one rename fails, the targets already

@@ -164,6 +164,7 @@ static ALLOCATOR: hairfit::cli::oom::ExitOnOom = hairfit::cli::oom::ExitOnOom;
 
 fn main() -> ExitCode {
     hairfit::cli::oom::set_aside();
+    hairfit::cli::exit::write_errors_not_signals();
     let command = hairfit::cli::help::with_registries(Cli::command());
     let cli = Cli::from_arg_matches(&command.get_matches()).unwrap_or_else(|e| e.exit());
     if let Err(e) = start_worker_threads() {

@@ -114,6 +114,17 @@ pub fn exit_on_signal() {
     });
 }
 
+/// A file-size limit (`ulimit -f`, `prlimit --fsize`) makes a write that crosses it fail with
+/// "File too large" instead of killing the process with SIGXFSZ (call first thing in `main`):
+/// the error path then removes the run's staging directory and temporary files and leaves what
+/// `--out`/`--output` held, as for a full disk. Python ignores SIGXFSZ itself.
+pub fn write_errors_not_signals() {
+    // SAFETY: setting a signal's disposition to SIG_IGN touches no Rust state.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+}
+
 /// Called by `main` before it exits: while a signal handler is removing the partial outputs, wait
 /// for it to end the process with the signal's code. Without this, a writer that failed because
 /// its staging directory was just removed could print that error and exit 1 first (seen under

@@ -20,6 +20,7 @@ mod eval_guards;
 mod export_failed;
 mod fault_kill;
 mod fit;
+mod full_disk;
 mod frostbite;
 mod help_registries;
 mod kajiya_kay;

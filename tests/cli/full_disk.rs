@@ -1,0 +1,179 @@
+//! A write the system refuses part-way — a file-size limit (`ulimit -f`) or a full disk — is an
+//! error that names the file and changes nothing: what `--out`/`--output` held stays byte for
+//! byte, and no staging directory, lock or temporary file is left. Temporary files a killed run
+//! left beside an output are removed by the next write of that output.
+
+use std::collections::BTreeMap;
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::support::cli;
+use cli::{hairfit_command, hairfit_ok, run_within, s, shipped, stderr, DEFAULT_LIMIT};
+
+/// Every file under `dir` (hidden ones included) with its bytes.
+fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let bytes = std::fs::read(&path).unwrap();
+                out.insert(path.strip_prefix(dir).unwrap().to_path_buf(), bytes);
+            }
+        }
+    }
+    out
+}
+
+/// `hairfit ARGS` under a file-size limit of `bytes`: a write past it fails with EFBIG.
+fn hairfit_with_file_limit(bytes: u64, args: &[&str]) -> std::process::Output {
+    let mut command = hairfit_command(args);
+    // SAFETY: only setrlimit runs between fork and exec; it allocates nothing.
+    unsafe {
+        command.pre_exec(move || {
+            let limit = libc::rlimit {
+                rlim_cur: bytes,
+                rlim_max: bytes,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    run_within(command, DEFAULT_LIMIT).0
+}
+
+/// Names in `dir` that only a run in progress may leave: staging directories, locks, temporaries.
+fn leftovers(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".hairfit-") || n.starts_with(".hairfit-"))
+        .collect()
+}
+
+fn fitted(dir: &Path) -> PathBuf {
+    let fit = dir.join("F");
+    hairfit_ok(&["fit", s(&shipped("sphere_1ch.csv")), "--out", s(&fit)]);
+    fit
+}
+
+#[test]
+fn a_file_size_limit_while_the_report_is_drawn_leaves_the_previous_result() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fit = fitted(tmp.path());
+    let before = snapshot(&fit);
+    // 60 kB: fit.json and params.json fit under it, the report's PNGs do not.
+    let out = hairfit_with_file_limit(
+        60_000,
+        &["demo", "--out", s(&fit), "--force", "--starts", "2"],
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("File too large"), "{err}");
+    assert!(err.contains(s(&fit)), "the error names --out: {err}");
+    assert_eq!(snapshot(&fit), before, "the previous result changed");
+    assert!(leftovers(tmp.path()).is_empty(), "{:?}", leftovers(tmp.path()));
+}
+
+#[test]
+fn a_two_file_export_under_a_file_size_limit_replaces_neither_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fit = fitted(tmp.path());
+    let exports = tmp.path().join("exports");
+    let json = exports.join("hair.json");
+    hairfit_ok(&["export", s(&fit), "--to", "unreal", "--output", s(&json)]);
+    let before = snapshot(&exports);
+    let sizes: Vec<u64> = ["hair.json", "hair.py"]
+        .map(|n| std::fs::metadata(exports.join(n)).unwrap().len())
+        .to_vec();
+    // Between the two files' sizes: the first is written in full, the second is cut, so the
+    // pair must be refused as a whole.
+    let limit = (sizes[0].min(sizes[1]) + sizes[0].max(sizes[1])) / 2;
+    assert!(sizes[0] != sizes[1], "{sizes:?}");
+    let out = hairfit_with_file_limit(
+        limit,
+        &["export", s(&fit), "--to", "unreal", "--output", s(&json)],
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("File too large") && err.contains("none of"), "{err}");
+    assert_eq!(snapshot(&exports), before, "an exported file changed");
+}
+
+#[test]
+fn temporaries_a_dead_run_left_are_removed_by_the_next_write() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fit = fitted(tmp.path());
+    let exports = tmp.path().join("exports");
+    std::fs::create_dir(&exports).unwrap();
+    // No process has a pid above the kernel's maximum (at most 2^22): this one is dead.
+    let dead = exports.join(".hairfit-hair.pbrt-4194305-0.tmp");
+    std::fs::write(&dead, "half a file").unwrap();
+    // This test's own pid is alive: a run in progress keeps its temporary.
+    let live = exports.join(format!(".hairfit-hair.pbrt-{}-0.tmp", std::process::id()));
+    std::fs::write(&live, "being written").unwrap();
+    // Another output's temporary is not this write's business.
+    let other = exports.join(".hairfit-other.pbrt-4194305-0.tmp");
+    std::fs::write(&other, "not mine").unwrap();
+    let pbrt = exports.join("hair.pbrt");
+    hairfit_ok(&["export", s(&fit), "--to", "pbrt", "--output", s(&pbrt)]);
+    assert!(pbrt.is_file());
+    assert!(!dead.exists(), "the dead run's temporary is still there");
+    assert!(live.exists() && other.exists());
+}
+
+/// `script` run as root of a new user and mount namespace with a 3 MB tmpfs at `mount`, or
+/// `None` where this system refuses such namespaces (then the file-size tests above stand in).
+fn in_small_tmpfs(mount: &Path, script: &str) -> Option<std::process::Output> {
+    let mut command = Command::new("unshare");
+    command.args([
+        "-rm",
+        "sh",
+        "-c",
+        &format!(
+            "mount -t tmpfs -o size=3m tmpfs '{}' || exit 97; {script}",
+            mount.display()
+        ),
+    ]);
+    let out = run_within(command, DEFAULT_LIMIT).0;
+    if out.status.code() == Some(97) || stderr(&out).contains("unshare:") {
+        eprintln!("skipped: no tmpfs in a user namespace here: {}", stderr(&out));
+        return None;
+    }
+    Some(out)
+}
+
+#[test]
+fn a_disk_that_fills_while_the_report_is_drawn_leaves_the_previous_result() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mount = tmp.path().join("disk");
+    std::fs::create_dir(&mount).unwrap();
+    let bin = env!("CARGO_BIN_EXE_hairfit");
+    let data = shipped("sphere_1ch.csv");
+    // A fit (about 1 MB) fills a third of the disk; a demo over it needs a second set beside the
+    // first while it is staged, which does not fit. Checksums before and after, and the names
+    // left in the tmpfs, are printed for the test to compare (the tmpfs dies with the namespace).
+    let script = format!(
+        "'{bin}' fit '{data}' --out {m}/F >/dev/null 2>&1 || exit 98; \
+         (cd {m}/F && find . -type f | sort | xargs md5sum) > {m}/before; \
+         '{bin}' demo --out {m}/F --force --starts 2; echo \"exit=$?\"; \
+         (cd {m}/F && find . -type f | sort | xargs md5sum) > {m}/after; \
+         cmp -s {m}/before {m}/after && echo unchanged; ls -a {m}",
+        m = mount.display(),
+        data = data.display(),
+    );
+    let Some(out) = in_small_tmpfs(&mount, &script) else {
+        return;
+    };
+    let text = format!("{}{}", cli::stdout(&out), stderr(&out));
+    assert!(text.contains("exit=1"), "{text}");
+    assert!(text.contains("No space left on device"), "{text}");
+    assert!(text.contains("unchanged"), "the previous result changed: {text}");
+    assert!(!text.contains(".hairfit-"), "a staging directory or lock was left: {text}");
+}
