@@ -78,7 +78,11 @@ fn a_file_size_limit_while_the_report_is_drawn_leaves_the_previous_result() {
     assert!(err.contains("File too large"), "{err}");
     assert!(err.contains(s(&fit)), "the error names --out: {err}");
     assert_eq!(snapshot(&fit), before, "the previous result changed");
-    assert!(leftovers(tmp.path()).is_empty(), "{:?}", leftovers(tmp.path()));
+    assert!(
+        leftovers(tmp.path()).is_empty(),
+        "{:?}",
+        leftovers(tmp.path())
+    );
 }
 
 #[test]
@@ -102,7 +106,10 @@ fn a_two_file_export_under_a_file_size_limit_replaces_neither_file() {
     );
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("File too large") && err.contains("none of"), "{err}");
+    assert!(
+        err.contains("File too large") && err.contains("none of"),
+        "{err}"
+    );
     assert_eq!(snapshot(&exports), before, "an exported file changed");
 }
 
@@ -143,7 +150,10 @@ fn in_small_tmpfs(mount: &Path, script: &str) -> Option<std::process::Output> {
     ]);
     let out = run_within(command, DEFAULT_LIMIT).0;
     if out.status.code() == Some(97) || stderr(&out).contains("unshare:") {
-        eprintln!("skipped: no tmpfs in a user namespace here: {}", stderr(&out));
+        eprintln!(
+            "skipped: no tmpfs in a user namespace here: {}",
+            stderr(&out)
+        );
         return None;
     }
     Some(out)
@@ -174,6 +184,12 @@ fn a_disk_that_fills_while_the_report_is_drawn_leaves_the_previous_result() {
     let text = format!("{}{}", cli::stdout(&out), stderr(&out));
     assert!(text.contains("exit=1"), "{text}");
     assert!(text.contains("No space left on device"), "{text}");
-    assert!(text.contains("unchanged"), "the previous result changed: {text}");
-    assert!(!text.contains(".hairfit-"), "a staging directory or lock was left: {text}");
+    assert!(
+        text.contains("unchanged"),
+        "the previous result changed: {text}"
+    );
+    assert!(
+        !text.contains(".hairfit-"),
+        "a staging directory or lock was left: {text}"
+    );
 }
