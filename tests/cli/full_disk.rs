@@ -160,36 +160,67 @@ fn in_small_tmpfs(mount: &Path, script: &str) -> Option<std::process::Output> {
 }
 
 #[test]
-fn a_disk_that_fills_while_the_report_is_drawn_leaves_the_previous_result() {
+fn a_disk_that_fills_at_any_file_of_the_set_leaves_the_previous_result() {
     let tmp = tempfile::tempdir().unwrap();
     let mount = tmp.path().join("disk");
     std::fs::create_dir(&mount).unwrap();
     let bin = env!("CARGO_BIN_EXE_hairfit");
     let data = shipped("sphere_1ch.csv");
-    // A fit (about 1 MB) fills a third of the disk; a demo over it needs a second set beside the
-    // first while it is staged, which does not fit. Checksums before and after, and the names
-    // left in the tmpfs, are printed for the test to compare (the tmpfs dies with the namespace).
+    // A fit (about 1 MB) in a 3 MB tmpfs; then fits over it with a filler file leaving from 8
+    // pages more than a new set needs down to 8 pages less, one page (4 kB) at a time, so the
+    // disk fills at each of the set's last files in turn (timing.json, index.html, the PNGs).
+    // Every trial must end whole: exit 0 and the marker lists exactly the files there, or exit
+    // 1 and the set byte for byte as before. The tmpfs dies with the namespace, so the script
+    // prints what the test checks.
     let script = format!(
-        "'{bin}' fit '{data}' --out {m}/F >/dev/null 2>&1 || exit 98; \
-         (cd {m}/F && find . -type f | sort | xargs md5sum) > {m}/before; \
-         '{bin}' demo --out {m}/F --force --starts 2; echo \"exit=$?\"; \
-         (cd {m}/F && find . -type f | sort | xargs md5sum) > {m}/after; \
-         cmp -s {m}/before {m}/after && echo unchanged; ls -a {m}",
+        r#"cd {m} || exit 98
+        sums() {{ (cd F && find . -type f | sort | xargs md5sum); }}
+        '{bin}' fit '{data}' --out F --starts 3 >/dev/null 2>&1 || exit 98
+        need=$(du -sk F | cut -f1); avail=$(df -k . | tail -1 | awk '{{print $4}}')
+        for k in $(seq 0 4 64); do
+            rm -f filler; head -c $(( (avail - need - 32 + k) * 1024 )) /dev/zero > filler 2>/dev/null
+            before=$(sums)
+            '{bin}' fit '{data}' --out F --starts 3 >/dev/null 2>{err}; code=$?
+            listed=$(sed -n 's/^name: //p' F/.hairfit | sort | tr '\n' ' ')
+            present=$(ls F | sort | tr '\n' ' ')
+            if [ $code = 1 ] && [ "$(sums)" = "$before" ]; then state=unchanged
+            elif [ $code = 0 ] && [ -n "$listed" ] && [ "$listed" = "$present" ]; then state=complete
+            else state=BROKEN; fi
+            echo "trial $k exit=$code state=$state left=$(ls -A | grep -c hairfit-) $(grep -o '[^ ]*: No space left' {err})"
+        done"#,
         m = mount.display(),
         data = data.display(),
+        err = tmp.path().join("err").display(),
     );
     let Some(out) = in_small_tmpfs(&mount, &script) else {
         return;
     };
     let text = format!("{}{}", cli::stdout(&out), stderr(&out));
-    assert!(text.contains("exit=1"), "{text}");
-    assert!(text.contains("No space left on device"), "{text}");
+    let trials: Vec<&str> = text.lines().filter(|l| l.starts_with("trial ")).collect();
+    assert_eq!(trials.len(), 17, "{text}");
+    for t in &trials {
+        assert!(
+            t.contains("state=unchanged") || t.contains("state=complete"),
+            "a set not whole: {t}\n{text}"
+        );
+        assert!(
+            t.contains("left=0"),
+            "a staging directory or lock left: {t}"
+        );
+        assert!(
+            t.contains("exit=0") || t.contains("No space left"),
+            "exit 1 without the disk's error: {t}"
+        );
+    }
+    // The sweep really crossed the boundary: some trials published, and the disk filled at
+    // more than one of the set's files.
+    let failing: std::collections::BTreeSet<&str> = trials
+        .iter()
+        .filter_map(|t| t.split_whitespace().find(|w| w.starts_with("F/")))
+        .collect();
+    assert!(trials.iter().any(|t| t.contains("exit=0")), "{text}");
     assert!(
-        text.contains("unchanged"),
-        "the previous result changed: {text}"
-    );
-    assert!(
-        !text.contains(".hairfit-"),
-        "a staging directory or lock was left: {text}"
+        failing.len() >= 2,
+        "the disk filled only at {failing:?}: {text}"
     );
 }
