@@ -1,6 +1,6 @@
 //! What `hairfit export` reads from a fit directory: the model family and its parameters
-//! (`params.json`, a Chiang file when tagged `"model": "chiang"`), the fit's quality, channel
-//! names, switched-off terms and held parameters (`fit.json`, read loosely so both families'
+//! (`params.json`, a Chiang or table family's file when tagged with its `"model"`), the fit's quality, channel
+//! names, switched-off terms and held parameters (`fit.json`, read loosely so every family's
 //! records serve), and the measured directions (`curves.csv`, one per sample).
 
 use std::collections::BTreeSet;

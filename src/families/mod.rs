@@ -201,9 +201,10 @@ impl std::fmt::Display for ModelFamily {
     }
 }
 
-/// A parameter file of either family. Written untagged, so a Marschner file is byte for byte
-/// what it always was; a Chiang file carries `"model": "chiang"`. Read: a Marschner file (whose
-/// keys differ from Chiang's; unknown keys are refused by both) else a Chiang file.
+/// A parameter file of any family. Written untagged, so a Marschner file is byte for byte
+/// what it always was; every other family's file carries its `"model"` (Chiang's may leave it
+/// out). Read as the tag says; untagged: a Marschner file (whose keys differ from Chiang's;
+/// unknown keys are refused by both) else a Chiang file.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum FamilyParams {

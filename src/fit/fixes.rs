@@ -1,6 +1,6 @@
-//! `--fix NAME=VALUE` and the free set for either model family: names, reporting units and
-//! bounds come from the family's parameter table through [`FitParam`], so both families parse,
-//! check and report fixes one way.
+//! `--fix NAME=VALUE` and the free set for any model family: names, reporting units and
+//! bounds come from the family's parameter table through [`FitParam`], so every family parses,
+//! checks and reports fixes one way.
 
 use crate::error::{Error, Result};
 use crate::fit::problem::FitParam;

@@ -188,8 +188,8 @@ fn angles_of(ds: &Dataset) -> Vec<crate::geometry::Angles> {
 /// verdict is then `good` and there is no statistical interval.
 pub const EXACT_MISFIT: f64 = 1e-6;
 
-/// The result of [`fit`]: fit.json's content, the parameters (`P`: the family's parameter set,
-/// or a parameter file of either family from [`fit_family`]), the curves curves.csv gets (all
+/// The result of a fit: fit.json's content, the parameters (`P`: the family's parameter set,
+/// or a parameter file of any family from `registry::fit_family`), the curves curves.csv gets (all
 /// rows, the summary's, or none, as fit.json's `options.curves` says) and the run's wall-clock
 /// times (timing.json).
 #[derive(Debug, Clone)]

@@ -50,7 +50,7 @@ fn one_channel_appends_s_and_carries_other_columns() {
     assert_eq!(rows[2][4], "c");
 
     // The printed value is the library's eval path exactly (it must round-trip an f64), and
-    // that path agrees with the scalar reference model (tests/families/model_lanes.rs: within 1e-11
+    // that path agrees with the scalar reference model (tests/families/marschner_lanes.rs: within 1e-11
     // relative times the grazing conditioning, which is below 4 at these directions).
     let p = ParamFile::from_json_str(PARAMS_1, "p.json")
         .unwrap()

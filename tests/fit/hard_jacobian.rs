@@ -1,7 +1,7 @@
 //! The model's exact (AD) Jacobian at every hard case of MODEL.md, across both root modes, every
 //! effect set and parameters at the fit's bounds: every entry finite (no NaN, no ±inf).
 //!
-//! S itself on these cases is covered by tests/families/model_invariants.rs; here the derivative chain is
+//! S itself on these cases is covered by tests/families/marschner_invariants.rs; here the derivative chain is
 //! the subject (implicit root derivatives at folds and at h = ±1, `1/cos²θ_d` at grazing, the
 //! `∞·0` glint fade at ±φ_c, Gaussians that underflow at the smallest widths).
 

@@ -4,7 +4,7 @@
 //! and reciprocity of S and of its gradient (swapping ω_i and ω_r changes neither); and the
 //! vector path `hairfit eval` runs agrees with the scalar model there.
 //!
-//! tests/families/model_proptest.rs already covers S over the wider model domain; this adds derivatives.
+//! tests/families/marschner_proptest.rs already covers S over the wider model domain; this adds derivatives.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -126,7 +126,7 @@ proptest! {
     }
 
     /// Eight directions (one or two vector groups) per case, on each lane kernel this CPU runs.
-    /// Tolerance as in tests/families/model_lanes.rs (1e-11 × (1 + η'), the grazing conditioning, plus
+    /// Tolerance as in tests/families/marschner_lanes.rs (1e-11 × (1 + η'), the grazing conditioning, plus
     /// 1e-15 of the largest value), widened where rounding is amplified in both paths alike
     /// (worst measured over 5 × 90,000 cases):
     /// - for η or η* within 1e-3 of 1, where asin(1/η') is near its singular end and an ulp of

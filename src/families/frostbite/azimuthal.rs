@@ -35,7 +35,7 @@ use crate::families::chiang::quadrature::{GaussLegendre, WidthRule};
 use crate::geometry::angles::wrap;
 
 /// Smallest azimuthal roughness β_N the family accepts (radial smoothness 0.95): the accuracy
-/// of [`lobe`] is tested down to here (tests/families/frostbite_table.rs).
+/// of [`lobe`] is tested down to here (tests/families/frostbite_azimuthal.rs).
 pub const BETA_N_MIN: f64 = 0.05;
 /// Largest β_N (radial smoothness 0).
 pub const BETA_N_MAX: f64 = 1.0;

@@ -12,7 +12,7 @@
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
 //! path is evaluated again by the scalar model, which stays the reference; elsewhere the two agree
 //! to ~1e-13 relative (the lanes' and libm's transcendental functions differ in the last bits;
-//! tests/families/model_lanes.rs states the tolerance and why).
+//! tests/families/marschner_lanes.rs states the tolerance and why).
 
 use wide::f64x4;
 

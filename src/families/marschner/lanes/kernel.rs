@@ -287,7 +287,7 @@ mod tests {
 
     /// The fast path is the common path: on random directions with typical parameters (all
     /// effects) fewer than 1% of the samples go to the scalar model. (Agreement with the scalar
-    /// model is tested in tests/families/model_lanes.rs; this catches a fast path that silently hands
+    /// model is tested in tests/families/marschner_lanes.rs; this catches a fast path that silently hands
     /// everything back, which would stay correct but lose the speed.)
     #[test]
     fn few_samples_leave_the_fast_path() {

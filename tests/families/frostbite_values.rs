@@ -168,7 +168,7 @@ fn by_lobe(inp: &Inputs, a: &Angles) -> Vec<[f64; 3]> {
 }
 
 /// Every lobe of every channel at 25 direction pairs × 3 parameter sets matches the reference
-/// within the table's measured error (tests/families/frostbite_table.rs: ≤ 3e-4 of the lobe's peak at
+/// within the table's measured error (tests/families/frostbite_azimuthal.rs: ≤ 3e-4 of the lobe's peak at
 /// β_N ≥ 0.1) plus 1e-3 relative for the reference's own midpoint rule and the table's
 /// relative error in the tails: |ΔS_p| ≤ M_p A_p (3e-4 + 1e-3 N_p).
 #[test]
