@@ -15,6 +15,7 @@ mod compare;
 mod curves;
 mod data;
 mod deon;
+mod docs_examples;
 mod eval;
 mod eval_guards;
 mod export_failed;
