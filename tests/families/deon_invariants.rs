@@ -357,3 +357,45 @@ fn narrow_trt_peaks_at_the_caustic() {
         last = offset;
     }
 }
+
+/// `scatter_each` takes the width integral once per (θ_d, φ) and reuses it: every sample's terms
+/// must be the bits `scatter` gives for it alone, whatever the order, for samples that share
+/// (θ_d, φ) with others (θ_i and θ_r moved together) and samples that share nothing.
+#[test]
+fn shared_width_integrals_give_each_sample_its_own_bits() {
+    let s = with(CLEAR, |s| {
+        s.sigma_a = 0.6;
+        s.alpha_deg = -3.0;
+    });
+    let p = table_params(&s);
+    let mut angles = Vec::new();
+    for (k, phi) in [-170.0_f64, -35.0, 0.0, 35.0, 120.0, 180.0]
+        .into_iter()
+        .enumerate()
+    {
+        for shift in [-20.0_f64, 0.0, 15.0, 40.0] {
+            // Same θ_d = 10° and φ for every shift: one integral serves four samples.
+            angles.push(Angles::from_degrees(
+                10.0 + shift,
+                5.0 * k as f64,
+                30.0 + shift,
+                5.0 * k as f64 + phi,
+            ));
+        }
+        angles.push(Angles::from_degrees(-25.0, 0.0, 7.0 * k as f64, phi));
+    }
+    // Repeated measurements: the very same angles, sharing their integral for certain.
+    let repeated: Vec<Angles> = angles.iter().step_by(3).copied().collect();
+    angles.extend(repeated);
+    angles.reverse();
+    let mut seen = vec![false; angles.len()];
+    DEon::scatter_each(&p, &angles, TermSet::all(4), &mut |i, terms| {
+        assert!(!seen[i], "sample {i} given twice");
+        seen[i] = true;
+        let mut alone = zero_terms::<f64>(1);
+        DEon::scatter(&p, &angles[i], TermSet::all(4), &mut alone);
+        let bits = |t: &[f64]| t.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&terms[0]), bits(&alone[0]), "sample {i}");
+    });
+    assert!(seen.iter().all(|&s| s), "a sample was never given");
+}

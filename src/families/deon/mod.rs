@@ -18,7 +18,7 @@ use crate::families::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, tr
 use crate::families::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
 use crate::families::chiang::quadrature::WidthRule;
 use crate::families::table::{
-    LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
+    clear_terms, zero_terms, LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
 };
 use crate::geometry::angles::{wrap, wrap_t};
 use crate::geometry::Angles;
@@ -246,6 +246,16 @@ pub fn scatter_with<T: DualNum<f64>>(
     out: &mut [Terms<T>],
 ) {
     add_azimuthal(p, a, on, how, out);
+    apply_longitudinal(p, a, on, out);
+}
+
+/// Multiply each term `on` of `out` (its width integral) by its longitudinal factor `M_k / cos θ_i`.
+fn apply_longitudinal<T: DualNum<f64>>(
+    p: &TableParams<T>,
+    a: &Angles,
+    on: TermSet,
+    out: &mut [Terms<T>],
+) {
     let v_r = variance_r(&p.get(BETA_R, 0));
     let alpha = p.get(ALPHA, 0);
     let inv_cos_i = a.theta_i.cos().recip();
@@ -371,4 +381,43 @@ impl TableFamily for DEon {
         let how = Integration::standard(p.get(BETA_N, 0).re());
         scatter_with(p, a, on, &how, out);
     }
+
+    /// The width integral depends on a sample only through (θ_d, φ), which a goniometer's
+    /// samples share (the demo's 2,340 have 1,260 distinct pairs): it is taken once per pair,
+    /// then each sample's longitudinal factors multiply a copy, so every value is the one
+    /// [`DEon::scatter`] gives, bit for bit.
+    fn scatter_each<T: DualNum<f64>>(
+        p: &TableParams<T>,
+        angles: &[Angles],
+        on: TermSet,
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        let how = Integration::standard(p.get(BETA_N, 0).re());
+        let mut order: Vec<(AzimuthalKey, usize)> = angles
+            .iter()
+            .enumerate()
+            .map(|(i, a)| (azimuthal_key(a), i))
+            .collect();
+        order.sort_unstable();
+        let mut shared = zero_terms::<T>(p.n_channels);
+        let mut terms = zero_terms::<T>(p.n_channels);
+        for group in order.chunk_by(|x, y| x.0 == y.0) {
+            clear_terms(&mut shared);
+            add_azimuthal(p, &angles[group[0].1], on, &how, &mut shared);
+            for &(_, i) in group {
+                terms.clone_from_slice(&shared);
+                apply_longitudinal(p, &angles[i], on, &mut terms);
+                each(i, &terms);
+            }
+        }
+    }
+}
+
+/// What [`add_azimuthal`] reads of a sample: the bits of θ_d and of the wrapped φ.
+type AzimuthalKey = (u64, u64);
+
+fn azimuthal_key(a: &Angles) -> AzimuthalKey {
+    let theta_d = 0.5 * (a.theta_r - a.theta_i);
+    let phi = wrap(a.phi_r - a.phi_i);
+    (theta_d.to_bits(), phi.to_bits())
 }

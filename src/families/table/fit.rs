@@ -12,8 +12,8 @@ use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::error::Result;
 use crate::families::table::{
-    clear_terms, every_parameter, fitted, lobes_config, param_name, total, zero_terms, DynTable,
-    ParamFact, Table, TableFamily, TableParamFile, TableParams, TermSet,
+    every_parameter, fitted, lobes_config, param_name, total, DynTable, ParamFact, Table,
+    TableFamily, TableParamFile, TableParams, TermSet,
 };
 use crate::families::{FamilyParams, ModelRecords};
 use crate::files::{EffectsSource, Floored};
@@ -143,10 +143,7 @@ impl<F: TableFamily> TableForward<F> {
         }
         let nc = p.n_channels;
         let nw = dim.value();
-        let mut terms = zero_terms::<DualVec64<D>>(nc);
-        for (i, a) in angles.iter().enumerate() {
-            clear_terms(&mut terms);
-            F::scatter(&pd, a, self.on, &mut terms);
+        F::scatter_each(&pd, angles, self.on, &mut |i, terms| {
             for (c, t) in terms.iter().enumerate() {
                 let r = i * nc + c;
                 let v = total(t);
@@ -154,7 +151,7 @@ impl<F: TableFamily> TableForward<F> {
                 let e = v.eps.unwrap_generic(dim, U1);
                 grad[r * nw..(r + 1) * nw].copy_from_slice(e.as_slice());
             }
-        }
+        });
     }
 }
 

@@ -248,6 +248,24 @@ pub trait TableFamily: Send + Sync + 'static {
     /// up to `S`) at angles `a` with the terms `on`. `out` comes zeroed; a term that is off is
     /// not computed and stays zero.
     fn scatter<T: DualNum<f64>>(p: &TableParams<T>, a: &Angles, on: TermSet, out: &mut [Terms<T>]);
+
+    /// [`TableFamily::scatter`] at every one of `angles`: `each(i, terms)` receives sample `i`'s
+    /// terms, in any order of `i`, each exactly once, with the very values `scatter` gives. A
+    /// family whose samples share work (the same azimuthal integral at the same θ_d and φ)
+    /// overrides it to do that work once.
+    fn scatter_each<T: DualNum<f64>>(
+        p: &TableParams<T>,
+        angles: &[Angles],
+        on: TermSet,
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        let mut terms = zero_terms::<T>(p.n_channels);
+        for (i, a) in angles.iter().enumerate() {
+            clear_terms(&mut terms);
+            Self::scatter(p, a, on, &mut terms);
+            each(i, &terms);
+        }
+    }
 }
 
 /// The most terms a family has.
@@ -325,14 +343,11 @@ impl<F: TableFamily> DynTable for Table<F> {
     }
     fn eval_batch(&self, p: &TableParams<f64>, on: TermSet, angles: &[Angles], out: &mut [f64]) {
         let nc = p.n_channels;
-        let mut terms = zero_terms(nc);
-        for (a, row) in angles.iter().zip(out.chunks_mut(nc)) {
-            clear_terms(&mut terms);
-            F::scatter(p, a, on, &mut terms);
-            for (v, t) in row.iter_mut().zip(&terms) {
+        F::scatter_each(p, angles, on, &mut |i, terms| {
+            for (v, t) in out[i * nc..(i + 1) * nc].iter_mut().zip(terms) {
                 *v = total(t);
             }
-        }
+        });
     }
     fn by_lobe(&self, p: &TableParams<f64>, on: TermSet, a: &Angles, out: &mut [[f64; 3]]) {
         let mut terms = zero_terms(p.n_channels);
