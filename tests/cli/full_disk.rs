@@ -3,31 +3,12 @@
 //! byte, and no staging directory, lock or temporary file is left. Temporary files a killed run
 //! left beside an output are removed by the next write of that output.
 
-use std::collections::BTreeMap;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::support::cli;
-use cli::{hairfit_command, hairfit_ok, run_within, s, shipped, stderr, DEFAULT_LIMIT};
-
-/// Every file under `dir` (hidden ones included) with its bytes.
-fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let bytes = std::fs::read(&path).unwrap();
-                out.insert(path.strip_prefix(dir).unwrap().to_path_buf(), bytes);
-            }
-        }
-    }
-    out
-}
+use cli::{hairfit_command, hairfit_ok, run_within, s, shipped, snapshot, stderr, DEFAULT_LIMIT};
 
 /// `hairfit ARGS` under a file-size limit of `bytes`: a write past it fails with EFBIG.
 fn hairfit_with_file_limit(bytes: u64, args: &[&str]) -> std::process::Output {

@@ -11,7 +11,7 @@ use crate::support::cli;
 use std::path::Path;
 use std::process::Command;
 
-use cli::{hairfit, hairfit_ok, s, shipped, stderr, write};
+use cli::{hairfit, hairfit_ok, s, shipped, snapshot, stderr, write};
 
 fn names(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -20,25 +20,6 @@ fn names(dir: &Path) -> Vec<String> {
         .collect();
     v.sort();
     v
-}
-
-/// Every file under `dir` with its bytes, sorted: equal snapshots are the same set.
-fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                stack.push(path);
-            } else {
-                let rel = path.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&path).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 fn fit(data: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
