@@ -4,7 +4,8 @@
 //! Cancellation: argmin's own `ctrlc` feature installs a process-wide handler per `Executor::run`
 //! and only the first installation wins, so with many executors running in parallel (multi-start)
 //! most runs would not see Ctrl-C. Instead the CLI installs one handler that sets a shared
-//! `AtomicBool`, and every run is wrapped in [`Cancellable`], whose `terminate` checks it.
+//! `AtomicBool`, and every run is wrapped in [`Cancellable`], whose `terminate` (the hook argmin
+//! gives a solver to decide when it stops) checks it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -12,15 +13,13 @@ use std::time::Instant;
 
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
-    Error as ArgminError, Executor, IterState, Problem, Solver, State, TerminationReason,
-    TerminationStatus, KV,
+    Error as ArgminError, Executor, Problem, Solver, State, TerminationReason, TerminationStatus,
+    KV,
 };
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use super::problem::{Evaluator, Forward, LsqProblem};
-
-/// argmin state of the least-squares solvers.
-pub type LsqState = IterState<DVector<f64>, (), DMatrix<f64>, (), DVector<f64>, f64>;
+use crate::lm::LmState;
 
 /// How a solver run ended (the same type as fit.json's `status`).
 pub use crate::files::FitStatus as RunStatus;
@@ -44,27 +43,27 @@ pub struct Cancellable<S> {
     pub costs: Vec<f64>,
 }
 
-impl<O, S: Solver<O, LsqState>> Solver<O, LsqState> for Cancellable<S> {
+impl<O, S: Solver<O, LmState>> Solver<O, LmState> for Cancellable<S> {
     fn name(&self) -> &str {
         self.inner.name()
     }
     fn init(
         &mut self,
         problem: &mut Problem<O>,
-        state: LsqState,
-    ) -> Result<(LsqState, Option<KV>), ArgminError> {
+        state: LmState,
+    ) -> Result<(LmState, Option<KV>), ArgminError> {
         self.inner.init(problem, state)
     }
     fn next_iter(
         &mut self,
         problem: &mut Problem<O>,
-        state: LsqState,
-    ) -> Result<(LsqState, Option<KV>), ArgminError> {
+        state: LmState,
+    ) -> Result<(LmState, Option<KV>), ArgminError> {
         let out = self.inner.next_iter(problem, state)?;
         self.costs.push(out.0.get_cost());
         Ok(out)
     }
-    fn terminate_internal(&mut self, state: &LsqState) -> TerminationStatus {
+    fn terminate(&mut self, state: &LmState) -> TerminationStatus {
         if is_cancelled(&self.flag) {
             return TerminationStatus::Terminated(TerminationReason::Interrupt);
         }
@@ -76,9 +75,6 @@ impl<O, S: Solver<O, LsqState>> Solver<O, LsqState> for Cancellable<S> {
                 return TerminationStatus::Terminated(TerminationReason::SolverConverged);
             }
         }
-        self.inner.terminate_internal(state)
-    }
-    fn terminate(&mut self, state: &LsqState) -> TerminationStatus {
         self.inner.terminate(state)
     }
 }
@@ -141,8 +137,8 @@ pub fn local_solver(dof: usize) -> crate::lm::LevenbergMarquardt {
 /// (a cancelled linearisation) still hands back where it was.
 struct ParamTrace(Arc<Mutex<Option<Vec<f64>>>>);
 
-impl Observe<LsqState> for ParamTrace {
-    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+impl Observe<LmState> for ParamTrace {
+    fn observe_iter(&mut self, state: &LmState, _kv: &KV) -> Result<(), ArgminError> {
         let best = state.get_best_param().or(state.get_param());
         if let (Ok(mut slot), Some(p)) = (self.0.lock(), best) {
             *slot = Some(p.as_slice().to_vec());
@@ -154,8 +150,8 @@ impl Observe<LsqState> for ParamTrace {
 /// Shows a long run's iteration and cost as the progress bar's message.
 struct IterationMessage(indicatif::ProgressBar);
 
-impl Observe<LsqState> for IterationMessage {
-    fn observe_iter(&mut self, state: &LsqState, _kv: &KV) -> Result<(), ArgminError> {
+impl Observe<LmState> for IterationMessage {
+    fn observe_iter(&mut self, state: &LmState, _kv: &KV) -> Result<(), ArgminError> {
         self.0.set_message(format!(
             "polish: iteration {}, cost {:.6e}",
             state.get_iter(),
