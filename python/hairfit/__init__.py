@@ -24,8 +24,9 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import warnings
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -79,7 +80,9 @@ def _flags(**options: Any) -> List[str]:
         else:
             items = [value]
         for item in items:
-            out.extend([flag, _text(item)])
+            text = _text(item)
+            # A value such as -1 goes as `--name=-1`, or the parser would read it as a flag.
+            out.extend([f"{flag}={text}"] if text.startswith("-") else [flag, text])
     return out
 
 
@@ -109,16 +112,58 @@ def _params_source(params: Params) -> Tuple[Optional[str], Optional[str]]:
     """(JSON text, path): a mapping as parameter-file JSON, else a params.json or a fit
     directory (the library reads its params.json, as `hairfit eval --params DIR` does)."""
     if isinstance(params, Mapping):
-        return json.dumps(dict(params)), None
+        return json.dumps({k: _param_value(k, v) for k, v in params.items()}), None
     return None, os.fspath(params)
+
+
+def _param_value(key: str, value: Any) -> Any:
+    """A params dict's value as JSON takes it: NumPy scalars and arrays become floats and lists;
+    a NaN or infinity is refused with the key (JSON has no spelling for it)."""
+    if isinstance(value, str) or value is None or isinstance(value, bool):
+        return value
+    if isinstance(value, np.ndarray) or isinstance(value, np.generic):
+        if np.iscomplexobj(value):
+            raise TypeError(f"params[{key!r}] is complex ({value!r}): pass a real number")
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_param_value(f"{key}[{i}]", v) for i, v in enumerate(value)]
+    if isinstance(value, (int, float)) and not np.isfinite(value):
+        raise HairfitError(
+            f"params[{key!r}] is {value!r}: every parameter is a finite number "
+            "(or a list of them, one per channel)"
+        )
+    return value
+
+
+_UNEXPECTED = re.compile(r"unexpected argument '--([^'=]+)' found(?: \(tip: a similar argument exists: '--([^'=]+)'\))?")
+
+
+def _keywords(func: str, call: Callable[[], Any]) -> Any:
+    """Run `call`; a keyword argument the command line does not know (the parser's "unexpected
+    argument '--modle'") is the TypeError Python gives for one, with the name meant."""
+    try:
+        return call()
+    except HairfitError as e:
+        m = _UNEXPECTED.search(str(e))
+        if m is None:
+            raise
+        name = m.group(1).replace("-", "_")
+        tip = f"; did you mean {m.group(2).replace('-', '_')!r}?" if m.group(2) else ""
+        raise TypeError(f"{func}() got an unexpected keyword argument {name!r}{tip}") from None
 
 
 def _model_flags(model: str, options: Dict[str, Any]) -> List[str]:
     return _flags(model=model, **options)
 
 
+def _real(name: str, a: Any) -> Any:
+    if np.iscomplexobj(a):
+        raise TypeError(f"{name} is complex: hairfit takes real numbers (pass np.real({name}) if that is meant)")
+    return a
+
+
 def _angles_1d(name: str, a: Any) -> np.ndarray:
-    arr = np.ascontiguousarray(a, dtype=np.float64)
+    arr = np.ascontiguousarray(_real(name, a), dtype=np.float64)
     if arr.ndim == 0:
         arr = arr.reshape(1)
     if arr.ndim != 1:
@@ -178,14 +223,27 @@ def eval(  # noqa: A001 (the command's name)
                                 and out.ndim == 2):
         got = f"{type(out).__name__} {getattr(out, 'dtype', '')} {getattr(out, 'shape', '')}"
         raise HairfitError(f"out must be a 2-D float64 NumPy array (n, channels); got {got.strip()}")
-    return _native.eval(text, path, *arrays, _model_flags(model, model_options), angles, out)
+    flags = _model_flags(model, model_options)
+    n = len(arrays[0])
+    if out is None and all(len(a) == n for a in arrays):
+        # The result is allocated here, where NumPy turns a refused allocation into MemoryError
+        # (allocated inside the extension, a refusal would surface as a Rust panic).
+        nc = len(_keywords("eval", lambda: _native.eval_columns(text, path, flags)))
+        try:
+            out = np.empty((n, nc))
+        except MemoryError as e:
+            raise MemoryError(
+                f"hairfit.eval: {e}: evaluate the samples in smaller chunks (passing out= to "
+                "re-use one array), or raise the memory limit"
+            ) from None
+    return _keywords("eval", lambda: _native.eval(text, path, *arrays, flags, angles, out))
 
 
 def eval_columns(params: Params, model: str = "marschner", **model_options: Any) -> List[str]:
     """The column names ``hairfit eval`` appends for these parameters: ``["s"]`` for a scalar
     ``sigma_a``, else ``["s_0", "s_1", ...]`` (one per channel of :func:`eval`'s result)."""
     text, path = _params_source(params)
-    return _native.eval_columns(text, path, _model_flags(model, model_options))
+    return _keywords("eval_columns", lambda: _native.eval_columns(text, path, _model_flags(model, model_options)))
 
 
 # ----------------------------------------------------------------------------------------------
@@ -258,7 +316,8 @@ def load(path: PathLike, angles: Optional[str] = None, **loader_options: Any) ->
     Raises:
         HairfitError: the message ``hairfit load`` prints (file:line:column for malformed input).
     """
-    return Data(_native.load(os.fspath(path), _load_flags(angles, loader_options)))
+    flags = _load_flags(angles, loader_options)
+    return Data(_keywords("load", lambda: _native.load(os.fspath(path), flags)))
 
 
 def _load_flags(angles: Optional[str], options: Mapping[str, Any]) -> List[str]:
@@ -294,15 +353,39 @@ def data(
         _angles_1d(n, a)
         for n, a in (("theta_i", theta_i), ("phi_i", phi_i), ("theta_r", theta_r), ("phi_r", phi_r))
     ]
-    values = np.asarray(radiance, dtype=np.float64)
+    values = np.asarray(_real("radiance", radiance), dtype=np.float64)
+    shape = values.shape
     if values.ndim == 1:
         values = values.reshape(-1, 1)
     if values.ndim != 2:
         raise HairfitError(f"radiance must be (n,) or (n, channels) (got shape {values.shape})")
+    n = len(arrays[0])
+    if values.shape[0] != n:
+        hint = (
+            f"; it looks transposed: pass radiance.T, shape ({n}, {values.shape[0]})"
+            if values.shape[1] == n
+            else ""
+        )
+        raise HairfitError(
+            f"radiance has shape {shape} but there are {n} samples (theta_i has {n}): "
+            f"one row per sample, (n,) or (n, channels){hint}"
+        )
     values = np.ascontiguousarray(values)
     nc = values.shape[1]
     if channels is None:
         channels = ["radiance"] if nc == 1 else ["r", "g", "b"] if nc == 3 else [f"c{k}" for k in range(nc)]
+    channels = [str(c) for c in channels]
+    if len(channels) != nc:
+        raise HairfitError(
+            f"channels names {len(channels)} channel(s) {channels} but radiance has {nc} "
+            f"(shape {shape}): one name per column of radiance"
+        )
+    twice = sorted({c for c in channels if channels.count(c) > 1})
+    if twice:
+        raise HairfitError(
+            f"channel name {twice[0]!r} is given twice in channels {channels}: each channel "
+            "needs its own name"
+        )
 
     def table(x: Any) -> Optional[np.ndarray]:
         if x is None:
@@ -440,14 +523,17 @@ def fit(
     if isinstance(data, Data):
         if load_opts or angles is not None:
             raise HairfitError("loader options apply to a file: pass them to hairfit.load")
-        return FitResult(_native.fit(data._native, fit_flags))
+        return FitResult(_keywords("fit", lambda: _native.fit(data._native, fit_flags)))
     if isinstance(data, Mapping):
         if load_opts:
             raise HairfitError("loader options apply to a file, not to arrays")
         arrays = dict(data)
         d = _make_data(angles=angles or "deg", **arrays)
-        return FitResult(_native.fit(d._native, fit_flags))
-    return FitResult(_native.fit_file(os.fspath(data), _load_flags(angles, load_opts), fit_flags))
+        return FitResult(_keywords("fit", lambda: _native.fit(d._native, fit_flags)))
+    path = os.fspath(data)
+    return FitResult(
+        _keywords("fit", lambda: _native.fit_file(path, _load_flags(angles, load_opts), fit_flags))
+    )
 
 
 # ----------------------------------------------------------------------------------------------
@@ -476,7 +562,7 @@ def synth(
     if isinstance(params, Mapping):
         raise HairfitError("synth reads its parameters from a file: pass a params.json path")
     flags = _flags(params=params, rig=rig, output=output, **options)
-    csv, truth, n, n_out, notes = _native.synth(flags)
+    csv, truth, n, n_out, notes = _keywords("synth", lambda: _native.synth(flags))
     return {"csv": csv, "truth": truth, "n_samples": n, "n_outliers": n_out, "notes": notes}
 
 
@@ -505,7 +591,7 @@ def compare(
     if models is not None and not isinstance(models, str):
         models = ",".join(models)
     flags = [os.fspath(data)] + _flags(out=out, no_progress=not progress, models=models, **options)
-    text = _native.compare(flags)
+    text = _keywords("compare", lambda: _native.compare(flags))
     result: Dict[str, Any] = {}
     path = os.path.join(os.fspath(out), "compare.json")
     if os.path.exists(path):

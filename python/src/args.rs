@@ -14,11 +14,13 @@ use crate::errors::HairfitError;
 fn clap_text(e: &clap::Error) -> String {
     let text = e.render().to_string();
     let text = text.trim_start().trim_start_matches("error: ");
-    text.split("\n\n")
-        .next()
-        .unwrap_or(text)
-        .trim_end()
-        .to_string()
+    let mut parts = text.split("\n\n").map(str::trim);
+    let first = parts.next().unwrap_or(text).to_string();
+    // clap's "tip: a similar argument exists: '--loss'" names what was meant: keep it.
+    match parts.find(|p| p.starts_with("tip:")) {
+        Some(tip) => format!("{first} ({tip})"),
+        None => first,
+    }
 }
 
 /// Parse `args` (command-line flags built by the Python layer) with the CLI's own option type.

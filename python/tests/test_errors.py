@@ -79,3 +79,91 @@ def test_array_errors_name_the_array():
         hairfit.data([10, 10], [0, 0], [5, 6], [0, 0], [1.0, float("nan")])
     with pytest.raises(hairfit.HairfitError, match=r"sigma\[0, 0\] = -1 must be a finite number > 0"):
         hairfit.data([10], [0], [5], [0], [1.0], sigma=-1.0)
+
+
+# Mistakes a NumPy user makes, each a Python exception that names the argument and what to pass.
+
+PARAMS = {"eta": 1.55, "sigma_a": 0.4, "alpha_r_deg": -7, "beta_r_deg": 8, "k_g": 2,
+          "w_c_deg": 15, "eccentricity": 0.9}
+ANGLES = ([10.0, 5.0], [0.0, 0.0], [20.0, -10.0], [30.0, 170.0])
+
+
+def test_params_dict_takes_numpy_values_and_refuses_nan():
+    import numpy as np
+
+    plain = hairfit.eval(PARAMS, *ANGLES)
+    # NumPy scalars and 0-d arrays are the numbers they hold (a NumPy user's natural values).
+    for eta in (np.float32(1.55), np.float64(1.55), np.array(1.55)):
+        same = hairfit.eval({**PARAMS, "eta": eta}, *ANGLES)
+        # float32(1.55) is not 1.55: compare it against the value it holds, exactly.
+        expected = hairfit.eval({**PARAMS, "eta": float(eta)}, *ANGLES)
+        assert np.array_equal(same, expected)
+    assert np.array_equal(hairfit.eval({**PARAMS, "eta": np.float64(1.55)}, *ANGLES), plain)
+    rgb = hairfit.eval({**PARAMS, "sigma_a": np.array([0.2, 0.3, 0.5])}, *ANGLES)
+    assert rgb.shape == (2, 3)
+    for bad in (float("nan"), float("inf"), np.nan):
+        with pytest.raises(hairfit.HairfitError, match=r"params\['eta'\] is .*finite number"):
+            hairfit.eval({**PARAMS, "eta": bad}, *ANGLES)
+    with pytest.raises(hairfit.HairfitError, match=r"params\['sigma_a\[1\]'\]"):
+        hairfit.eval({**PARAMS, "sigma_a": [0.2, float("nan"), 0.5]}, *ANGLES)
+
+
+def test_complex_arrays_are_refused_by_name():
+    import numpy as np
+
+    with pytest.raises(TypeError, match="theta_r is complex"):
+        hairfit.eval(PARAMS, ANGLES[0], ANGLES[1], np.array(ANGLES[2], dtype=complex), ANGLES[3])
+    with pytest.raises(TypeError, match="radiance is complex"):
+        hairfit.data(*ANGLES, radiance=np.array([1.0, 2.0], dtype=complex))
+
+
+def test_a_mistyped_keyword_is_a_type_error_naming_what_was_meant():
+    with pytest.raises(TypeError, match=r"fit\(\) got an unexpected keyword argument 'los'; did you mean 'loss'\?"):
+        hairfit.fit(DATA / "sphere_1ch.csv", los="cauchy")
+    with pytest.raises(TypeError, match=r"eval\(\) got an unexpected keyword argument 'lobbes'"):
+        hairfit.eval(PARAMS, *ANGLES, lobbes="R")
+
+
+def test_a_negative_option_value_is_read_as_a_value(cli, tmp_path):
+    # `--starts -1` would be read as an unknown flag `-1`; the value is passed as --starts=-1, so
+    # the message is the one the CLI gives for that value.
+    with pytest.raises(hairfit.HairfitError) as e:
+        hairfit.fit(DATA / "sphere_1ch.csv", starts=-1)
+    assert "invalid value '-1' for '--starts" in str(e.value)
+    assert "unexpected argument" not in str(e.value)
+
+
+def test_radiance_shape_and_channel_names_are_checked_against_the_samples():
+    import numpy as np
+
+    with pytest.raises(hairfit.HairfitError, match=r"looks transposed: pass radiance\.T, shape \(2, 3\)"):
+        hairfit.data(*ANGLES, radiance=np.ones((3, 2)))
+    with pytest.raises(hairfit.HairfitError, match="has shape \\(5, 3\\) but there are 2 samples"):
+        hairfit.data(*ANGLES, radiance=np.ones((5, 3)))
+    with pytest.raises(hairfit.HairfitError, match="channel name 'r' is given twice"):
+        hairfit.data(*ANGLES, radiance=np.ones((2, 2)), channels=["r", "r"])
+    with pytest.raises(hairfit.HairfitError, match="channels names 2 channel"):
+        hairfit.data(*ANGLES, radiance=np.ones(2), channels=["r", "g"])
+
+
+def test_eval_under_a_memory_cap_raises_memory_error_not_a_panic(tmp_path):
+    # A child with 1.5 GB of address space: its 800 MB of angles fit, the 800 MB result does not.
+    import subprocess
+    import sys
+
+    script = tmp_path / "cap.py"
+    script.write_text(
+        "import resource, numpy as np, hairfit\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (1_500_000_000, 1_500_000_000))\n"
+        "a = np.full(100_000_000, 10.0)\n"
+        f"p = {PARAMS!r}\n"
+        "try:\n"
+        "    hairfit.eval(p, a, a, a, a)\n"
+        "    print('no error')\n"
+        "except MemoryError as e:\n"
+        "    print('MemoryError:', e)\n"
+    )
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert "MemoryError:" in run.stdout and "smaller chunks" in run.stdout, run.stdout + run.stderr
+    assert "panicked" not in run.stderr and "PanicException" not in run.stdout + run.stderr
