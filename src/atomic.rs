@@ -158,7 +158,9 @@ where
     let mut staged = StagedFiles::new();
     let tmp = staged.stage_resolved(target.clone());
     {
-        let file = std::fs::File::create_new(&tmp).map_err(|e| Error::io(dir, e))?;
+        // The name is this process's alone (its pid and a counter); a file already there is a
+        // leftover of a dead process that had the same pid, so it is overwritten.
+        let file = std::fs::File::create(&tmp).map_err(|e| Error::io(dir, e))?;
         let mut out = BufWriter::new(&file);
         fill(&mut out)?;
         out.flush().map_err(|e| Error::io(path, e))?;
