@@ -4,7 +4,7 @@ use pyo3::prelude::*;
 
 use crate::args::{parse, CompareCli, ExportCli, SynthCli};
 use crate::errors::hf;
-use crate::interrupt::interruptible;
+use crate::interrupt::{interruptible, off_gil};
 
 /// `hairfit synth ARGS`: (csv path, truth path, samples, outliers, notes).
 #[pyfunction]
@@ -17,9 +17,10 @@ pub(crate) fn synth(
         .chain(args.iter().cloned());
     let command_line = hairfit::cli::synth::command_line_string(argv);
     let cli: SynthCli = parse(args)?;
-    let s = py
-        .allow_threads(|| hairfit::cli::synth::run(&cli.synth, Some(command_line)))
-        .map_err(hf)?;
+    let s = off_gil(py, || {
+        hairfit::cli::synth::run(&cli.synth, Some(command_line))
+    })?
+    .map_err(hf)?;
     Ok((
         s.csv.display().to_string(),
         s.truth.display().to_string(),
@@ -57,6 +58,5 @@ pub(crate) fn compare(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
 #[pyfunction]
 pub(crate) fn export(py: Python<'_>, args: Vec<String>) -> PyResult<(String, Option<String>)> {
     let cli: ExportCli = parse(args)?;
-    py.allow_threads(|| hairfit::cli::export::export_command(&cli.export))
-        .map_err(hf)
+    off_gil(py, || hairfit::cli::export::export_command(&cli.export))?.map_err(hf)
 }

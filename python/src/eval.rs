@@ -20,6 +20,7 @@ use hairfit::geometry::Angles;
 use crate::args::{parse, ModelCli};
 use crate::arrays::{angle_unit, check_angles, common_length, unit_name, values_of};
 use crate::errors::{hf, name_parameter_file, warn, HairfitError};
+use crate::interrupt::off_gil;
 
 /// `hairfit eval`'s chunking (src/eval.rs: CHUNK_ROWS, CHUNK_VALUES, EVAL_BATCH): the lane
 /// kernel evaluates a batch eight samples at a time and the rest one by one, so the values are
@@ -216,7 +217,7 @@ pub(crate) fn eval<'py>(
     let out = borrow
         .as_slice_mut()
         .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
-    py.allow_threads(|| match eval_rows(&model, a, unit, out) {
+    off_gil(py, || match eval_rows(&model, a, unit, out) {
         Fault::None => Ok(()),
         Fault::Angle => Err(check_angles(a, unit)
             .expect_err("a batch found an angle out of the domain")),
@@ -234,7 +235,7 @@ pub(crate) fn eval<'py>(
                 file.json_line()
             ))
         }
-    })
+    })?
     .map_err(HairfitError::new_err)?;
     drop(borrow);
     Ok(result)

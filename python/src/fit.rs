@@ -12,7 +12,7 @@ use hairfit::fit::{into_fit_data, FitOutcome};
 
 use crate::args::{parse, FitCli};
 use crate::errors::{hf, HairfitError};
-use crate::interrupt::interruptible;
+use crate::interrupt::{interruptible, off_gil};
 use crate::load::{load, Data};
 
 /// A finished fit: fit.json's content, the parameters, curves and timing, as `hairfit fit`
@@ -56,13 +56,13 @@ impl Fit {
     /// Write what `hairfit fit --out DIR` writes (fit.json, params.json, curves.csv,
     /// timing.json and the plotted report), published as one set; the report's line.
     fn save(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<String> {
-        let published = py.allow_threads(|| {
+        let published = off_gil(py, || {
             let inputs: Vec<&Path> = self.inputs.iter().map(PathBuf::as_path).collect();
             hairfit::report::publish::publish_fit(&dir, "hairfit fit", force, &inputs, |_| {
                 Ok(self.outcome.clone())
             })
         });
-        let published = published.map_err(hf)?;
+        let published = published?.map_err(hf)?;
         Ok(published.report_line(&dir))
     }
 }

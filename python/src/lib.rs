@@ -25,8 +25,17 @@ use pyo3::prelude::*;
 
 use errors::HairfitError;
 
+/// An allocation the system refuses (a memory limit) becomes `MemoryError` in the call that made
+/// it, not an abort that kills the interpreter (see `interrupt`).
+#[global_allocator]
+static ALLOCATOR: hairfit::cli::oom::CancelOnOom = hairfit::cli::oom::CancelOnOom;
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    hairfit::cli::oom::keep_ballast(interrupt::BALLAST);
+    // The worker threads now, while there is room for their stacks: rayon panics at first use
+    // when the system refuses them. Already built (another module started it) is fine.
+    let _ = rayon::ThreadPoolBuilder::new().build_global();
     m.add("HairfitError", m.py().get_type::<HairfitError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<load::Data>()?;

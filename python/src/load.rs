@@ -12,6 +12,7 @@ use hairfit::data::{AngleUnit, Dataset, LoadOptions, LoadReport};
 use crate::args::{parse, LoadCli};
 use crate::arrays::{angle_unit, angles_from, array2, values_of};
 use crate::errors::{hf, HairfitError};
+use crate::interrupt::off_gil;
 
 /// Loaded samples (angles in radians inside) with the loader's report on every row.
 #[pyclass(module = "hairfit._native", frozen)]
@@ -109,9 +110,7 @@ pub(crate) fn load(py: Python<'_>, path: PathBuf, load_args: Vec<String>) -> PyR
     let cli: LoadCli = parse(load_args)?;
     let options = cli.load;
     let started = Instant::now();
-    let (ds, report) = py
-        .allow_threads(|| hairfit::data::load(&path, &options))
-        .map_err(hf)?;
+    let (ds, report) = off_gil(py, || hairfit::data::load(&path, &options))?.map_err(hf)?;
     Ok(Data {
         ds,
         report,

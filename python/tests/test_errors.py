@@ -5,7 +5,7 @@ import json
 import pytest
 
 import hairfit
-from conftest import DATA, cli_error
+from conftest import DATA, ROOT, cli_error
 
 
 def test_malformed_csv_names_file_line_column(cli, tmp_path):
@@ -167,3 +167,42 @@ def test_eval_under_a_memory_cap_raises_memory_error_not_a_panic(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "MemoryError:" in run.stdout and "smaller chunks" in run.stdout, run.stdout + run.stderr
     assert "panicked" not in run.stderr and "PanicException" not in run.stdout + run.stderr
+
+
+def test_fit_and_compare_under_a_memory_cap_raise_memory_error_and_the_interpreter_goes_on(tmp_path):
+    # A child whose address space is capped a few MB above what it holds: the fit's vectors
+    # (100k rows, 0.8-5 MB each) and compare's are refused mid-run. Each call must end as a
+    # MemoryError (or succeed), never abort the interpreter (exit 134) or raise PanicException;
+    # with the cap lifted, the same interpreter fits again.
+    import subprocess
+    import sys
+
+    demo_data = str(ROOT / "fits" / "demo" / "data.csv")
+    script = tmp_path / "cap.py"
+    script.write_text(
+        "import resource, numpy as np, hairfit\n"
+        "vm = lambda: int(open('/proc/self/statm').read().split()[0]) * 4096\n"
+        "n = 100_000\n"
+        "rng = np.random.default_rng(1)\n"
+        "a = [rng.uniform(-60, 60, n), np.zeros(n), rng.uniform(-60, 60, n), rng.uniform(-180, 180, n)]\n"
+        f"p = {PARAMS!r}\n"
+        "d = hairfit.data(*a, radiance=hairfit.eval(p, *a)[:, 0])\n"
+        "calls = {'fit': lambda: hairfit.fit(d),\n"
+        f"         'compare': lambda: hairfit.compare({demo_data!r}, out={str(tmp_path / 'c')!r}, models='all')}}\n"
+        "for name, call in calls.items():\n"
+        "    for extra_mb in ((8, 20) if name == 'fit' else (1, 4)):\n"
+        "        hairfit.eval(p, [10.0], [0.0], [20.0], [30.0])  # sets the 64 MiB ballast aside again\n"
+        "        resource.setrlimit(resource.RLIMIT_AS, (vm() + extra_mb * 10**6, resource.RLIM_INFINITY))\n"
+        "        try:\n"
+        "            call()\n"
+        "            print(name, extra_mb, 'ok')\n"
+        "        except MemoryError as e:\n"
+        "            print(name, extra_mb, 'MemoryError:', e)\n"
+        "        resource.setrlimit(resource.RLIMIT_AS, (resource.RLIM_INFINITY, resource.RLIM_INFINITY))\n"
+        "print('after:', hairfit.fit(d).verdict)\n"
+    )
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "PanicException" not in run.stdout + run.stderr and "panicked" not in run.stderr
+    assert "the system refused" in run.stdout and "Run with a higher limit" in run.stdout, run.stdout
+    assert "after: good" in run.stdout, run.stdout
