@@ -66,14 +66,25 @@ impl Integration<'static> {
     /// The family's own: the rule of [`nodes_for`] `beta_n` (radians; each built once per
     /// process) and [`HIGHEST_EXPLICIT_ORDER`].
     pub fn standard(beta_n: f64) -> Integration<'static> {
-        static RULES: [OnceLock<Arc<WidthRule>>; NODE_COUNTS.len()] =
-            [const { OnceLock::new() }; NODE_COUNTS.len()];
-        let n = nodes_for(beta_n);
+        Self::with_nodes(nodes_for(beta_n), 1)
+    }
+
+    /// The multi-start's screening rule: half the nodes of [`Integration::standard`] (basins,
+    /// not values: the polish and everything reported use the standard rule).
+    pub fn screening(beta_n: f64) -> Integration<'static> {
+        Self::with_nodes(nodes_for(beta_n), 2)
+    }
+
+    /// The rule of `n / divisor` nodes, `n` one of [`NODE_COUNTS`] and `divisor` 1 or 2.
+    fn with_nodes(n: usize, divisor: usize) -> Integration<'static> {
+        static RULES: [[OnceLock<Arc<WidthRule>>; NODE_COUNTS.len()]; 2] =
+            [const { [const { OnceLock::new() }; NODE_COUNTS.len()] }; 2];
         let k = NODE_COUNTS
             .iter()
             .position(|&c| c == n)
             .expect("one of NODE_COUNTS");
-        let rule = RULES[k].get_or_init(|| WidthRule::cached(n).expect("in range"));
+        let rule =
+            RULES[divisor - 1][k].get_or_init(|| WidthRule::cached(n / divisor).expect("in range"));
         Integration {
             rule,
             highest_order: HIGHEST_EXPLICIT_ORDER,
@@ -393,22 +404,45 @@ impl TableFamily for DEon {
         each: &mut dyn FnMut(usize, &[Terms<T>]),
     ) {
         let how = Integration::standard(p.get(BETA_N, 0).re());
-        let mut order: Vec<(AzimuthalKey, usize)> = angles
-            .iter()
-            .enumerate()
-            .map(|(i, a)| (azimuthal_key(a), i))
-            .collect();
-        order.sort_unstable();
-        let mut shared = zero_terms::<T>(p.n_channels);
-        let mut terms = zero_terms::<T>(p.n_channels);
-        for group in order.chunk_by(|x, y| x.0 == y.0) {
-            clear_terms(&mut shared);
-            add_azimuthal(p, &angles[group[0].1], on, &how, &mut shared);
-            for &(_, i) in group {
-                terms.clone_from_slice(&shared);
-                apply_longitudinal(p, &angles[i], on, &mut terms);
-                each(i, &terms);
-            }
+        scatter_shared(p, angles, on, &how, each);
+    }
+
+    const SCREENING: Option<&'static str> = Some("with half the width nodes");
+
+    fn screen_each<T: DualNum<f64>>(
+        p: &TableParams<T>,
+        angles: &[Angles],
+        on: TermSet,
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        let how = Integration::screening(p.get(BETA_N, 0).re());
+        scatter_shared(p, angles, on, &how, each);
+    }
+}
+
+/// [`DEon::scatter_each`] with the width integral taken as `how` says: once per (θ_d, φ).
+fn scatter_shared<T: DualNum<f64>>(
+    p: &TableParams<T>,
+    angles: &[Angles],
+    on: TermSet,
+    how: &Integration,
+    each: &mut dyn FnMut(usize, &[Terms<T>]),
+) {
+    let mut order: Vec<(AzimuthalKey, usize)> = angles
+        .iter()
+        .enumerate()
+        .map(|(i, a)| (azimuthal_key(a), i))
+        .collect();
+    order.sort_unstable();
+    let mut shared = zero_terms::<T>(p.n_channels);
+    let mut terms = zero_terms::<T>(p.n_channels);
+    for group in order.chunk_by(|x, y| x.0 == y.0) {
+        clear_terms(&mut shared);
+        add_azimuthal(p, &angles[group[0].1], on, how, &mut shared);
+        for &(_, i) in group {
+            terms.clone_from_slice(&shared);
+            apply_longitudinal(p, &angles[i], on, &mut terms);
+            each(i, &terms);
         }
     }
 }

@@ -13,7 +13,7 @@ use num_dual::{Derivative, DualNum, DualVec64};
 use crate::error::Result;
 use crate::families::table::{
     every_parameter, fitted, lobes_config, param_name, total, DynTable, ParamFact, Table,
-    TableFamily, TableParamFile, TableParams, TermSet,
+    TableFamily, TableParamFile, TableParams, TermSet, Terms,
 };
 use crate::families::{FamilyParams, ModelRecords};
 use crate::files::{EffectsSource, Floored};
@@ -111,6 +111,8 @@ impl<F: TableFamily> FitParam for TableParam<F> {
 pub struct TableForward<F> {
     pub on: TermSet,
     pub measurement: Measurement,
+    /// Evaluate with [`TableFamily::screen_each`] (the multi-start's screening forward).
+    screening: bool,
     family: PhantomData<fn() -> F>,
 }
 
@@ -119,7 +121,30 @@ impl<F: TableFamily> TableForward<F> {
         TableForward {
             on,
             measurement,
+            screening: false,
             family: PhantomData,
+        }
+    }
+
+    /// The family's screening forward ([`TableFamily::screen_each`]), if it has one.
+    pub fn screening(&self) -> Option<TableForward<F>> {
+        F::SCREENING.map(|_| TableForward {
+            screening: true,
+            ..TableForward::new(self.on, self.measurement)
+        })
+    }
+
+    /// `each(i, terms)` for every sample: [`TableFamily::scatter_each`], or `screen_each`.
+    fn each<T: DualNum<f64>>(
+        &self,
+        p: &TableParams<T>,
+        angles: &[Angles],
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        if self.screening {
+            F::screen_each(p, angles, self.on, each)
+        } else {
+            F::scatter_each(p, angles, self.on, each)
         }
     }
 
@@ -143,7 +168,7 @@ impl<F: TableFamily> TableForward<F> {
         }
         let nc = p.n_channels;
         let nw = dim.value();
-        F::scatter_each(&pd, angles, self.on, &mut |i, terms| {
+        self.each(&pd, angles, &mut |i, terms| {
             for (c, t) in terms.iter().enumerate() {
                 let r = i * nc + c;
                 let v = total(t);
@@ -159,8 +184,13 @@ impl<F: TableFamily> Forward for TableForward<F> {
     type Param = TableParam<F>;
 
     fn values(&self, p: &TableParams<f64>, angles: &[Angles], out: &mut [f64]) {
-        let out = &mut out[..angles.len() * p.n_channels];
-        table::<F>().eval_batch(p, self.on, angles, out);
+        let nc = p.n_channels;
+        let out = &mut out[..angles.len() * nc];
+        self.each(p, angles, &mut |i, terms| {
+            for (v, t) in out[i * nc..(i + 1) * nc].iter_mut().zip(terms) {
+                *v = total(t);
+            }
+        });
         self.measurement.apply(angles, out);
     }
 
@@ -256,6 +286,7 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
     let nc = require_samples(data, file)?;
     let on = opts.terms.unwrap_or(F::default_terms());
     let forward = TableForward::<F>::new(on, opts.measurement);
+    let screening = forward.screening();
     let mut warnings = Vec::new();
     let params_of = |on: TermSet| -> Vec<TableParam<F>> {
         fitted(F::PARAMETERS, F::TERMS, on, nc, opts.free_eta)
@@ -280,9 +311,10 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
         config: records.config,
         effects_choice: EffectsSource::Explicit,
         reasons: vec![format!(
-            "{} model, terms {} (--terms)",
+            "{} model, terms {} (--terms){}",
             F::TITLE,
-            on.names(F::TERMS).join("+")
+            on.names(F::TERMS).join("+"),
+            F::SCREENING.map_or(String::new(), |s| format!("; the multi-start screens {s}"))
         )],
     };
     let options = |sub: usize, explicit: bool, floored: Floored| {
@@ -298,7 +330,7 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
             load_report,
             opts,
             forward: &forward,
-            screening: None,
+            screening: screening.as_ref(),
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,

@@ -266,6 +266,22 @@ pub trait TableFamily: Send + Sync + 'static {
             each(i, &terms);
         }
     }
+
+    /// What the multi-start's screening forward does differently, for fit.json's reasons; `None`
+    /// (the default): the multi-start uses [`TableFamily::scatter_each`] itself.
+    const SCREENING: Option<&'static str> = None;
+
+    /// [`TableFamily::scatter_each`] with a cheaper rule (fewer quadrature nodes), for the
+    /// multi-start on the subsample, which only looks for basins: the polish, the intervals and
+    /// everything reported use `scatter_each`. Overridden with [`TableFamily::SCREENING`].
+    fn screen_each<T: DualNum<f64>>(
+        p: &TableParams<T>,
+        angles: &[Angles],
+        on: TermSet,
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        Self::scatter_each(p, angles, on, each)
+    }
 }
 
 /// The most terms a family has.
