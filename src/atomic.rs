@@ -134,6 +134,43 @@ pub fn is_special_file(path: &Path) -> bool {
     destination(path) == Destination::InPlace
 }
 
+/// The check of a command that writes a CSV and a companion file beside it (`synth`, `trace`):
+/// `--output` must end in `.csv` and be no device, FIFO or socket. `command` and `companion`
+/// ("its truth file FILE.truth.json") word the message.
+pub fn require_csv_pair(output: &Path, command: &str, companion: &str) -> crate::error::Result<()> {
+    let is_csv = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let why = if !is_csv {
+        format!(
+            "name the file FILE.csv (the loader picks the format by extension; {companion} goes \
+             beside it)"
+        )
+    } else if is_special_file(output) {
+        format!(
+            "is a device, FIFO or socket; {command} writes the CSV and {companion} beside each \
+             other, so --output names a file"
+        )
+    } else {
+        return Ok(());
+    };
+    Err(crate::error::Error::Other(format!(
+        "--output {}: {why}",
+        output.display()
+    )))
+}
+
+/// An error about the staged temporary `tmp`, worded about the file the user asked for.
+pub fn name_target(e: crate::error::Error, tmp: &Path, target: &Path) -> crate::error::Error {
+    let text = e.to_string();
+    let tmp = tmp.display().to_string();
+    if text.contains(&tmp) {
+        crate::error::Error::Other(text.replace(&tmp, &target.display().to_string()))
+    } else {
+        e
+    }
+}
+
 /// Write `path` atomically: `fill` writes the whole content; on success the temporary file is
 /// renamed over `path`, on error it is removed and `path` is left untouched. A `path` that is a
 /// link is resolved and the file it names replaced; a device, FIFO or socket (`/dev/null`, a

@@ -77,24 +77,7 @@ pub struct SynthSummary {
 /// Run `hairfit synth`: load and reconcile the inputs, synthesize, write the CSV and the truth
 /// file. `command_line` is recorded in the truth file.
 pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummary> {
-    let is_csv = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    if !is_csv {
-        return Err(Error::Other(format!(
-            "--output {}: name the file FILE.csv (the loader picks the format by extension; the \
-             truth goes to FILE.truth.json)",
-            args.output.display()
-        )));
-    }
-    if crate::atomic::is_special_file(&args.output) {
-        return Err(Error::Other(format!(
-            "--output {}: is a device, FIFO or socket; synth writes the CSV and its truth file \
-             (FILE.truth.json) beside each other, so --output names a file",
-            args.output.display()
-        )));
-    }
+    crate::atomic::require_csv_pair(&args.output, "synth", "its truth file FILE.truth.json")?;
     refuse_overwriting_input(&args.params, &args.output)?;
     let rig = Rig::parse(&args.rig)?;
     let noise =
@@ -141,11 +124,12 @@ pub fn run(args: &SynthArgs, command_line: Option<String>) -> Result<SynthSummar
     let truth_file = truth_path(&args.output);
     let mut staged = crate::atomic::StagedFiles::new();
     let csv_tmp = staged.stage(&args.output)?;
-    write_csv(&dataset, &csv_tmp).map_err(|e| name_target(e, &csv_tmp, &args.output))?;
+    write_csv(&dataset, &csv_tmp)
+        .map_err(|e| crate::atomic::name_target(e, &csv_tmp, &args.output))?;
     let truth_tmp = staged.stage(&truth_file)?;
     truth
         .save(&truth_tmp)
-        .map_err(|e| name_target(e, &truth_tmp, &truth_file))?;
+        .map_err(|e| crate::atomic::name_target(e, &truth_tmp, &truth_file))?;
     staged.publish()?;
     Ok(SynthSummary {
         csv: args.output.clone(),
@@ -162,17 +146,6 @@ fn refuse_overwriting_input(params: &Path, output: &Path) -> Result<()> {
     let inputs = [("--params", params)];
     crate::atomic::refuse_replacing_inputs("--output", output, &inputs)?;
     crate::atomic::refuse_replacing_inputs("--output's truth file", &truth_path(output), &inputs)
-}
-
-/// An error about the staged temporary file `tmp`, worded about the file the user asked for.
-fn name_target(e: Error, tmp: &Path, target: &Path) -> Error {
-    let text = e.to_string();
-    let tmp = tmp.display().to_string();
-    if text.contains(&tmp) {
-        Error::Other(text.replace(&tmp, &target.display().to_string()))
-    } else {
-        e
-    }
 }
 
 /// Apply `--channels`: a scalar sigma_a is replicated (with a note), an array must match.

@@ -48,23 +48,7 @@ pub struct TraceSummary {
 
 /// Run `hairfit trace`; `command_line` is recorded in the sidecar.
 pub fn run(args: &TraceArgs, command_line: Option<String>) -> Result<TraceSummary> {
-    let is_csv = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    if !is_csv {
-        return Err(Error::Other(format!(
-            "--output {}: name the file FILE.csv (the sidecar goes to FILE.trace.json)",
-            args.output.display()
-        )));
-    }
-    if crate::atomic::is_special_file(&args.output) {
-        return Err(Error::Other(format!(
-            "--output {}: is a device, FIFO or socket; trace writes the CSV and its sidecar \
-             beside each other, so --output names a file",
-            args.output.display()
-        )));
-    }
+    crate::atomic::require_csv_pair(&args.output, "trace", "its sidecar FILE.trace.json")?;
     let inputs = [("--fiber", args.fiber.as_path())];
     crate::atomic::refuse_replacing_inputs("--output", &args.output, &inputs)?;
     crate::atomic::refuse_replacing_inputs(

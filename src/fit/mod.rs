@@ -32,10 +32,10 @@ pub mod verdict;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
-use std::time::Instant;
 
 pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
+pub use family::FitInput;
 pub use loss::{Loss, LossScale};
 pub use problem::{Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode, Space};
 pub use profile::Intervals;
@@ -47,9 +47,7 @@ use crate::error::{Error, Result};
 use crate::families::chiang::ChiangModel;
 use crate::families::marschner::{Effects, ParamName, Params, RootMode};
 use crate::families::{FamilyParams, ModelFamily};
-use crate::files::{
-    Curves, CurvesMode, FitJson, FitStatus, Floored, LoadReport, OptionsRecord, Timing,
-};
+use crate::files::{Curves, CurvesMode, FitJson, FitStatus, Floored, OptionsRecord, Timing};
 use crate::geometry::Measurement;
 
 /// Runner-ups of the multi-start are polished on all data only within this many χ² units of the
@@ -262,10 +260,8 @@ pub type OptionsOf<'a> = &'a dyn Fn(usize, bool, Floored) -> OptionsRecord;
 
 /// One family's fit, as [`fit_with`] runs it through the shared stages.
 pub struct FitRun<'a, F: Forward> {
-    pub data: &'a FitData,
-    pub file: &'a str,
-    pub load_report: LoadReport,
-    pub opts: &'a FitOptions,
+    /// The samples, their file and loader report, the options and the start time.
+    pub input: FitInput<'a>,
     pub forward: &'a F,
     /// A cheaper forward for the multi-start stages on the subsample, which only look for basins
     /// (the polish, intervals and everything reported use `forward`); None: `forward`.
@@ -279,7 +275,6 @@ pub struct FitRun<'a, F: Forward> {
     pub all: Vec<F::Param>,
     pub why: assemble::WhyUndetermined<'a, F::Param>,
     pub params_file: fn(&ParamSet<F>) -> FamilyParams,
-    pub started: Instant,
 }
 
 /// The stages every family's fit runs: multi-start on a subsample, optional global stage,
@@ -288,12 +283,8 @@ pub fn fit_with<F: Forward>(
     run: FitRun<'_, F>,
     mut warnings: Vec<String>,
 ) -> Result<FitOutcome<ParamSet<F>>> {
-    let FitRun {
-        data,
-        opts,
-        forward,
-        ..
-    } = run;
+    let FitInput { data, opts, .. } = run.input;
+    let forward = run.forward;
     let screening = run.screening.unwrap_or(forward);
     let (mut ev_full, floored) =
         evaluator_for(forward, data, opts.space, opts.loss, &run.base, &run.free)?;
@@ -388,8 +379,8 @@ pub fn fit_with<F: Forward>(
     let x_best = ev_full.natural(&best.u[..run.free.len()]);
     let mut out = assemble::assemble(assemble::Assembly {
         data,
-        file: run.file,
-        load_report: run.load_report,
+        file: run.input.file,
+        load_report: run.input.load_report,
         records: run.records,
         all: run.all,
         why: run.why,
@@ -401,7 +392,7 @@ pub fn fit_with<F: Forward>(
         warnings,
         trace: log.trace,
         stage_times: log.times,
-        started: run.started,
+        started: run.input.started,
     })?;
     let optimum = profile::Optimum {
         forward,
@@ -418,7 +409,7 @@ pub fn fit_with<F: Forward>(
         max_iters: opts.polish_iters,
         cancel: opts.cancel.clone(),
     };
-    profile::intervals(&mut out, optimum, &best, opts, run.started)?;
+    profile::intervals(&mut out, optimum, &best, opts, run.input.started)?;
     verdict::after_profiles(&mut out.json, data);
     Ok(out)
 }

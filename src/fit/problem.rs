@@ -18,6 +18,7 @@ mod residual;
 
 pub use evaluation::{chunked_sum, Evaluation, ScaleMode, CHUNK};
 pub use evaluator::{Evaluator, Floored, Space, LOG_MIN_SNR};
+pub(crate) use forward::with_dual_dim;
 pub use forward::{FitParam, Forward, ParamSet};
 pub use linearize::Linearization;
 

@@ -32,10 +32,5 @@ pub fn fit_family(
     load_report: LoadReport,
     opts: &FitOptions,
 ) -> Result<FitOutcome<FamilyParams>> {
-    family_fit(opts.family).fit(FitInput {
-        data,
-        file,
-        load_report,
-        opts,
-    })
+    family_fit(opts.family).fit(FitInput::new(data, file, load_report, opts))
 }

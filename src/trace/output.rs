@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{FiberFile, TraceResult, ORDERS};
 use crate::data::{round_trip_degrees, write_csv_with, Dataset};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::synth::{channel_names, CSV_FIRST_DATA_LINE};
 
 /// The per-order columns' prefixes, in order R, TT, TRT, higher.
@@ -157,11 +157,12 @@ pub fn write(
     let sidecar = record_path(csv);
     let mut staged = crate::atomic::StagedFiles::new();
     let csv_tmp = staged.stage(csv)?;
-    write_csv_with(ds, extra, &csv_tmp).map_err(|e| name_target(e, &csv_tmp, csv))?;
+    write_csv_with(ds, extra, &csv_tmp)
+        .map_err(|e| crate::atomic::name_target(e, &csv_tmp, csv))?;
     let side_tmp = staged.stage(&sidecar)?;
     record
         .save(&side_tmp)
-        .map_err(|e| name_target(e, &side_tmp, &sidecar))?;
+        .map_err(|e| crate::atomic::name_target(e, &side_tmp, &sidecar))?;
     staged.publish()
 }
 
@@ -171,14 +172,4 @@ pub fn radians(directions_deg: &[[f64; 4]]) -> Vec<[f64; 4]> {
         .iter()
         .map(|a| a.map(|d| round_trip_degrees(d.to_radians()).to_radians()))
         .collect()
-}
-
-fn name_target(e: Error, tmp: &Path, target: &Path) -> Error {
-    let text = e.to_string();
-    let tmp = tmp.display().to_string();
-    if text.contains(&tmp) {
-        Error::Other(text.replace(&tmp, &target.display().to_string()))
-    } else {
-        e
-    }
 }

@@ -5,9 +5,8 @@
 //! undetermined parameter) handed to the shared stages ([`crate::fit::fit_with`]).
 
 use std::marker::PhantomData;
-use std::time::Instant;
 
-use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
+use nalgebra::{allocator::Allocator, DefaultAllocator, Dim, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::error::Result;
@@ -20,7 +19,7 @@ use crate::files::{EffectsSource, Floored};
 use crate::fit::bounds::Bound;
 use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
-use crate::fit::problem::{FitData, FitParam, Forward};
+use crate::fit::problem::{with_dual_dim, FitData, FitParam, Forward};
 use crate::fit::stages::{options_record, ModelChoice};
 use crate::fit::{diagnostics, fit_with, require_samples, FitOutcome, FitRun};
 use crate::geometry::{Angles, Measurement};
@@ -202,16 +201,13 @@ impl<F: TableFamily> Forward for TableForward<F> {
         out: &mut [f64],
         grad: &mut [f64],
     ) {
-        macro_rules! dispatch {
-            ($($n:literal)*) => {
-                match free.len() {
-                    $($n => self.dual_pass(Const::<$n>, p, free, angles, (out, grad)),)*
-                    nf => self.dual_pass(Dyn(nf), p, free, angles, (out, grad)),
-                }
-            };
-        }
-        // Stack duals for every realistic count (shared shape parameters plus one per channel).
-        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12);
+        with_dual_dim!(free.len(), |dim| self.dual_pass(
+            dim,
+            p,
+            free,
+            angles,
+            (out, grad)
+        ));
         let rows = angles.len() * p.n_channels;
         self.measurement.apply(angles, &mut out[..rows]);
         self.measurement.apply(angles, grad);
@@ -277,12 +273,8 @@ fn why_undetermined<F: TableFamily>(
 /// Fit the table family `F` under `opts.terms` (all when absent).
 fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f64>>> {
     let FitInput {
-        data,
-        file,
-        load_report,
-        opts,
+        data, file, opts, ..
     } = i;
-    let started = Instant::now();
     let nc = require_samples(data, file)?;
     let on = opts.terms.unwrap_or(F::default_terms());
     let forward = TableForward::<F>::new(on, opts.measurement);
@@ -325,10 +317,7 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
     };
     fit_with(
         FitRun {
-            data,
-            file,
-            load_report,
-            opts,
+            input: i,
             forward: &forward,
             screening: screening.as_ref(),
             base: set.base.clone(),
@@ -338,7 +327,6 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
             all: <Table<F> as Family>::parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Table(TableParamFile::from_params(table::<F>(), p)),
-            started,
         },
         warnings,
     )

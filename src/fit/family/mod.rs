@@ -9,12 +9,31 @@ use crate::files::LoadReport;
 use crate::fit::{FitData, FitOptions, FitOutcome, FitParam};
 
 /// What a fit is given: the samples, the file they came from (for messages and fit.json), the
-/// loader's report of that file, and the options.
+/// loader's report of that file, the options, and when the fit started (timing.json).
 pub struct FitInput<'a> {
     pub data: &'a FitData,
     pub file: &'a str,
     pub load_report: LoadReport,
     pub opts: &'a FitOptions,
+    pub started: std::time::Instant,
+}
+
+impl<'a> FitInput<'a> {
+    /// The input of a fit starting now.
+    pub fn new(
+        data: &'a FitData,
+        file: &'a str,
+        load_report: LoadReport,
+        opts: &'a FitOptions,
+    ) -> FitInput<'a> {
+        FitInput {
+            data,
+            file,
+            load_report,
+            opts,
+            started: std::time::Instant::now(),
+        }
+    }
 }
 
 /// A model family's part of a fit: its parameters, how `--fix` names them, and its fit. A new

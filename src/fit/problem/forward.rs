@@ -104,3 +104,26 @@ pub trait Forward: Sync {
         false
     }
 }
+
+/// `$call` with `$dim` bound to the dual-number dimension for `$n` derivative directions:
+/// `Const::<N>` for every realistic count (1–12: stack duals, no heap allocation per arithmetic
+/// operation; ≤ η + 3σ_a + 5 shape parameters = 9, plus headroom), else `Dyn(n)`. Every family's
+/// `Forward::gradients` dispatches through it.
+macro_rules! with_dual_dim {
+    ($n:expr, |$dim:ident| $call:expr) => {
+        $crate::fit::problem::with_dual_dim!(@arms $n, $dim, $call, 1 2 3 4 5 6 7 8 9 10 11 12)
+    };
+    (@arms $n:expr, $dim:ident, $call:expr, $($k:literal)*) => {
+        match $n {
+            $($k => {
+                let $dim = nalgebra::Const::<$k>;
+                $call
+            })*
+            n => {
+                let $dim = nalgebra::Dyn(n);
+                $call
+            }
+        }
+    };
+}
+pub(crate) use with_dual_dim;

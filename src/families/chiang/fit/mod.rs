@@ -153,10 +153,11 @@ pub fn fit_chiang(
     };
     let mut outcome = fit_with(
         FitRun {
-            data,
-            file,
-            load_report,
-            opts,
+            // The grouping above counts in the fit's time.
+            input: FitInput {
+                started,
+                ..FitInput::new(data, file, load_report, opts)
+            },
             forward: &forward,
             screening: screening.as_ref(),
             base: set.base.clone(),
@@ -173,7 +174,6 @@ pub fn fit_chiang(
             all: all_parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Chiang(ChiangParamFile::from_params(p)),
-            started,
         },
         warnings,
     )?;

@@ -2,7 +2,7 @@
 //! configuration as a [`Forward`] ([`MarschnerForward`]), with exact gradients by forward-mode
 //! AD ([`gradients`]).
 
-use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
+use nalgebra::{allocator::Allocator, DefaultAllocator, Dim, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::families::marschner::jacobian::seeded;
@@ -10,7 +10,7 @@ use crate::families::marschner::{
     scattering_batch, scattering_by_lobe, ModelConfig, ModelNum, ParamName, Params,
 };
 use crate::fit::bounds::Bound;
-use crate::fit::problem::{FitParam, Forward};
+use crate::fit::problem::{with_dual_dim, FitParam, Forward};
 use crate::geometry::{Angles, Measurement};
 
 impl FitParam for ParamName {
@@ -90,15 +90,14 @@ impl Forward for MarschnerForward {
         out: &mut [f64],
         grad: &mut [f64],
     ) {
-        macro_rules! dispatch {
-            ($($n:literal)*) => {
-                match shared.len() + 1 {
-                    $($n => compressed_dim(self, Const::<$n>, p, (shared, local), angles, (out, grad)),)*
-                    nw => compressed_dim(self, Dyn(nw), p, (shared, local), angles, (out, grad)),
-                }
-            };
-        }
-        dispatch!(1 2 3 4 5 6 7 8 9 10 11 12);
+        with_dual_dim!(shared.len() + 1, |dim| compressed_dim(
+            self,
+            dim,
+            p,
+            (shared, local),
+            angles,
+            (out, grad)
+        ));
     }
 
     fn measurement(&self) -> Measurement {
@@ -136,17 +135,14 @@ pub fn gradients(
     out: &mut [f64],
     grad: &mut [f64],
 ) {
-    macro_rules! dispatch {
-        ($($n:literal)*) => {
-            match free.len() {
-                $($n => gradients_dim(forward, Const::<$n>, p, free, angles, (out, grad)),)*
-                nf => gradients_dim(forward, Dyn(nf), p, free, angles, (out, grad)),
-            }
-        };
-    }
-    // Static dual sizes avoid a heap allocation per arithmetic operation; every realistic
-    // free-parameter count (≤ η + 3σ_a + 5 shape = 9, plus headroom) has one.
-    dispatch!(1 2 3 4 5 6 7 8 9 10 11 12);
+    with_dual_dim!(free.len(), |dim| gradients_dim(
+        forward,
+        dim,
+        p,
+        free,
+        angles,
+        (out, grad)
+    ));
 }
 
 /// [`gradients`] with `dim`-sized dual numbers; `(out, grad)` as there.

@@ -5,8 +5,6 @@
 
 pub mod forward;
 
-use std::time::Instant;
-
 use crate::error::Result;
 use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::all_parameters;
@@ -48,7 +46,7 @@ pub fn fit(
     load_report: LoadReport,
     opts: &FitOptions,
 ) -> Result<FitOutcome> {
-    let started = Instant::now();
+    let input = FitInput::new(data, file, load_report, opts);
     let nc = require_samples(data, file)?;
     let mut warnings = Vec::new();
     let choice = stages::choose_model(data, opts);
@@ -65,10 +63,7 @@ pub fn fit(
     };
     fit_with(
         FitRun {
-            data,
-            file,
-            load_report,
-            opts,
+            input,
             forward: &forward,
             screening: None,
             base: set.base.clone(),
@@ -82,7 +77,6 @@ pub fn fit(
             all: all_parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Marschner(ParamFile::from_params(p)),
-            started,
         },
         warnings,
     )
