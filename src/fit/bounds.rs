@@ -1,9 +1,6 @@
 //! The fit's bounds and the MINUIT-style smooth transforms that keep every iterate inside them.
-//! Bounds, typical ranges, reporting factors and reference values are read from the model's
-//! parameter table (`model::parameters`); this module only turns them into transforms.
-
-use crate::families::marschner::{ParamName, Params};
-use crate::geometry::Unit;
+//! Each family's parameters give their bounds (`FitParam::bound`, from the family's parameter
+//! table); this module only turns them into transforms.
 
 /// The bounds of one parameter in its natural (model, radian) units.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -17,14 +14,6 @@ pub enum Bound {
 }
 
 impl Bound {
-    /// The fit bounds of `name` in the parameter table (natural units, radians).
-    pub fn of(name: ParamName) -> Bound {
-        match name.fact().fit_bounds() {
-            (lo, Some(hi)) => Bound::Both(lo, hi),
-            (lo, None) => Bound::Lower(lo),
-        }
-    }
-
     /// Natural value of internal `u` (MINUIT transform).
     pub fn to_natural(&self, u: f64) -> f64 {
         match *self {
@@ -73,27 +62,6 @@ impl Bound {
             Bound::Both(lo, hi) => near(lo, hi - lo) || near(hi, hi - lo),
         }
     }
-}
-
-/// MODEL.md's typical range of `name` in natural units (radians for angles): the start design box.
-pub fn typical_range(name: ParamName) -> (f64, f64) {
-    name.fact().typical_range()
-}
-
-/// True for parameters stored in radians and reported in degrees.
-pub fn is_angle(name: ParamName) -> bool {
-    name.fact().unit == Unit::Degrees
-}
-
-/// Factor from natural units to reporting units (degrees for angles).
-pub fn report_factor(name: ParamName) -> f64 {
-    name.fact().unit.file_factor()
-}
-
-/// The table's reference values (defaults, else mid typical range): a neutral parameter set with
-/// `n_channels` channels, the value of every parameter a fit does not vary.
-pub fn reference_params(n_channels: usize) -> Params<f64> {
-    Params::from_fn(n_channels, |name| name.fact().reference_value())
 }
 
 #[cfg(test)]

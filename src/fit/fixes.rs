@@ -263,7 +263,7 @@ mod tests {
         let mut warnings = Vec::new();
         let set = FreeSet::new(
             fixes,
-            crate::fit::bounds::reference_params(1),
+            crate::families::marschner::parameters::reference_params(1),
             vec![ParamName::SigmaA(0), ParamName::KG],
             vec![ParamName::SigmaA(0), ParamName::KG, ParamName::WC],
             "why",

@@ -11,7 +11,6 @@
 //! report.
 
 pub mod assemble;
-pub mod auto;
 pub mod bounds;
 pub mod design;
 pub mod diagnostics;
@@ -33,7 +32,6 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-pub use auto::{choose_effects, AutoChoice};
 pub use diagnostics::POORLY_DETERMINED;
 pub use family::FitInput;
 pub use loss::{Loss, LossScale};
@@ -191,7 +189,7 @@ pub const EXACT_MISFIT: f64 = 1e-6;
 /// rows, the summary's, or none, as fit.json's `options.curves` says) and the run's wall-clock
 /// times (timing.json).
 #[derive(Debug, Clone)]
-pub struct FitOutcome<P = Params<f64>> {
+pub struct FitOutcome<P> {
     pub json: FitJson,
     pub params: P,
     pub curves: Curves,

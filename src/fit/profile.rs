@@ -30,7 +30,6 @@ use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
 
 mod record;
-use crate::families::marschner::ParamName;
 use crate::files::{FitStatus, ProfileMethod, StageTiming, Verdict};
 pub use record::apply;
 
@@ -181,7 +180,7 @@ impl End {
 
 /// One parameter's profile.
 #[derive(Debug, Clone)]
-pub struct Profile<P = ParamName> {
+pub struct Profile<P> {
     pub name: P,
     /// `(value, Δχ²)` in natural units, ascending in value, the optimum included.
     pub points: Vec<(f64, f64)>,

@@ -9,8 +9,8 @@ use rayon::prelude::*;
 pub use super::fixes::FreeSet;
 use super::problem::{self, Evaluator, FitData, FitParam, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
-use super::{choose_effects, EffectsChoice, FitOptions, Global};
-use crate::families::marschner::{Effects, ModelConfig};
+use super::{FitOptions, Global};
+use crate::families::marschner::ModelConfig;
 use crate::files::{
     EffectsSource, FitStatus, Floored, OptionsRecord, ScaleMethod, StageTiming, TraceStage,
 };
@@ -20,34 +20,6 @@ pub struct ModelChoice {
     pub config: ModelConfig,
     pub effects_choice: EffectsSource,
     pub reasons: Vec<String>,
-}
-
-/// Effects: from the data's geometry (`auto`), all, or as given.
-pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
-    let (effects, effects_choice, reasons) = match opts.effects {
-        EffectsChoice::Auto => {
-            let c = choose_effects(data, opts.mode);
-            (c.effects, EffectsSource::Auto, c.reasons)
-        }
-        EffectsChoice::All => (
-            Effects::default(),
-            EffectsSource::All,
-            vec!["--effects all".into()],
-        ),
-        EffectsChoice::Explicit(e) => (
-            e,
-            EffectsSource::Explicit,
-            vec!["--lobes/--no-glints/--no-eccentricity".into()],
-        ),
-    };
-    ModelChoice {
-        config: ModelConfig {
-            mode: opts.mode,
-            effects,
-        },
-        effects_choice,
-        reasons,
-    }
 }
 
 /// Warn about values a log-space fit takes as linear residuals.

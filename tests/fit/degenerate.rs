@@ -3,11 +3,11 @@
 
 use crate::support;
 use hairfit::cli::summary::summary;
-use hairfit::families::marschner::fit::fit;
-use hairfit::fit::{write_outputs, EffectsChoice, FitOptions, FitOutcome};
+use hairfit::families::marschner::fit::{fit, MarschnerOutcome};
+use hairfit::fit::{write_outputs, EffectsChoice, FitOptions};
 use hairfit::geometry::Angles;
 
-fn fit_angles(angles: Vec<Angles>, effects: EffectsChoice) -> FitOutcome {
+fn fit_angles(angles: Vec<Angles>, effects: EffectsChoice) -> MarschnerOutcome {
     let truth = support::fit::random_params(77, 3);
     let data = support::fit::data(&truth, &angles, 0.02, 77);
     let opts = FitOptions {
@@ -18,7 +18,7 @@ fn fit_angles(angles: Vec<Angles>, effects: EffectsChoice) -> FitOutcome {
 }
 
 /// Written files contain no NaN/inf, and each undetermined parameter has a null error.
-fn assert_clean(out: &FitOutcome) {
+fn assert_clean(out: &MarschnerOutcome) {
     let dir = tempfile::tempdir().unwrap();
     write_outputs(dir.path(), out).unwrap();
     let text = std::fs::read_to_string(dir.path().join("fit.json")).unwrap();
@@ -34,7 +34,7 @@ fn assert_clean(out: &FitOutcome) {
     assert!(!curves.contains("NaN") && !curves.contains("inf"));
 }
 
-fn status_of(out: &FitOutcome, name: &str) -> &'static str {
+fn status_of(out: &MarschnerOutcome, name: &str) -> &'static str {
     out.json
         .parameters
         .iter()
@@ -44,7 +44,7 @@ fn status_of(out: &FitOutcome, name: &str) -> &'static str {
         .as_str()
 }
 
-fn warned(out: &FitOutcome, name: &str) -> bool {
+fn warned(out: &MarschnerOutcome, name: &str) -> bool {
     out.json.warnings.iter().any(|w| w.starts_with(name))
 }
 

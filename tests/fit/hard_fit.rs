@@ -13,10 +13,12 @@ use crate::support::hard::*;
 use hairfit::demo::synthesize;
 use hairfit::families::marschner::azimuthal::caustic_position;
 use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::fit::forward::fit_bound;
 use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::parameters::reference_params;
 use hairfit::families::marschner::{Effects, ModelConfig, Params, RootMode};
-use hairfit::fit::bounds::{reference_params, Bound};
+use hairfit::fit::bounds::Bound;
 use hairfit::fit::problem::{Evaluator, FitData, Space};
 use hairfit::fit::solve::run_local;
 use hairfit::fit::{EffectsChoice, FitOptions, Loss};
@@ -323,7 +325,7 @@ fn local_runs_started_on_the_bounds_stay_finite_and_inside() {
     let corner = |upper: bool| -> Vec<f64> {
         free.iter()
             .map(|&p| {
-                let b = Bound::of(p);
+                let b = fit_bound(p);
                 let x = match (b, upper) {
                     (Bound::Free, false) => -PI / 6.0,
                     (Bound::Free, true) => PI / 6.0,
@@ -352,7 +354,7 @@ fn local_runs_started_on_the_bounds_stay_finite_and_inside() {
         let x = ev.natural(&r.u);
         for (&p, &v) in free.iter().zip(&x) {
             assert_eq!(
-                Bound::of(p).clamp(v),
+                fit_bound(p).clamp(v),
                 v,
                 "{name}: {} = {v} leaves its bound",
                 p.json_name()
@@ -496,7 +498,7 @@ proptest! {
         assert_params_in_bounds(&j, "proptest fit");
         for name in hairfit::families::marschner::parameters::all_parameters(1) {
             let v = hairfit::fit::param(&outcome.params, name);
-            prop_assert_eq!(Bound::of(name).clamp(v), v, "{} = {}", name.json_name(), v);
+            prop_assert_eq!(fit_bound(name).clamp(v), v, "{} = {}", name.json_name(), v);
         }
         prop_assert!(outcome.params.validate().is_ok());
     }

@@ -8,6 +8,7 @@
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 
 use hairfit::families::marschner::azimuthal::caustic_position;
+use hairfit::families::marschner::fit::forward::fit_bound;
 use hairfit::families::marschner::parameters::all_parameters;
 use hairfit::families::marschner::{
     scattering_jacobian, ModelConfig, ParamName, Params, RootMode, StaticJacobian,
@@ -126,7 +127,7 @@ fn hard_angles(eta: f64) -> Vec<(String, Angles)> {
     v
 }
 
-/// Named parameter sets: the table values, each fit bound of `hairfit::fit::bounds::Bound::of`,
+/// Named parameter sets: the table values, each fit bound of `parameters::fit_bound`,
 /// and MODEL.md's hard parameter values.
 fn hard_params() -> Vec<(String, Params<f64>)> {
     let base = table_params();
@@ -138,7 +139,7 @@ fn hard_params() -> Vec<(String, Params<f64>)> {
         v.push((name, p));
     };
     for name in all_parameters(2) {
-        let (lo, hi) = match Bound::of(name) {
+        let (lo, hi) = match fit_bound(name) {
             Bound::Free => (-(30f64.to_radians()), 30f64.to_radians()),
             Bound::Lower(lo) => (lo, f64::NAN),
             Bound::Both(lo, hi) => (lo, hi),
@@ -163,14 +164,14 @@ fn hard_params() -> Vec<(String, Params<f64>)> {
     // Every parameter at its lower bound at once (the corner a fit can reach).
     with("all at lower bounds".into(), &|p| {
         for name in all_parameters(2) {
-            if let Bound::Lower(lo) | Bound::Both(lo, _) = Bound::of(name) {
+            if let Bound::Lower(lo) | Bound::Both(lo, _) = fit_bound(name) {
                 p.set(name, lo);
             }
         }
     });
     with("all at upper bounds".into(), &|p| {
         for name in all_parameters(2) {
-            if let Bound::Both(_, hi) = Bound::of(name) {
+            if let Bound::Both(_, hi) = fit_bound(name) {
                 p.set(name, hi);
             }
         }

@@ -1,5 +1,5 @@
 //! Property tests of the exact Jacobian over the fit's parameter box: random parameters inside
-//! every fit bound (`hairfit::fit::bounds::Bound::of`), random angles reaching within 1e-9 rad of
+//! every fit bound (`parameters::fit_bound`), random angles reaching within 1e-9 rad of
 //! grazing, both root modes, random effect sets → S finite and ≥ 0, every Jacobian entry finite,
 //! and reciprocity of S and of its gradient (swapping ω_i and ω_r changes neither); and the
 //! vector path `hairfit eval` runs agrees with the scalar model there.
@@ -8,6 +8,7 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
+use hairfit::families::marschner::fit::forward::fit_bound;
 use hairfit::families::marschner::parameters::all_parameters;
 use hairfit::families::marschner::{
     scattering_batch, scattering_jacobian, scattering_lanes_on, Effects, LaneKernel, Lobes,
@@ -51,10 +52,10 @@ fn params() -> impl Strategy<Value = Params<f64>> {
     let names = all_parameters(3);
     let strategies: Vec<BoxedStrategy<f64>> = names
         .iter()
-        .map(|&n| in_bound(Bound::of(n), (-0.6, 10.0)))
+        .map(|&n| in_bound(fit_bound(n), (-0.6, 10.0)))
         .collect();
     strategies.prop_map(move |values| {
-        let mut p = hairfit::fit::bounds::reference_params(3);
+        let mut p = hairfit::families::marschner::parameters::reference_params(3);
         for (&n, v) in names.iter().zip(values) {
             p.set(n, v);
         }

@@ -4,8 +4,8 @@
 use crate::support;
 use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::parameters::reference_params;
 use hairfit::families::marschner::{Effects, ModelConfig, RootMode};
-use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{Evaluator, Loss, Space};
 use hairfit::geometry::Measurement;
 

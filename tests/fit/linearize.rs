@@ -6,8 +6,8 @@
 use crate::support;
 use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::parameters::reference_params;
 use hairfit::families::marschner::{Effects, ModelConfig};
-use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{Evaluator, Loss, ScaleMode, Space};
 use hairfit::geometry::Measurement;
 use nalgebra::{DMatrix, DVector};

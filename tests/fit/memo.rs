@@ -11,8 +11,8 @@ use hairfit::families::chiang::fit::ChiangForward;
 use hairfit::families::chiang::{ChiangModel, ChiangParamName, ChiangParams};
 use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::parameters::fitted_parameters;
+use hairfit::families::marschner::parameters::reference_params;
 use hairfit::families::marschner::{Effects, ModelConfig};
-use hairfit::fit::bounds::reference_params;
 use hairfit::fit::{Evaluator, FitData, FitParam, Forward, Loss, ParamSet, ScaleMode, Space};
 use hairfit::geometry::{Angles, Measurement};
 

@@ -15,15 +15,13 @@ use crate::support;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use hairfit::families::marschner::fit::fit;
 use hairfit::families::marschner::fit::forward::MarschnerForward;
+use hairfit::families::marschner::fit::{fit, MarschnerOutcome};
+use hairfit::families::marschner::parameters::report_factor;
 use hairfit::families::marschner::{ParamName, Params};
 use hairfit::files::{FitStatus, ParamStatus, ProfileMethod};
-use hairfit::fit::bounds::report_factor;
 use hairfit::fit::profile::{self, End, Optimum, Profile};
-use hairfit::fit::{
-    EffectsChoice, Evaluator, FitData, FitOptions, FitOutcome, Intervals, Loss, Space,
-};
+use hairfit::fit::{EffectsChoice, Evaluator, FitData, FitOptions, Intervals, Loss, Space};
 use hairfit::geometry::Measurement;
 
 /// MODEL.md's example hair, one channel.
@@ -63,7 +61,10 @@ fn true_value(name: &str) -> f64 {
 /// Hits over the free parameters of one fit: (profile hits, trials) over all of them, and
 /// (profile hits, linearised hits, trials) over those the linearised fit gives a standard error
 /// (where the SE makes a claim that can fail).
-fn hits(profiled: &FitOutcome, linear: Option<&FitOutcome>) -> ([usize; 2], [usize; 3]) {
+fn hits(
+    profiled: &MarschnerOutcome,
+    linear: Option<&MarschnerOutcome>,
+) -> ([usize; 2], [usize; 3]) {
     let (mut all, mut se) = ([0; 2], [0; 3]);
     for (k, e) in profiled.json.parameters.iter().enumerate() {
         if e.status == ParamStatus::Fixed {
@@ -318,7 +319,7 @@ fn intervals_bracket_the_value_and_match_the_se_where_the_cost_is_nearly_quadrat
 fn optimum<'a>(
     forward: &'a MarschnerForward,
     data: &'a FitData,
-    out: &FitOutcome,
+    out: &MarschnerOutcome,
     cancel: Option<Arc<AtomicBool>>,
 ) -> Optimum<'a, MarschnerForward> {
     let free: Vec<ParamName> = out
@@ -386,7 +387,7 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
             .unwrap()
     };
     #[allow(clippy::type_complexity)]
-    let key = |ps: Vec<Profile>| -> Vec<(Vec<(f64, f64)>, [End; 2], [End; 2])> {
+    let key = |ps: Vec<Profile<ParamName>>| -> Vec<(Vec<(f64, f64)>, [End; 2], [End; 2])> {
         ps.into_iter()
             .map(|p| (p.points, p.end_68, p.end_95))
             .collect()

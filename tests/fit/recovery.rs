@@ -3,10 +3,10 @@
 //! never from the truth — and every free parameter must come back.
 
 use crate::support;
-use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::fit::{fit, MarschnerOutcome};
+use hairfit::families::marschner::parameters::{is_angle, report_factor};
 use hairfit::families::marschner::{ParamName, Params};
-use hairfit::fit::bounds::{is_angle, report_factor};
-use hairfit::fit::{EffectsChoice, FitOptions, FitOutcome};
+use hairfit::fit::{EffectsChoice, FitOptions};
 
 /// Default options, every effect on (the data is synthesised with every effect on).
 fn options() -> FitOptions {
@@ -16,7 +16,7 @@ fn options() -> FitOptions {
     }
 }
 
-fn run(truth: &Params<f64>, geometry: usize, noise: f64, seed: u64) -> (String, FitOutcome) {
+fn run(truth: &Params<f64>, geometry: usize, noise: f64, seed: u64) -> (String, MarschnerOutcome) {
     let (name, angles) = support::fit::geometry(geometry, seed);
     let data = support::fit::data(truth, &angles, noise, seed);
     let out = fit(&data, name, Default::default(), &options()).expect("fit runs");
@@ -24,7 +24,7 @@ fn run(truth: &Params<f64>, geometry: usize, noise: f64, seed: u64) -> (String, 
 }
 
 /// Value and standard error of `p` in reporting units (degrees for angles).
-fn reported(out: &FitOutcome, p: ParamName) -> (f64, Option<f64>, String) {
+fn reported(out: &MarschnerOutcome, p: ParamName) -> (f64, Option<f64>, String) {
     let e = out
         .json
         .parameters
@@ -34,7 +34,7 @@ fn reported(out: &FitOutcome, p: ParamName) -> (f64, Option<f64>, String) {
     (e.value.expect("finite"), e.std_error, e.status.to_string())
 }
 
-fn free(out: &FitOutcome) -> Vec<ParamName> {
+fn free(out: &MarschnerOutcome) -> Vec<ParamName> {
     let nc = out.json.data.channels.len();
     hairfit::families::marschner::parameters::all_parameters(nc)
         .into_iter()

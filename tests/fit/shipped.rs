@@ -2,13 +2,13 @@
 //! through the loader exactly as `hairfit fit` reads them.
 
 use hairfit::data::{load, LoadOptions};
-use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::fit::{fit, MarschnerOutcome};
 use hairfit::families::marschner::parameters::all_parameters;
+use hairfit::families::marschner::parameters::report_factor;
 use hairfit::families::marschner::params::ParamFile;
-use hairfit::fit::bounds::report_factor;
-use hairfit::fit::{fit_data, FitOptions, FitOutcome};
+use hairfit::fit::{fit_data, FitOptions};
 
-fn fit_file(name: &str, opts: &FitOptions) -> (FitOutcome, ParamFile) {
+fn fit_file(name: &str, opts: &FitOptions) -> (MarschnerOutcome, ParamFile) {
     let root = env!("CARGO_MANIFEST_DIR");
     let (ds, _) = load(
         format!("{root}/data/{name}.csv").as_ref(),
@@ -25,7 +25,10 @@ fn fit_file(name: &str, opts: &FitOptions) -> (FitOutcome, ParamFile) {
 }
 
 /// (name, fitted, std error, status, truth) for every non-fixed parameter.
-fn compare(out: &FitOutcome, truth: &ParamFile) -> Vec<(String, f64, Option<f64>, String, f64)> {
+fn compare(
+    out: &MarschnerOutcome,
+    truth: &ParamFile,
+) -> Vec<(String, f64, Option<f64>, String, f64)> {
     let t = truth.to_params();
     all_parameters(out.json.data.channels.len())
         .into_iter()

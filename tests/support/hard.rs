@@ -9,8 +9,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output};
 use std::time::Duration;
 
+use hairfit::families::marschner::fit::forward::fit_bound;
 use hairfit::families::marschner::parameters::all_parameters;
-use hairfit::fit::bounds::{report_factor, Bound};
+use hairfit::families::marschner::parameters::report_factor;
+use hairfit::fit::bounds::Bound;
 use hairfit::fit::problem::FitData;
 
 pub use super::cli;
@@ -129,7 +131,7 @@ pub fn check_fit_dir(dir: &Path, what: &str) -> serde_json::Value {
     fit
 }
 
-/// Every `parameters[].value` of fit.json inside `Bound::of` (reporting units converted back).
+/// Every `parameters[].value` of fit.json inside `fit_bound` (reporting units converted back).
 pub fn assert_params_in_bounds(fit: &serde_json::Value, what: &str) {
     let nc = fit["data"]["channels"].as_array().map_or(1, |a| a.len());
     let names = all_parameters(nc);
@@ -148,12 +150,12 @@ pub fn assert_params_in_bounds(fit: &serde_json::Value, what: &str) {
         let x = v / report_factor(p);
         // The degree → radian round trip of the report moves a value by ≤ 2 ulps: 1e-12 relative.
         let slack = 1e-12 * x.abs().max(1e-300);
-        let inside = match Bound::of(p) {
+        let inside = match fit_bound(p) {
             Bound::Free => x.is_finite(),
             Bound::Lower(lo) => x >= lo - slack,
             Bound::Both(lo, hi) => x >= lo - slack && x <= hi + slack,
         };
-        assert!(inside, "{what}: {name} = {v} outside {:?}", Bound::of(p));
+        assert!(inside, "{what}: {name} = {v} outside {:?}", fit_bound(p));
     }
 }
 

@@ -308,6 +308,27 @@ fn expand(names: impl Iterator<Item = ParamName>, n_channels: usize) -> Vec<Para
     out
 }
 
+/// MODEL.md's typical range of `name` in natural units (radians for angles): the start design box.
+pub fn typical_range(name: ParamName) -> (f64, f64) {
+    name.fact().typical_range()
+}
+
+/// True for parameters stored in radians and reported in degrees.
+pub fn is_angle(name: ParamName) -> bool {
+    name.fact().unit == Unit::Degrees
+}
+
+/// Factor from natural units to reporting units (degrees for angles).
+pub fn report_factor(name: ParamName) -> f64 {
+    name.fact().unit.file_factor()
+}
+
+/// The table's reference values (defaults, else mid typical range): a neutral parameter set with
+/// `n_channels` channels, the value of every parameter a fit does not vary.
+pub fn reference_params(n_channels: usize) -> super::Params<f64> {
+    super::Params::from_fn(n_channels, |name| name.fact().reference_value())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -22,16 +22,16 @@ impl FitParam for ParamName {
         p.set(self, value)
     }
     fn bound(self) -> Bound {
-        Bound::of(self)
+        fit_bound(self)
     }
     fn json_name(self) -> String {
         ParamName::json_name(&self)
     }
     fn report_factor(self) -> f64 {
-        crate::fit::bounds::report_factor(self)
+        crate::families::marschner::parameters::report_factor(self)
     }
     fn typical_range(self) -> (f64, f64) {
-        crate::fit::bounds::typical_range(self)
+        crate::families::marschner::parameters::typical_range(self)
     }
     fn check_domain(self, report_value: f64) -> std::result::Result<(), String> {
         self.fact().check(report_value)
@@ -202,5 +202,13 @@ fn dual_pass<D: Dim>(
         out[r] = v.re;
         let e = v.eps.unwrap_generic(dim, U1);
         grad[r * nw..(r + 1) * nw].copy_from_slice(e.as_slice());
+    }
+}
+
+/// The fit bounds of `name` in the parameter table (natural units, radians).
+pub fn fit_bound(name: ParamName) -> Bound {
+    match name.fact().fit_bounds() {
+        (lo, Some(hi)) => Bound::Both(lo, hi),
+        (lo, None) => Bound::Lower(lo),
     }
 }

@@ -3,22 +3,24 @@
 //! handed to the shared stages ([`crate::fit::fit_with`]) — and its model as the fit evaluates
 //! it ([`forward`]).
 
+pub mod auto;
+pub mod diagnostics;
 pub mod forward;
 
 use crate::error::Result;
 use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::all_parameters;
-use crate::families::marschner::parameters::fitted_parameters;
+use crate::families::marschner::parameters::{fitted_parameters, reference_params};
 use crate::families::marschner::params::ParamFile;
 use crate::families::marschner::{Effects, ParamName, Params};
 use crate::families::FamilyParams;
 use crate::files::LoadReport;
-use crate::fit::bounds;
 use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
-use crate::fit::{
-    diagnostics, fit_with, require_samples, stages, FitData, FitOptions, FitOutcome, FitRun,
-};
+use crate::fit::{fit_with, require_samples, stages, FitData, FitOptions, FitOutcome, FitRun};
+
+/// A Marschner fit's outcome, its parameters as the model's own set.
+pub type MarschnerOutcome = FitOutcome<Params<f64>>;
 
 /// The Marschner 2003 family (MODEL.md).
 pub struct Marschner;
@@ -45,11 +47,11 @@ pub fn fit(
     file: &str,
     load_report: LoadReport,
     opts: &FitOptions,
-) -> Result<FitOutcome> {
+) -> Result<MarschnerOutcome> {
     let input = FitInput::new(data, file, load_report, opts);
     let nc = require_samples(data, file)?;
     let mut warnings = Vec::new();
-    let choice = stages::choose_model(data, opts);
+    let choice = auto::choose_model(data, opts);
     let forward = MarschnerForward {
         config: choice.config,
         measurement: opts.measurement,
@@ -91,7 +93,7 @@ fn free_set(
 ) -> Result<FreeSet<ParamName>> {
     Ok(FreeSet::new(
         Marschner::parse_fixes(&opts.fix, nc)?,
-        bounds::reference_params(nc),
+        reference_params(nc),
         fitted_parameters(effects, nc, opts.free_eta),
         fitted_parameters(&Effects::default(), nc, opts.free_eta),
         "the effects in play do not depend on it; see options.effects_reasons",

@@ -4,13 +4,16 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::bounds::reference_params;
-use super::design::subsample;
-use super::problem::FitData;
 use crate::families::marschner::eccentricity::cos_2phi_h_spread;
+use crate::families::marschner::parameters::reference_params;
 use crate::families::marschner::{
     scattering, scattering_by_lobe, Effects, Lobes, ModelConfig, RootMode,
 };
+use crate::files::EffectsSource;
+use crate::fit::design::subsample;
+use crate::fit::problem::FitData;
+use crate::fit::stages::ModelChoice;
+use crate::fit::{EffectsChoice, FitOptions};
 
 /// A contribution counts as measurable above this fraction of S: 1%, the scale of typical
 /// measurement noise (2% in the demo) and well above rounding.
@@ -177,4 +180,31 @@ pub fn choose_effects(data: &FitData, mode: RootMode) -> AutoChoice {
         reasons.push("eccentricity off: TRT is off".into());
     }
     AutoChoice { effects, reasons }
+}
+/// Effects: from the data's geometry (`auto`), all, or as given.
+pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
+    let (effects, effects_choice, reasons) = match opts.effects {
+        EffectsChoice::Auto => {
+            let c = choose_effects(data, opts.mode);
+            (c.effects, EffectsSource::Auto, c.reasons)
+        }
+        EffectsChoice::All => (
+            Effects::default(),
+            EffectsSource::All,
+            vec!["--effects all".into()],
+        ),
+        EffectsChoice::Explicit(e) => (
+            e,
+            EffectsSource::Explicit,
+            vec!["--lobes/--no-glints/--no-eccentricity".into()],
+        ),
+    };
+    ModelChoice {
+        config: ModelConfig {
+            mode: opts.mode,
+            effects,
+        },
+        effects_choice,
+        reasons,
+    }
 }
