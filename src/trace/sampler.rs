@@ -375,6 +375,22 @@ impl Sampler {
     ) -> V3 {
         let sees = |m: V3| if outside { -dot(d, m) } else { dot(d, m) };
         if self.rough {
+            // Rejection against the cosine c = ±d·m over a bound B ≥ c, tested on the facet
+            // before normalising (c·√(1 + s_l² + s_a²) = ±d·(its unnormalised normal) = c_u):
+            // accept when c_u > 0 and ξ²·(1 + s_l² + s_a²)·B² < c_u². Without azimuthal
+            // roughness every facet lies in the plane of u and ng, where the cosine is at most
+            // B = |d's projection on that plane| = √(d_u² + (d·ng)²) (Cauchy–Schwarz); else B = 1.
+            let sign = if outside { -1.0 } else { 1.0 };
+            let (du, dn, dt) = (
+                sign * d[0],
+                sign * (d[1] * ng[1] + d[2] * ng[2]),
+                sign * (d[2] * ng[1] - d[1] * ng[2]),
+            );
+            let bound2 = if self.slope_sd_az == 0.0 {
+                du * du + dn * dn
+            } else {
+                1.0
+            };
             for _ in 0..NORMAL_TRIES {
                 let x1 = normal(rng);
                 let x2 = if self.slope_sd_az == 0.0 {
@@ -382,10 +398,14 @@ impl Sampler {
                 } else {
                     normal(rng)
                 };
-                let m = facet(ng, self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
-                let c = sees(m);
-                if c > 0.0 && uniform(rng) < c {
-                    return m;
+                let (s_l, s_a) = (self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
+                // ±d · (s_l, ng_v − s_a·ng_w, ng_w + s_a·ng_v).
+                let c = du * s_l + dn + s_a * dt;
+                if c > 0.0 {
+                    let x = uniform(rng);
+                    if x * x * (1.0 + s_l * s_l + s_a * s_a) * bound2 < c * c {
+                        return facet(ng, s_l, s_a);
+                    }
                 }
             }
             balance.fallbacks += 1;
