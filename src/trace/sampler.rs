@@ -52,6 +52,14 @@ impl Balance {
     }
 }
 
+/// `a += b` over the first `nc` channels (the rest are 0 in every weight the sampler makes).
+#[inline]
+fn add_n(a: &mut Weights, b: &Weights, nc: usize) {
+    for (x, y) in a[..nc].iter_mut().zip(&b[..nc]) {
+        *x += y;
+    }
+}
+
 fn add_w(a: &mut Weights, b: &Weights) {
     for (x, y) in a.iter_mut().zip(b) {
         *x += y;
@@ -234,7 +242,7 @@ impl Sampler {
                 }
                 if !l.ok[k] {
                     l.active[k] = false;
-                    add_w(&mut balance.inside, &l.w[k]);
+                    add_n(&mut balance.inside, &l.w[k], nc);
                     continue;
                 }
                 let len = l.len[k];
@@ -280,7 +288,7 @@ impl Sampler {
                     let out = keep_side(out, ng, true, balance);
                     let mut we = l.w[k];
                     we[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
-                    add_w(&mut balance.tallied[seg.min(ORDERS - 1)], &we);
+                    add_n(&mut balance.tallied[seg.min(ORDERS - 1)], &we, nc);
                     exit(seg, out, &we);
                     l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
                 }
@@ -289,7 +297,7 @@ impl Sampler {
                 [l.du[k], l.dv[k], l.dw[k]] = d;
                 if seg >= max_seg || l.w[k][..nc].iter().all(|&x| x < WEIGHT_CUTOFF) {
                     l.active[k] = false;
-                    add_w(&mut balance.inside, &l.w[k]);
+                    add_n(&mut balance.inside, &l.w[k], nc);
                 }
                 l.seg[k] = seg + 1;
             }
@@ -326,7 +334,7 @@ impl Sampler {
         let Some(t) = section.entry(p0, [d[1], d[2]]) else {
             // Rounding at the very edge: a grazing hit, where the reflectance is 1.
             balance.grazing += 1;
-            add_w(&mut balance.tallied[0], &w);
+            add_n(&mut balance.tallied[0], &w, nc);
             exit(0, d, &w);
             return;
         };
@@ -338,7 +346,7 @@ impl Sampler {
         let r = keep_side(reflect(d, m), ng, true, balance);
         let mut wr = w;
         wr[..nc].iter_mut().for_each(|x| *x *= f);
-        add_w(&mut balance.tallied[0], &wr);
+        add_n(&mut balance.tallied[0], &wr, nc);
         exit(0, r, &wr);
         // From outside the reflectance is below 1 (no total internal reflection there).
         w[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
