@@ -127,15 +127,16 @@ pub fn run(
             let mut bal = Balance::default();
             let n = batch_rays(setup.rays, b);
             const TICK: u64 = 1 << 14;
-            for k in 0..n {
-                sampler.trace(omega_i, &mut rng, &mut bal, &mut |order, d, w| {
+            // Chunks of TICK rays (the lanes drain at each chunk's end), then the rest.
+            let mut left = n;
+            while left > 0 {
+                let m = left.min(TICK);
+                sampler.trace_batch(omega_i, m, &mut rng, &mut bal, &mut |order, d, w| {
                     det.visit(d, |s| col.add(s, order, w));
                 });
-                if (k + 1) % TICK == 0 {
-                    progress(done.fetch_add(TICK, Ordering::Relaxed) + TICK);
-                }
+                left -= m;
+                progress(done.fetch_add(m, Ordering::Relaxed) + m);
             }
-            progress(done.fetch_add(n % TICK, Ordering::Relaxed) + n % TICK);
             (col, bal)
         })
         .collect();

@@ -52,6 +52,14 @@ impl Balance {
     }
 }
 
+/// `a += b` over the first `nc` channels (the rest are 0 in every weight the sampler makes).
+#[inline]
+fn add_n(a: &mut Weights, b: &Weights, nc: usize) {
+    for (x, y) in a[..nc].iter_mut().zip(&b[..nc]) {
+        *x += y;
+    }
+}
+
 fn add_w(a: &mut Weights, b: &Weights) {
     for (x, y) in a.iter_mut().zip(b) {
         *x += y;
@@ -88,18 +96,11 @@ impl Sampler {
         self.nc
     }
 
-    /// Trace one ray arriving from direction `omega_i` (unit, toward the light): its rotation
-    /// and its offset uniform over the projected width are drawn from `rng`.
-    pub fn trace(
-        &self,
-        omega_i: V3,
-        rng: &mut impl RngCore,
-        balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
-    ) {
-        let d = [-omega_i[0], -omega_i[1], -omega_i[2]];
-        let len = d[1].hypot(d[2]);
-        let dir = [d[1] / len, d[2] / len];
+    /// Draw one ray of the beam from `omega_i`: the section it meets (its rotation, when the
+    /// fibre has none, weighted by the width it presents) and its offset `h` ∈ [−1, 1].
+    fn draw_ray(&self, omega_i: V3, rng: &mut impl RngCore) -> (Section, f64) {
+        let len = omega_i[1].hypot(omega_i[2]);
+        let dir = [-omega_i[1] / len, -omega_i[2] / len];
         let section = match self.fiber.rotation {
             Some(psi) => Section::new(self.fiber.eccentricity, psi),
             None if self.fiber.eccentricity == 1.0 => Section::new(1.0, 0.0),
@@ -113,7 +114,46 @@ impl Sampler {
             },
         };
         let h = 2.0 * uniform(rng) - 1.0;
+        (section, h)
+    }
+
+    /// Trace one ray arriving from direction `omega_i` (unit, toward the light): its rotation
+    /// and its offset uniform over the projected width are drawn from `rng`.
+    pub fn trace(
+        &self,
+        omega_i: V3,
+        rng: &mut impl RngCore,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
+        let (section, h) = self.draw_ray(omega_i, rng);
         self.trace_at(&section, omega_i, h, rng, balance, exit);
+    }
+
+    /// Trace `n` rays from `omega_i` as [`trace`](Self::trace) draws them, [`LANES`] at a
+    /// time: the same paths and estimator, but the draws of different rays interleave in
+    /// `rng`'s stream (deterministically: the lanes advance in a fixed order).
+    pub fn trace_batch(
+        &self,
+        omega_i: V3,
+        n: u64,
+        rng: &mut impl RngCore,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
+        let mut left = n;
+        self.trace_lanes(
+            omega_i,
+            &mut |rng| {
+                (left > 0).then(|| {
+                    left -= 1;
+                    self.draw_ray(omega_i, rng)
+                })
+            },
+            rng,
+            balance,
+            exit,
+        );
     }
 
     /// Trace the ray from `omega_i` that meets `section` at offset `h` ∈ [−1, 1] of its
@@ -129,9 +169,159 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
+        let mut one = Some((*section, h));
+        self.trace_lanes(omega_i, &mut |_| one.take(), rng, balance, exit);
+    }
+
+    /// The rays `source` gives (it draws from the generator it is passed, or not), followed
+    /// [`LANES`] at a time in lock step: a lane that finishes takes the next ray, in lane
+    /// order. The arithmetic of one internal interface runs over all lanes in loops without
+    /// branches (independent rays: the divisions, square roots and the Fresnel terms of
+    /// different lanes overlap, and the compiler vectorises them); the draws, the exits and
+    /// the bookkeeping run lane by lane.
+    fn trace_lanes<R: RngCore>(
+        &self,
+        omega_i: V3,
+        source: &mut impl FnMut(&mut R) -> Option<(Section, f64)>,
+        rng: &mut R,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
         let nc = self.nc;
         let eta = self.fiber.eta;
-        let mut d = [-omega_i[0], -omega_i[1], -omega_i[2]];
+        let sigma_a = &self.fiber.sigma_a[..nc];
+        let max_seg = self.fiber.max_segments as usize;
+        let mut lanes = Lanes::default();
+        let mut exhausted = false;
+        loop {
+            // Refill, in lane order.
+            let mut any = false;
+            for k in 0..LANES {
+                while !lanes.active[k] && !exhausted {
+                    match source(rng) {
+                        Some((section, h)) => {
+                            self.enter(&mut lanes, k, &section, omega_i, h, rng, balance, exit)
+                        }
+                        None => exhausted = true,
+                    }
+                }
+                any |= lanes.active[k];
+            }
+            if !any {
+                break;
+            }
+            let l = &mut lanes;
+            // The chord to the boundary's other side (the quadratic's second root, its first
+            // is 0), the point there and the geometric normal, all lanes.
+            for k in 0..LANES {
+                let (c, s, ia2) = (l.c[k], l.s[k], l.ia2[k]);
+                let (px, py) = (c * l.pv[k] + s * l.pw[k], c * l.pw[k] - s * l.pv[k]);
+                let (dx, dy) = (c * l.dv[k] + s * l.dw[k], c * l.dw[k] - s * l.dv[k]);
+                let qa = dx * dx + dy * dy * ia2;
+                let qb = 2.0 * (px * dx + py * dy * ia2);
+                let t = -qb / qa;
+                // Along the axis (no chord): it never leaves.
+                let ok = qa > 0.0 && t.is_finite() && t > 0.0;
+                l.ok[k] = ok;
+                let t = if ok { t } else { 0.0 };
+                l.len[k] = t;
+                let (pv, pw) = (l.pv[k] + t * l.dv[k], l.pw[k] + t * l.dw[k]);
+                l.pv[k] = pv;
+                l.pw[k] = pw;
+                let g0 = c * pv + s * pw;
+                let g1 = (c * pw - s * pv) * ia2;
+                let inv = 1.0 / (g0 * g0 + g1 * g1).sqrt();
+                let (g0, g1) = (g0 * inv, g1 * inv);
+                l.nv[k] = c * g0 - s * g1;
+                l.nw[k] = s * g0 + c * g1;
+            }
+            // Absorption along the chord and the shading normal, lane by lane.
+            for k in 0..LANES {
+                if !l.active[k] {
+                    continue;
+                }
+                if !l.ok[k] {
+                    l.active[k] = false;
+                    add_n(&mut balance.inside, &l.w[k], nc);
+                    continue;
+                }
+                let len = l.len[k];
+                for ((w, sigma_a), absorbed) in l.w[k][..nc]
+                    .iter_mut()
+                    .zip(sigma_a)
+                    .zip(balance.absorbed.iter_mut())
+                {
+                    let kept = *w * (-sigma_a * len).exp();
+                    *absorbed += *w - kept;
+                    *w = kept;
+                }
+                let ng = [0.0, l.nv[k], l.nw[k]];
+                let m = self.shading_normal(ng, [l.du[k], l.dv[k], l.dw[k]], false, rng, balance);
+                l.mu[k] = m[0];
+                l.mv[k] = m[1];
+                l.mw[k] = m[2];
+            }
+            // Fresnel from inside, the refracted and the reflected directions, all lanes.
+            for k in 0..LANES {
+                let d = [l.du[k], l.dv[k], l.dw[k]];
+                let m = [l.mu[k], l.mv[k], l.mw[k]];
+                let cos_i = dot(d, m);
+                let (f, cos_t) = fresnel_lane(cos_i, eta);
+                l.f[k] = f;
+                // refract(d, −m, η, cos_i, cos_t) and reflect(d, m), written out.
+                let a = eta * cos_i - cos_t;
+                for j in 0..3 {
+                    l.out[j][k] = d[j] * eta - m[j] * a;
+                    l.refl[j][k] = d[j] - 2.0 * cos_i * m[j];
+                }
+            }
+            // Exits and the next segment, lane by lane.
+            for k in 0..LANES {
+                if !l.active[k] {
+                    continue;
+                }
+                let ng = [0.0, l.nv[k], l.nw[k]];
+                let f = l.f[k];
+                let seg = l.seg[k];
+                if f < 1.0 {
+                    let out = [l.out[0][k], l.out[1][k], l.out[2][k]];
+                    let out = keep_side(out, ng, true, balance);
+                    let mut we = l.w[k];
+                    we[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
+                    add_n(&mut balance.tallied[seg.min(ORDERS - 1)], &we, nc);
+                    exit(seg, out, &we);
+                    l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
+                }
+                let r = [l.refl[0][k], l.refl[1][k], l.refl[2][k]];
+                let d = keep_side(r, ng, false, balance);
+                [l.du[k], l.dv[k], l.dw[k]] = d;
+                if seg >= max_seg || l.w[k][..nc].iter().all(|&x| x < WEIGHT_CUTOFF) {
+                    l.active[k] = false;
+                    add_n(&mut balance.inside, &l.w[k], nc);
+                }
+                l.seg[k] = seg + 1;
+            }
+        }
+    }
+
+    /// The ray from `omega_i` at offset `h` of `section`'s half-width meets the surface: R
+    /// leaves, the rest is refracted into lane `k`, which becomes active (a ray that misses by
+    /// rounding at the very edge leaves whole as grazing R instead).
+    #[allow(clippy::too_many_arguments)]
+    fn enter(
+        &self,
+        l: &mut Lanes,
+        k: usize,
+        section: &Section,
+        omega_i: V3,
+        h: f64,
+        rng: &mut impl RngCore,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
+        let nc = self.nc;
+        let eta = self.fiber.eta;
+        let d = [-omega_i[0], -omega_i[1], -omega_i[2]];
         let len = d[1].hypot(d[2]);
         let dir = [d[1] / len, d[2] / len];
         let offset = h * section.half_width(dir);
@@ -144,11 +334,11 @@ impl Sampler {
         let Some(t) = section.entry(p0, [d[1], d[2]]) else {
             // Rounding at the very edge: a grazing hit, where the reflectance is 1.
             balance.grazing += 1;
-            add_w(&mut balance.tallied[0], &w);
+            add_n(&mut balance.tallied[0], &w, nc);
             exit(0, d, &w);
             return;
         };
-        let mut p = [p0[0] + t * d[1], p0[1] + t * d[2]];
+        let p = [p0[0] + t * d[1], p0[1] + t * d[2]];
         let ng = self.geometric_normal(section, p);
         let m = self.shading_normal(ng, d, true, rng, balance);
         let cos_i = -dot(d, m);
@@ -156,45 +346,19 @@ impl Sampler {
         let r = keep_side(reflect(d, m), ng, true, balance);
         let mut wr = w;
         wr[..nc].iter_mut().for_each(|x| *x *= f);
-        add_w(&mut balance.tallied[0], &wr);
+        add_n(&mut balance.tallied[0], &wr, nc);
         exit(0, r, &wr);
         // From outside the reflectance is below 1 (no total internal reflection there).
         w[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
-        d = keep_side(refract(d, m, 1.0 / eta, cos_i, cos_t), ng, false, balance);
-
-        for seg in 1..=self.fiber.max_segments as usize {
-            let Some(l) = section.chord(p, [d[1], d[2]]) else {
-                break; // along the axis: it never leaves
-            };
-            for ((w, sigma_a), absorbed) in w[..nc]
-                .iter_mut()
-                .zip(&self.fiber.sigma_a)
-                .zip(balance.absorbed.iter_mut())
-            {
-                let kept = *w * (-sigma_a * l).exp();
-                *absorbed += *w - kept;
-                *w = kept;
-            }
-            p = [p[0] + l * d[1], p[1] + l * d[2]];
-            let ng = self.geometric_normal(section, p);
-            let m = self.shading_normal(ng, d, false, rng, balance);
-            let cos_i = dot(d, m);
-            let (f, cos_t) = fresnel(cos_i, eta, 1.0);
-            if f < 1.0 {
-                let out = refract(d, [-m[0], -m[1], -m[2]], eta, cos_i, cos_t);
-                let out = keep_side(out, ng, true, balance);
-                let mut we = w;
-                we[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
-                add_w(&mut balance.tallied[seg.min(ORDERS - 1)], &we);
-                exit(seg, out, &we);
-                w[..nc].iter_mut().for_each(|x| *x *= f);
-            }
-            d = keep_side(reflect(d, m), ng, false, balance);
-            if w[..nc].iter().all(|&x| x < WEIGHT_CUTOFF) {
-                break;
-            }
-        }
-        add_w(&mut balance.inside, &w);
+        let d = keep_side(refract(d, m, 1.0 / eta, cos_i, cos_t), ng, false, balance);
+        l.active[k] = true;
+        l.c[k] = section.c;
+        l.s[k] = section.s;
+        l.ia2[k] = section.ia2;
+        [l.pv[k], l.pw[k]] = p;
+        [l.du[k], l.dv[k], l.dw[k]] = d;
+        l.w[k] = w;
+        l.seg[k] = 1;
     }
 
     fn geometric_normal(&self, section: &Section, p: [f64; 2]) -> V3 {
@@ -208,6 +372,7 @@ impl Sampler {
     /// `s_a = tan β_φ·ξ₂` (ξ standard normal by [`normal`], fresh at every interface), drawn among the facets
     /// `d` can see with probability proportional to the cosine it sees them at (a facet's
     /// projected area).
+    #[inline]
     fn shading_normal(
         &self,
         ng: V3,
@@ -218,6 +383,22 @@ impl Sampler {
     ) -> V3 {
         let sees = |m: V3| if outside { -dot(d, m) } else { dot(d, m) };
         if self.rough {
+            // Rejection against the cosine c = ±d·m over a bound B ≥ c, tested on the facet
+            // before normalising (c·√(1 + s_l² + s_a²) = ±d·(its unnormalised normal) = c_u):
+            // accept when c_u > 0 and ξ²·(1 + s_l² + s_a²)·B² < c_u². Without azimuthal
+            // roughness every facet lies in the plane of u and ng, where the cosine is at most
+            // B = |d's projection on that plane| = √(d_u² + (d·ng)²) (Cauchy–Schwarz); else B = 1.
+            let sign = if outside { -1.0 } else { 1.0 };
+            let (du, dn, dt) = (
+                sign * d[0],
+                sign * (d[1] * ng[1] + d[2] * ng[2]),
+                sign * (d[2] * ng[1] - d[1] * ng[2]),
+            );
+            let bound2 = if self.slope_sd_az == 0.0 {
+                du * du + dn * dn
+            } else {
+                1.0
+            };
             for _ in 0..NORMAL_TRIES {
                 let x1 = normal(rng);
                 let x2 = if self.slope_sd_az == 0.0 {
@@ -225,10 +406,14 @@ impl Sampler {
                 } else {
                     normal(rng)
                 };
-                let m = facet(ng, self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
-                let c = sees(m);
-                if c > 0.0 && uniform(rng) < c {
-                    return m;
+                let (s_l, s_a) = (self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
+                // ±d · (s_l, ng_v − s_a·ng_w, ng_w + s_a·ng_v).
+                let c = du * s_l + dn + s_a * dt;
+                if c > 0.0 {
+                    let x = uniform(rng);
+                    if x * x * (1.0 + s_l * s_l + s_a * s_a) * bound2 < c * c {
+                        return facet(ng, s_l, s_a);
+                    }
                 }
             }
             balance.fallbacks += 1;
@@ -241,6 +426,57 @@ impl Sampler {
             balance.fallbacks += 1;
         }
         ng
+    }
+}
+
+/// Rays traced at once by [`Sampler::trace_batch`].
+pub const LANES: usize = 8;
+
+/// The state of [`LANES`] rays inside the fibre, one array per quantity (the lanes' loops
+/// vectorise over them). An inactive lane's values are stale and never read as results.
+#[derive(Default)]
+struct Lanes {
+    active: [bool; LANES],
+    /// The lane's section: cos ψ, sin ψ, 1/a².
+    c: [f64; LANES],
+    s: [f64; LANES],
+    ia2: [f64; LANES],
+    /// Point on the boundary, direction, weights, the segment being followed.
+    pv: [f64; LANES],
+    pw: [f64; LANES],
+    du: [f64; LANES],
+    dv: [f64; LANES],
+    dw: [f64; LANES],
+    w: [Weights; LANES],
+    seg: [usize; LANES],
+    /// Per step: chord found, its length, geometric normal, shading normal, reflectance,
+    /// refracted and reflected directions.
+    ok: [bool; LANES],
+    len: [f64; LANES],
+    nv: [f64; LANES],
+    nw: [f64; LANES],
+    mu: [f64; LANES],
+    mv: [f64; LANES],
+    mw: [f64; LANES],
+    f: [f64; LANES],
+    out: [[f64; LANES]; 3],
+    refl: [[f64; LANES]; 3],
+}
+
+/// [`fresnel`] from inside a medium of index `eta` into air, without branches: the same
+/// reflectance and refracted cosine (1 and 0 under total internal reflection).
+#[inline]
+fn fresnel_lane(cos_i: f64, eta: f64) -> (f64, f64) {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    let tir = sin2_t >= 1.0;
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let f = (rs * rs + rp * rp) / 2.0;
+    if tir {
+        (1.0, 0.0)
+    } else {
+        (f, cos_t)
     }
 }
 

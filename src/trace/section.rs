@@ -7,10 +7,11 @@ pub struct Section {
     /// Minor semi-axis (the major is 1).
     a: f64,
     /// 1/a².
-    ia2: f64,
-    /// cos ψ, sin ψ of the major axis' angle from `v`.
-    c: f64,
-    s: f64,
+    pub(super) ia2: f64,
+    /// cos ψ, sin ψ of the major axis' angle from `v` (exactly 1 and 0 for a circle, so the
+    /// sampler's lanes can use the ellipse's formulas for both).
+    pub(super) c: f64,
+    pub(super) s: f64,
 }
 
 impl Section {
