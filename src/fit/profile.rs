@@ -18,13 +18,11 @@
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use argmin::core::{Executor, State};
-use nalgebra::DVector;
 use rayon::prelude::*;
 
 use super::bounds::Bound;
-use super::problem::{Evaluator, FitData, FitParam, Forward, LsqProblem, ParamSet, Space};
-use super::solve::{is_cancelled, Cancellable, LocalRun};
+use super::problem::{Evaluator, FitData, FitParam, Forward, ParamSet, Space};
+use super::solve::{is_cancelled, run_lm, LocalRun};
 use super::Loss;
 use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
@@ -228,46 +226,18 @@ impl<F: Forward> Pinned<'_, '_, F> {
         }
     }
 
-    /// The fit's LM (Cancellable, as `solve::run_local`) with a relative cost tolerance of
-    /// [`SOLVE_CHI2_TOL`] χ² units: `(u, cost, iterations)`, never worse than the start (the
-    /// solver's best point, whose cost it has: no extra passes over the data for the start's
-    /// and the end's cost, which were two of a solve's ~eight).
+    /// The fit's LM runner ([`run_lm`]) with a relative cost tolerance of [`SOLVE_CHI2_TOL`] χ²
+    /// units and no linearisation at its last point: `(u, cost, iterations)`, never worse than
+    /// the start (the solver's best point, whose cost it has: no extra passes over the data for
+    /// the start's and the end's cost, which were two of a solve's ~eight).
     fn run(&self, u0: &[f64], max_iters: u64) -> (Vec<f64>, f64, u64) {
-        let ev = &self.ev;
-        let dof = self.opt.dof.max(1);
-        let ftol = (SOLVE_CHI2_TOL / dof as f64).clamp(super::solve::FTOL, 1e-4);
-        let solver = Cancellable {
-            inner: crate::lm::LevenbergMarquardt::new()
-                .with_tolerances(ftol, crate::lm::DEFAULT_XTOL, 0.0)
-                .unwrap_or_default()
-                .with_lazy_final_linearization(),
-            flag: self.opt.cancel.clone(),
-            dof,
-            costs: Vec::new(),
-        };
-        let result = Executor::new(
-            LsqProblem {
-                ev,
-                cancel: self.opt.cancel.clone(),
-            },
-            solver,
-        )
-        .configure(|s| s.param(DVector::from_column_slice(u0)).max_iters(max_iters))
-        .run();
-        let (u, cost, iterations) = match result {
-            Ok(res) => {
-                let st = &res.state;
-                let best = st.get_best_param().map(|p| p.as_slice().to_vec());
-                let cost = best
-                    .as_ref()
-                    .map(|_| st.get_best_cost())
-                    .filter(|c| c.is_finite());
-                (best.unwrap_or_else(|| u0.to_vec()), cost, st.get_iter())
-            }
-            Err(_) => (u0.to_vec(), None, 0),
-        };
-        let cost = cost.unwrap_or_else(|| ev.eval_internal(&u, false).cost());
-        (u, cost, iterations)
+        let ftol = (SOLVE_CHI2_TOL / self.opt.dof.max(1) as f64).clamp(super::solve::FTOL, 1e-4);
+        let solver = crate::lm::LevenbergMarquardt::new()
+            .with_tolerances(ftol, crate::lm::DEFAULT_XTOL, 0.0)
+            .unwrap_or_default()
+            .with_lazy_final_linearization();
+        let run = run_lm(&self.ev, u0, solver, max_iters, &self.opt.cancel, None);
+        (run.u, run.cost, run.iterations)
     }
 
     /// Bracket both thresholds on one side (`dir` = ±1) out to `hmax`; the points, ascending in

@@ -1,25 +1,18 @@
-//! Running the local solver through argmin's `Executor`: a cost-trace observer, a cancellation
-//! wrapper, and the multi-start driver (short runs on a subsample, then polish on all data).
-//!
-//! Cancellation: argmin's own `ctrlc` feature installs a process-wide handler per `Executor::run`
-//! and only the first installation wins, so with many executors running in parallel (multi-start)
-//! most runs would not see Ctrl-C. Instead the CLI installs one handler that sets a shared
-//! `AtomicBool`, and every run is wrapped in [`Cancellable`], whose `terminate` (the hook argmin
-//! gives a solver to decide when it stops) checks it.
+//! Running the fit's solvers through argmin's `Executor`: [`run_lm`], the one Levenberg–Marquardt
+//! runner of the multi-start, the polish and the profile re-fits, and the derivative-free global
+//! stages. Observers only watch (cost and parameter traces, the progress bar); the solver itself
+//! decides when to stop, cancellation (the CLI's Ctrl-C flag) and the stall test included.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{
-    Error as ArgminError, Executor, Problem, Solver, State, TerminationReason, TerminationStatus,
-    KV,
-};
+use argmin::core::{Error as ArgminError, Executor, State, TerminationReason, KV};
 use nalgebra::DVector;
 
 use super::problem::{Evaluator, Forward, LsqProblem};
-use crate::lm::LmState;
+use crate::lm::{LevenbergMarquardt, LmState};
 
 /// How a solver run ended (the same type as fit.json's `status`).
 pub use crate::files::FitStatus as RunStatus;
@@ -31,53 +24,6 @@ pub const STALL_WINDOW: usize = 20;
 /// ends LM's crawl along directions the data leave (nearly) flat, where its relative tolerances
 /// would exhaust the iteration limit instead.
 pub const STALL_CHI2: f64 = 1e-3;
-
-/// Wraps a solver so that a shared flag stops it at the next iteration boundary, and so that a
-/// statistically invisible crawl ([`STALL_CHI2`]) stops it as converged.
-pub struct Cancellable<S> {
-    pub inner: S,
-    pub flag: Option<Arc<AtomicBool>>,
-    /// Degrees of freedom of the residuals (0: no stall test).
-    pub dof: usize,
-    /// Cost after each step so far.
-    pub costs: Vec<f64>,
-}
-
-impl<O, S: Solver<O, LmState>> Solver<O, LmState> for Cancellable<S> {
-    fn name(&self) -> &str {
-        self.inner.name()
-    }
-    fn init(
-        &mut self,
-        problem: &mut Problem<O>,
-        state: LmState,
-    ) -> Result<(LmState, Option<KV>), ArgminError> {
-        self.inner.init(problem, state)
-    }
-    fn next_iter(
-        &mut self,
-        problem: &mut Problem<O>,
-        state: LmState,
-    ) -> Result<(LmState, Option<KV>), ArgminError> {
-        let out = self.inner.next_iter(problem, state)?;
-        self.costs.push(out.0.get_cost());
-        Ok(out)
-    }
-    fn terminate(&mut self, state: &LmState) -> TerminationStatus {
-        if is_cancelled(&self.flag) {
-            return TerminationStatus::Terminated(TerminationReason::Interrupt);
-        }
-        let k = self.costs.len();
-        if self.dof > 0 && k > STALL_WINDOW {
-            let (then, now) = (self.costs[k - 1 - STALL_WINDOW], self.costs[k - 1]);
-            // Δχ² = 2Δcost/s² with s² = 2·cost/dof.
-            if now > 0.0 && (then - now) * self.dof as f64 / now < STALL_CHI2 {
-                return TerminationStatus::Terminated(TerminationReason::SolverConverged);
-            }
-        }
-        self.inner.terminate(state)
-    }
-}
 
 /// True when the cancellation flag is set.
 pub fn is_cancelled(flag: &Option<Arc<AtomicBool>>) -> bool {
@@ -126,8 +72,8 @@ pub const PREDICTED_CHI2: f64 = 1e-3;
 
 /// The local least-squares solver: Moré–MINPACK Levenberg–Marquardt (`crate::lm`), for residuals
 /// with `dof` degrees of freedom (the statistical stop, [`PREDICTED_CHI2`], needs them).
-pub fn local_solver(dof: usize) -> crate::lm::LevenbergMarquardt {
-    crate::lm::LevenbergMarquardt::new()
+pub fn local_solver(dof: usize) -> LevenbergMarquardt {
+    LevenbergMarquardt::new()
         .with_tolerances(FTOL, crate::lm::DEFAULT_XTOL, 0.0)
         .and_then(|lm| lm.with_statistical_tolerance(dof, PREDICTED_CHI2))
         .unwrap_or_default()
@@ -161,22 +107,33 @@ impl Observe<LmState> for IterationMessage {
     }
 }
 
-/// Run the local solver from `u0` for at most `max_iters` iterations. A raised `cancel` stops it
-/// within one chunk of samples, with the best point reached so far.
+/// Run the fit's local solver ([`local_solver`]) from `u0` for at most `max_iters` iterations.
+/// A raised `cancel` stops it within one chunk of samples, with the best point reached so far.
 pub fn run_local<F: Forward>(
     ev: &Evaluator<'_, F>,
     u0: &[f64],
     max_iters: u64,
     cancel: &Option<Arc<AtomicBool>>,
 ) -> LocalRun {
-    run_local_with_progress(ev, u0, max_iters, cancel, None)
+    let solver = local_solver(residual_dof(ev));
+    run_lm(ev, u0, solver, max_iters, cancel, None)
 }
 
-/// [`run_local`], showing each iteration and its cost on `progress` (the polish on all data can
-/// take minutes on millions of samples).
-pub fn run_local_with_progress<F: Forward>(
+/// Degrees of freedom of `ev`'s residuals: samples less free parameters and channel scales.
+pub fn residual_dof<F: Forward>(ev: &Evaluator<'_, F>) -> usize {
+    ev.n_residuals()
+        .saturating_sub(ev.n_params() + ev.n_channels)
+}
+
+/// The fit's one LM runner: `solver` from `u0` for at most `max_iters` iterations, with the
+/// stall test ([`STALL_CHI2`]) and `cancel` added, each iteration shown on `progress` (the
+/// polish on all data can take minutes on millions of samples). A raised `cancel` stops it
+/// within one chunk of samples, with the best point reached so far; the point handed back is
+/// never worse than the start.
+pub fn run_lm<F: Forward>(
     ev: &Evaluator<'_, F>,
     u0: &[f64],
+    solver: LevenbergMarquardt,
     max_iters: u64,
     cancel: &Option<Arc<AtomicBool>>,
     progress: Option<&indicatif::ProgressBar>,
@@ -185,15 +142,10 @@ pub fn run_local_with_progress<F: Forward>(
     let full_cost = |u: &[f64]| ev.cost_internal(u, None).unwrap_or(f64::INFINITY);
     let history = Arc::new(Mutex::new(Vec::new()));
     let last = Arc::new(Mutex::new(None));
-    let dof = ev
-        .n_residuals()
-        .saturating_sub(ev.n_params() + ev.n_channels);
-    let solver = Cancellable {
-        inner: local_solver(dof),
-        flag: cancel.clone(),
-        dof,
-        costs: Vec::new(),
-    };
+    let solver = solver
+        .with_stall_test(residual_dof(ev), STALL_WINDOW, STALL_CHI2)
+        .expect("the stall test's constants are valid")
+        .with_cancel(cancel.clone());
     let problem = LsqProblem {
         ev,
         cancel: cancel.clone(),

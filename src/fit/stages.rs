@@ -264,8 +264,15 @@ pub fn polish<F: Forward>(
         if is_cancelled(&opts.cancel) && best.is_some() {
             break;
         }
-        let r =
-            solve::run_local_with_progress(ev_full, u0, opts.polish_iters, &opts.cancel, Some(bar));
+        let solver = solve::local_solver(solve::residual_dof(ev_full));
+        let r = solve::run_lm(
+            ev_full,
+            u0,
+            solver,
+            opts.polish_iters,
+            &opts.cancel,
+            Some(bar),
+        );
         iterations += r.iterations;
         bar.inc(1);
         if best.as_ref().is_none_or(|b| r.cost < b.cost) {

@@ -152,6 +152,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         self.diag = DVector::zeros(0);
         self.factor = None;
         self.status = None;
+        self.costs.clear();
         self.first_step = true;
         self.lambda = 0.0;
         self.rows = lin.rows;
@@ -307,6 +308,11 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             };
         }
 
+        self.costs.push(state.get_cost());
+        if self.status.is_none() && self.stalled() {
+            self.status = Some(LmTermination::Stalled);
+        }
+
         let kv = argmin::kv!(
             "cost" => state.get_cost();
             "lambda" => step.lambda;
@@ -320,12 +326,16 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
     }
 
     fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
+        if self.cancelled() {
+            return TerminationStatus::Terminated(TerminationReason::Interrupt);
+        }
         match self.status {
             Some(s) => TerminationStatus::Terminated(match s {
                 LmTermination::CostConverged
                 | LmTermination::StepConverged
                 | LmTermination::GradientConverged
                 | LmTermination::StatisticallyConverged
+                | LmTermination::Stalled
                 | LmTermination::ZeroResidual => TerminationReason::SolverConverged,
                 LmTermination::MachinePrecision => TerminationReason::SolverExit(s.text().into()),
             }),

@@ -18,6 +18,9 @@
 //! One argmin iteration is one trial step (one residual evaluation); a Jacobian is evaluated only
 //! after an accepted step. The state's cost is `½‖r‖²`.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
 use argmin::core::IterState;
 use nalgebra::{DMatrix, DVector};
 
@@ -65,6 +68,9 @@ pub enum LmTermination {
     /// The Gauss–Newton step from the current point predicts a χ² decrease below the statistical
     /// tolerance ([`LevenbergMarquardt::with_statistical_tolerance`]).
     StatisticallyConverged,
+    /// The cost fell by less than the stall test's χ² over its window of steps
+    /// ([`LevenbergMarquardt::with_stall_test`]).
+    Stalled,
 }
 
 impl LmTermination {
@@ -81,6 +87,7 @@ impl LmTermination {
             LmTermination::StatisticallyConverged => {
                 "the Gauss-Newton step predicts a chi-square decrease below tolerance"
             }
+            LmTermination::Stalled => "no statistically visible progress over the stall window",
         }
     }
 }
@@ -148,6 +155,19 @@ pub struct LevenbergMarquardt {
     chi2_tol: f64,
     /// Stop at an accepted step that meets the cost tolerance without linearising there.
     lazy_final: bool,
+    /// Stops the run at the next step once raised (Ctrl-C, a memory refusal).
+    cancel: Option<Arc<AtomicBool>>,
+    stall: Option<StallTest>,
+    /// The state's cost after each step of this run (the stall test's window).
+    costs: Vec<f64>,
+}
+
+/// Stop when `window` steps lowered χ² (with `dof` degrees of freedom) by less than `chi2`.
+#[derive(Debug, Clone, Copy)]
+struct StallTest {
+    dof: usize,
+    window: usize,
+    chi2: f64,
 }
 
 /// Default `xtol`: a few ulps above `f64::EPSILON`, so the solver iterates until its steps are
@@ -198,6 +218,9 @@ impl LevenbergMarquardt {
             dof: 0,
             chi2_tol: 0.0,
             lazy_final: false,
+            cancel: None,
+            stall: None,
+            costs: Vec::new(),
         }
     }
 
@@ -257,6 +280,50 @@ impl LevenbergMarquardt {
     pub fn with_lazy_final_linearization(mut self) -> Self {
         self.lazy_final = true;
         self
+    }
+
+    /// Also stop, as converged, once the last `window` steps together lowered `χ² = ‖r‖²/s²`
+    /// (`s² = ‖r‖²/dof`) by less than `chi2`: a statistically invisible crawl along directions
+    /// the data leave (nearly) flat, where the relative tolerances would exhaust the iteration
+    /// limit instead. `dof` 0 turns it off.
+    pub fn with_stall_test(mut self, dof: usize, window: usize, chi2: f64) -> Result<Self> {
+        let ok = chi2.is_finite() && chi2 >= 0.0 && window > 0;
+        check_option(
+            "stall chi2",
+            chi2,
+            ok,
+            "must be finite and >= 0, window > 0",
+        )?;
+        self.stall = (dof > 0).then_some(StallTest { dof, window, chi2 });
+        Ok(self)
+    }
+
+    /// Stop at the next step boundary once `flag` is raised; argmin reports the run as
+    /// interrupted. (argmin's own `ctrlc` feature installs one process-wide handler per run, and
+    /// only the first wins: runs in parallel would not all see it.)
+    pub fn with_cancel(mut self, flag: Option<Arc<AtomicBool>>) -> Self {
+        self.cancel = flag;
+        self
+    }
+
+    /// True when the run's cancellation flag is raised.
+    fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::SeqCst))
+    }
+
+    /// The stall test after the latest step.
+    fn stalled(&self) -> bool {
+        let (Some(t), k) = (self.stall, self.costs.len()) else {
+            return false;
+        };
+        if k <= t.window {
+            return false;
+        }
+        let (then, now) = (self.costs[k - 1 - t.window], self.costs[k - 1]);
+        // Δχ² = 2Δcost/s² with s² = 2·cost/dof.
+        now > 0.0 && (then - now) * t.dof as f64 / now < t.chi2
     }
 
     /// Why the last run stopped, if it converged (None while running or after max iterations).
