@@ -94,17 +94,8 @@ fn fit_data(py: Python<'_>, data: &Data, args: &FitArgs) -> PyResult<Fit> {
     let outcome = interruptible(py, |cancel| -> hairfit::Result<FitOutcome<FamilyParams>> {
         let opts = args.options(Some(cancel))?;
         let fit_data = into_fit_data(data.ds.clone());
-        let mut outcome = fit_family(&fit_data, &file, data.report.clone(), &opts)?;
-        if let Some((_, load_options)) = &data.source {
-            // What `fit_command` adds: the loader's settings, its warnings, its time.
-            outcome.json.options.load = Some(format!("{load_options:?}"));
-            outcome
-                .json
-                .warnings
-                .splice(0..0, data.report.warnings.clone());
-            outcome.timing.load_s = data.load_s;
-        }
-        Ok(outcome)
+        // A loaded file's report carries the loader's settings, warnings and time into the fit.
+        fit_family(&fit_data, &file, data.report.clone(), &opts)
     })?
     .map_err(hf)?;
     let inputs = data.source.iter().map(|(p, _)| p.clone()).collect();

@@ -1,7 +1,6 @@
 //! load: the `Data` class, samples loaded from a file or built from NumPy arrays.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyRuntimeError;
@@ -21,7 +20,6 @@ pub(crate) struct Data {
     pub(crate) report: LoadReport,
     /// The file and loader options, when loaded from a file (a fit records them as the CLI's).
     pub(crate) source: Option<(PathBuf, LoadOptions)>,
-    pub(crate) load_s: Option<f64>,
 }
 
 #[pymethods]
@@ -109,13 +107,11 @@ impl Data {
 pub(crate) fn load(py: Python<'_>, path: PathBuf, load_args: Vec<String>) -> PyResult<Data> {
     let cli: LoadCli = parse(load_args)?;
     let options = cli.load;
-    let started = Instant::now();
     let (ds, report) = off_gil(py, || hairfit::data::load(&path, &options))?.map_err(hf)?;
     Ok(Data {
         ds,
         report,
         source: Some((path, options)),
-        load_s: Some(started.elapsed().as_secs_f64()),
     })
 }
 
@@ -205,6 +201,5 @@ pub(crate) fn data_from_arrays<'py>(
         ds,
         report,
         source: None,
-        load_s: None,
     })
 }

@@ -249,13 +249,11 @@ pub fn fit_command(
     // Shown from the end of the fit until its files and report are published.
     let mut writing = None;
     let published = publish_fit(out, "hairfit fit", args.force, &[data_path], |_| {
-        let loading = std::time::Instant::now();
         let (ds, report) = load(data_path, load_options)?;
-        let load_s = loading.elapsed().as_secs_f64();
-        let load_warnings = report.warnings.clone();
         // --strict: angles that look like radians are an error, not a warning.
         if args.strict {
-            if let Some(w) = load_warnings
+            if let Some(w) = report
+                .warnings
                 .iter()
                 .find(|w| w.starts_with(crate::data::unit::RADIANS_WARNING))
             {
@@ -266,11 +264,7 @@ pub fn fit_command(
             }
         }
         let data = into_fit_data(ds);
-        let mut outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
-        // The loader's settings are options of this fit too, and its warnings the fit's.
-        outcome.json.options.load = Some(format!("{load_options:?}"));
-        outcome.json.warnings.splice(0..0, load_warnings);
-        outcome.timing.load_s = Some(load_s);
+        let outcome = fit_family(&data, &data_path.display().to_string(), report, &opts)?;
         writing = Some(super::summary::writing_spinner(
             opts.progress,
             outcome.curves.len(),

@@ -229,12 +229,11 @@ pub fn compare_command(
     };
     for opts in fits {
         let name = opts.family.as_str();
-        let mut outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
+        let outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
         // A ranking of interrupted fits would be a ranking of best-so-far points.
         if outcome.json.verdict == Verdict::Interrupted || stopped() {
             return interrupted(format!("while fitting {name}"));
         }
-        outcome.json.options.load = Some(format!("{load_options:?}"));
         let dir = set.sub_dir(name)?;
         let written = crate::report::publish::write_fit(&set, &dir, outcome)?;
         report_lines.push(written.report_line(&out.join(name)));

@@ -82,6 +82,7 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)>
             )));
         }
     }
+    let started = std::time::Instant::now();
     let (dataset, mut report) = match format {
         Format::Csv => csv::load_csv(path, options)?,
         Format::Scan => scan::load_scan(path, options)?,
@@ -89,6 +90,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<(Dataset, LoadReport)>
     };
     report.file = path.display().to_string();
     report.format = format.name().into();
+    report.settings = Some(format!("{options:?}"));
+    report.seconds = Some(started.elapsed().as_secs_f64());
     debug_assert_eq!(report.rows_read, report.accepted + report.rejected_total());
     Ok((dataset, report))
 }

@@ -89,6 +89,13 @@ pub struct LoadReport {
     /// Things that may make a fit of this file wrong (e.g. angles that look like radians read
     /// as degrees); `--strict` makes them errors.
     pub warnings: Vec<String>,
+    /// The loader's settings when a command read the file (fit.json `options.load`); a fit of
+    /// a loaded file also takes its warnings as its own. Not part of the report's JSON.
+    #[serde(skip)]
+    pub settings: Option<String>,
+    /// Seconds the loading took (timing.json `load_s`).
+    #[serde(skip)]
+    pub seconds: Option<f64>,
 }
 
 impl LoadReport {

@@ -9,15 +9,16 @@ use rayon::prelude::*;
 
 use super::diagnostics::{NULL_WEIGHT, POORLY_DETERMINED};
 use super::problem::{Evaluation, Evaluator, FitData, FitParam, Forward, ParamSet, ScaleMode};
+use super::verdict::Assessment;
 use super::FitOutcome;
 use crate::error::Result;
 use crate::families::{FamilyParams, ModelRecords};
-use crate::files::CurvesMode;
 use crate::files::{
     finite, ChannelCorrelation, ChannelResiduals, Correlation, CurveValues, Curves, DataInfo,
     DownWeighted, FitJson, FitStatus, LoadReport, OptionsRecord, ParamStatus, ParameterEntry,
     ResidualSummary, ScaleEntry, StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
+use crate::files::{CurvesMode, Verdict};
 
 /// Why the data cannot determine a parameter: words for its warning, from the parameter, the
 /// fitted set and its strongly correlated partners (family-specific geometry).
@@ -449,7 +450,7 @@ fn written_samples(mode: CurvesMode, data: &FitData, e: &Evaluation) -> Vec<usiz
 }
 
 /// Build the outcome (fit.json content, parameters, curves, timing) at solver parameters `u`.
-pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<ParamSet<F>>> {
+pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<ParamSet<F>>> {
     let Assembly {
         data,
         file,
@@ -467,6 +468,13 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         mut stage_times,
         started,
     } = a;
+    // A file a command loaded: its loader's settings and warnings are the fit's.
+    let mut options = options;
+    if let Some(settings) = &load_report.settings {
+        options.load = Some(settings.clone());
+        warnings.splice(0..0, load_report.warnings.iter().cloned());
+    }
+    let load_s = load_report.seconds;
     // Each statistics step's wall time joins the solver stages' in timing.json.
     let mut clock = Instant::now();
     let mut lap = |stage: &str| {
@@ -518,7 +526,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         status
     };
     let worst_row = worst_row_misfit(data, &e);
-    let judgement = super::verdict::judge(&super::evidence::Evidence {
+    let assessment = super::verdict::assess(&super::evidence::Evidence {
         data,
         ev,
         e: &e,
@@ -568,23 +576,53 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitOutcome<Par
         warnings,
         residuals,
         trace,
-        verdict: judgement.verdict,
-        reasons: judgement.reasons,
-        goodness_of_fit: judgement.goodness_of_fit,
-        suggestions: judgement.suggestions,
+        // Decided once, after the profiles: FitDraft::finish.
+        verdict: Verdict::default(),
+        reasons: Vec::new(),
+        goodness_of_fit: Default::default(),
+        suggestions: Vec::new(),
         chiang: records.chiang,
         terms: records.terms,
     };
-    Ok(FitOutcome {
-        json,
-        params,
-        curves,
-        relative_misfit: relative_misfit(data, &e),
-        worst_row_misfit: worst_row,
-        timing: Timing {
-            wall_time_s: started.elapsed().as_secs_f64(),
-            stages: stage_times,
-            ..Timing::default()
+    Ok(FitDraft {
+        outcome: FitOutcome {
+            json,
+            params,
+            curves,
+            relative_misfit: relative_misfit(data, &e),
+            worst_row_misfit: worst_row,
+            timing: Timing {
+                wall_time_s: started.elapsed().as_secs_f64(),
+                stages: stage_times,
+                load_s,
+                ..Timing::default()
+            },
         },
+        assessment,
     })
+}
+
+/// A fit measured at its optimum whose verdict is not decided yet: the profiles add their
+/// intervals to it, then [`FitDraft::finish`] decides the verdict once and hands the outcome
+/// over, not to be edited again.
+pub struct FitDraft<P> {
+    pub outcome: FitOutcome<P>,
+    pub assessment: Assessment,
+}
+
+impl<P> FitDraft<P> {
+    /// The finished outcome: the verdict, its reasons and suggestions decided from the
+    /// assessment and the profiled parameters ([`super::verdict::decide`]).
+    pub fn finish(self, data: &FitData) -> FitOutcome<P> {
+        let FitDraft {
+            mut outcome,
+            assessment,
+        } = self;
+        let judgement = super::verdict::decide(&assessment, &outcome.json, data);
+        outcome.json.verdict = judgement.verdict;
+        outcome.json.reasons = judgement.reasons;
+        outcome.json.goodness_of_fit = judgement.goodness_of_fit;
+        outcome.json.suggestions = judgement.suggestions;
+        outcome
+    }
 }

@@ -6,9 +6,10 @@
 //! Pipeline ([`fit`], its stages in [`stages`]): choose effects → free parameters →
 //! Latin-hypercube starts → short LM runs on a subsample (parallel over starts) → optional
 //! global stage → LM polish of the best few on all data → covariance, warnings, residual
-//! statistics, curves ([`assemble`]), the verdict ([`verdict`]). The result is typed
-//! ([`FitOutcome`], formats from [`crate::files`]); the caller writes it and hands it to the
-//! report.
+//! statistics, curves and the assessment of the optimum ([`assemble`], a draft) → profile
+//! intervals ([`profile`]) → the verdict, decided once ([`verdict::decide`], in
+//! [`assemble::FitDraft::finish`]). The result is typed ([`FitOutcome`], formats from
+//! [`crate::files`]) and not edited after: the caller writes it and hands it to the report.
 
 pub mod assemble;
 pub mod bounds;
@@ -408,8 +409,7 @@ pub fn fit_with<F: Forward>(
         cancel: opts.cancel.clone(),
     };
     profile::intervals(&mut out, optimum, &best, opts, run.input.started)?;
-    verdict::after_profiles(&mut out.json, data);
-    Ok(out)
+    Ok(out.finish(data))
 }
 
 /// An evaluator of `d` with the run's fixed values and free parameters (loss scale 1 until the

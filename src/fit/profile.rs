@@ -20,6 +20,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use super::assemble::FitDraft;
 use super::bounds::Bound;
 use super::problem::{Evaluator, FitData, FitParam, Forward, ParamSet, Space};
 use super::solve::{is_cancelled, run_lm, LocalRun};
@@ -28,7 +29,7 @@ use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
 
 mod record;
-use crate::files::{FitStatus, ProfileMethod, StageTiming, Verdict};
+use crate::files::{FitStatus, ProfileMethod, StageTiming};
 pub use record::apply;
 
 /// Δχ² of a 68.27% interval for one parameter.
@@ -494,7 +495,7 @@ pub fn profile_all<F: Forward>(
 /// (`best`: the polish run, whose cost is the reference), and write the result
 /// into `out`. Ctrl-C stops it: the linearised intervals stand and the status is `interrupted`.
 pub fn intervals<F: Forward, Q>(
-    out: &mut FitOutcome<Q>,
+    draft: &mut FitDraft<Q>,
     mut opt: Optimum<'_, F>,
     best: &LocalRun,
     opts: &FitOptions,
@@ -502,6 +503,10 @@ pub fn intervals<F: Forward, Q>(
 ) -> Result<()> {
     let t0 = std::time::Instant::now();
     let nf = opt.free.len();
+    let FitDraft {
+        outcome: out,
+        assessment,
+    } = draft;
     let record = |out: &mut FitOutcome<Q>, method: &str, reason: String| {
         out.json.options.intervals = method.into();
         out.json.options.intervals_reason = reason;
@@ -525,7 +530,7 @@ pub fn intervals<F: Forward, Q>(
     // a poor fit the misfit, not the noise, shapes χ², so its intervals mean no more than the
     // linearised errors (already scaled by √(reduced χ²)) and cost most of the run (re-fits of a
     // mismatched model settle slowly). `--intervals profile` still computes them.
-    if opts.intervals == Intervals::Auto && out.json.verdict == Verdict::PoorFit {
+    if opts.intervals == Intervals::Auto && assessment.is_poor_fit() {
         record(out, "linear", "auto: the fit is poor_fit, so the model does not describe the data and profile intervals (which assume it does) are no more meaningful than the linearised standard errors; pass --intervals profile to compute them anyway".into());
         return Ok(());
     }

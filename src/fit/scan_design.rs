@@ -9,7 +9,7 @@
 //! example hair `data/true_1ch.json`, default fit options with `--intervals profile`); the
 //! README's "Coverage on single scans" section lists the commands and the full tables.
 
-use crate::files::{FitJson, ParamStatus, Suggestion, Verdict};
+use crate::files::{FitJson, ParamStatus, Suggestion};
 use crate::fit::FitData;
 use crate::geometry::angles::wrap_deg;
 // Degrees in a reason: at most two decimals, no trailing zeros (as the report's titles).
@@ -260,20 +260,6 @@ pub fn caveats(design: &Design, json: &FitJson) -> Caveats {
         });
     }
     out
-}
-
-/// Add the design's caveats to a judged fit (after its profiles): reasons and suggestions, and
-/// `good` → `undetermined` when an effect that matters was assumed away.
-pub fn apply(json: &mut FitJson, data: &FitData) {
-    if matches!(json.verdict, Verdict::Failed | Verdict::Interrupted) {
-        return;
-    }
-    let c = caveats(&Design::of(data), json);
-    if c.undetermined && json.verdict == Verdict::Good {
-        json.verdict = Verdict::Undetermined;
-    }
-    json.reasons.extend(c.reasons);
-    json.suggestions.extend(c.suggestions);
 }
 
 #[cfg(test)]

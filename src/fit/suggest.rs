@@ -9,7 +9,7 @@ use super::evidence::{Evidence, LARGE_RESIDUAL};
 use super::gof;
 use super::problem::{FitParam, Forward, ScaleMode, Space, CHUNK};
 use crate::families::marschner::RootMode;
-use crate::files::{GoodnessOfFit, ParamStatus, Suggestion, Verdict};
+use crate::files::{GoodnessOfFit, ParamStatus, ParameterEntry, Suggestion};
 use crate::fit::Loss;
 use crate::geometry::Measurement;
 use crate::slices::Slice;
@@ -30,22 +30,17 @@ const MIN_EXACT_SHARE: f64 = 0.05;
 /// against ln cos θ_i within ±0.5 of ±1 (what fitting radiance as S, or S as radiance, gives).
 const MIN_TREND_T: f64 = 5.0;
 
-/// Suggestions for a fit with `verdict` and statistics `g`.
-pub fn suggestions<F: Forward>(
+/// What to try for a poor fit with statistics `g`: a robust loss, the exact mode, another
+/// measurement quantity.
+pub fn poor_fit_suggestions<F: Forward>(
     x: &Evidence<'_, '_, '_, F>,
     g: &GoodnessOfFit,
-    verdict: Verdict,
     slices: &[Slice],
 ) -> Vec<Suggestion> {
     let mut out = Vec::new();
-    if verdict == Verdict::PoorFit {
-        out.extend(robust_loss(x, g, slices));
-        out.extend(exact_mode(x, g));
-        out.extend(measurement(x));
-    }
-    if matches!(verdict, Verdict::PoorFit | Verdict::Undetermined) {
-        out.extend(fix_undetermined(x));
-    }
+    out.extend(robust_loss(x, g, slices));
+    out.extend(exact_mode(x, g));
+    out.extend(measurement(x));
     out
 }
 
@@ -299,9 +294,8 @@ fn measurement<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<Suggestion> {
     })
 }
 
-fn fix_undetermined<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<Suggestion> {
-    let names: Vec<&str> = x
-        .parameters
+pub fn fix_undetermined(parameters: &[ParameterEntry]) -> Option<Suggestion> {
+    let names: Vec<&str> = parameters
         .iter()
         .filter(|p| p.status == ParamStatus::Undetermined)
         .map(|p| p.name.as_str())
@@ -309,8 +303,7 @@ fn fix_undetermined<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<Suggestio
     if names.is_empty() {
         return None;
     }
-    let example = x
-        .parameters
+    let example = parameters
         .iter()
         .find(|p| p.status == ParamStatus::Undetermined)
         .map(|p| format!("--fix {}=VALUE", p.name))

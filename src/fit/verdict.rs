@@ -6,13 +6,13 @@
 //! reasons come first; the others follow, so a poor fit still names its undetermined parameters.
 //! What to try next is [`super::suggest`]'s.
 
-use rayon::prelude::*;
-
 use super::evidence::Evidence;
 use super::evidence::LARGE_RESIDUAL;
-use super::gof;
+use super::gof::{
+    self, centre_per_channel, direction_groups, poisson_upper_tail, GAUSSIAN_BEYOND_5SD,
+};
 use super::problem::{FitData, Forward};
-use super::suggest::suggestions;
+use super::suggest::{fix_undetermined, poor_fit_suggestions};
 use crate::files::{
     FitJson, FitStatus, GofThresholds, GoodnessOfFit, ParamStatus, ParameterEntry, Suggestion,
     Verdict,
@@ -62,8 +62,47 @@ pub struct Judgement {
     pub suggestions: Vec<Suggestion>,
 }
 
-/// Judge a fit.
-pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
+/// What a fit's final evaluation says, before its intervals are profiled: why the numbers are
+/// no fit, why the model misses the data, the goodness-of-fit statistics and what to try when
+/// it does. The verdict is decided from it once, by [`decide`], after the profiles.
+#[derive(Debug, Clone)]
+pub struct Assessment {
+    /// The solver's status when the fit ended (profiling may still be interrupted).
+    fit_status: FitStatus,
+    /// Solver iterations over every stage.
+    iterations: u64,
+    failed: Vec<String>,
+    poor: Vec<String>,
+    /// The worst row's relative misfit, when at rounding level (noise-free data).
+    exact: Option<f64>,
+    goodness_of_fit: GoodnessOfFit,
+    /// What to try for a poor fit (robust loss, exact mode, what was measured).
+    poor_fit_suggestions: Vec<Suggestion>,
+}
+
+impl Assessment {
+    /// The verdict before the profiles, up to undetermined parameters: `interrupted`, `failed`,
+    /// `poor_fit`, or `None` for a fit that describes its data.
+    fn ranking(&self) -> Option<Verdict> {
+        if self.fit_status == FitStatus::Interrupted {
+            Some(Verdict::Interrupted)
+        } else if !self.failed.is_empty() {
+            Some(Verdict::Failed)
+        } else if !self.poor.is_empty() {
+            Some(Verdict::PoorFit)
+        } else {
+            None
+        }
+    }
+
+    /// True when the model misses the data (the verdict will be `poor_fit`).
+    pub fn is_poor_fit(&self) -> bool {
+        self.ranking() == Some(Verdict::PoorFit)
+    }
+}
+
+/// Assess a fit at its optimum (see [`Assessment`]).
+pub fn assess<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Assessment {
     let failed = failures(x);
     let slices = scan_slices(x.data);
     let g = goodness_of_fit(x, &slices);
@@ -74,39 +113,52 @@ pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
     } else {
         Vec::new()
     };
-    let undetermined: Vec<&ParameterEntry> = x
+    let mut a = Assessment {
+        fit_status: x.status,
+        iterations: x.trace.iter().map(|t| t.iterations).sum(),
+        failed,
+        poor,
+        exact: exact.then_some(x.worst_row_misfit),
+        goodness_of_fit: g,
+        poor_fit_suggestions: Vec::new(),
+    };
+    if a.is_poor_fit() {
+        a.poor_fit_suggestions = poor_fit_suggestions(x, &a.goodness_of_fit, &slices);
+    }
+    a
+}
+
+/// The verdict of a fit, decided once: from its assessment, its parameters after the profiles
+/// (an open profile makes one `undetermined`), its status (profiling may have been
+/// interrupted) and the caveats of the data's design ([`super::scan_design`]).
+pub fn decide(a: &Assessment, json: &FitJson, data: &FitData) -> Judgement {
+    let g = &a.goodness_of_fit;
+    let undetermined: Vec<&ParameterEntry> = json
         .parameters
         .iter()
         .filter(|p| p.status == ParamStatus::Undetermined)
         .collect();
-    let verdict = if x.status == FitStatus::Interrupted {
-        Verdict::Interrupted
-    } else if !failed.is_empty() {
-        Verdict::Failed
-    } else if !poor.is_empty() {
-        Verdict::PoorFit
-    } else if !undetermined.is_empty() {
-        Verdict::Undetermined
-    } else {
+    let mut verdict = a.ranking().unwrap_or(if undetermined.is_empty() {
         Verdict::Good
-    };
+    } else {
+        Verdict::Undetermined
+    });
     let mut reasons = Vec::new();
     if verdict == Verdict::Interrupted {
-        let iterations: u64 = x.trace.iter().map(|t| t.iterations).sum();
         reasons.push(format!(
-            "stopped by a signal (Ctrl-C or SIGTERM) after {iterations} solver iterations: the parameters are the best point so far, not a converged fit"
+            "stopped by a signal (Ctrl-C or SIGTERM) after {} solver iterations: the parameters are the best point so far, not a converged fit",
+            a.iterations
         ));
     }
-    reasons.extend(failed.iter().cloned());
-    reasons.extend(poor.iter().cloned());
-    if failed.is_empty() && exact {
-        reasons.push(format!(
-            "the model reproduces the data to rounding: every row within {:.1e} of its value (relative; <= {:e}), so there is no noise for the goodness-of-fit tests to judge",
-            x.worst_row_misfit,
+    reasons.extend(a.failed.iter().cloned());
+    reasons.extend(a.poor.iter().cloned());
+    match a.exact {
+        Some(worst) if a.failed.is_empty() => reasons.push(format!(
+            "the model reproduces the data to rounding: every row within {worst:.1e} of its value (relative; <= {:e}), so there is no noise for the goodness-of-fit tests to judge",
             super::EXACT_MISFIT
-        ));
-    } else if failed.is_empty() && poor.is_empty() {
-        reasons.extend(good_fit_reasons(&g));
+        )),
+        _ if a.failed.is_empty() && a.poor.is_empty() => reasons.extend(good_fit_reasons(g)),
+        _ => {}
     }
     if verdict == Verdict::PoorFit && g.sigma_given {
         if let Some(f) = g.se_scale_factor.filter(|f| *f > 1.0) {
@@ -117,10 +169,10 @@ pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
     }
     if verdict != Verdict::Failed {
         for p in &undetermined {
-            reasons.push(undetermined_reason(p, x.warnings));
+            reasons.push(undetermined_reason(p, &json.warnings));
         }
     }
-    for p in x
+    for p in json
         .parameters
         .iter()
         .filter(|p| p.status == ParamStatus::AtBound)
@@ -131,17 +183,35 @@ pub fn judge<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Judgement {
             p.value.map_or("null".into(), |v| format!("{v:.6}"))
         ));
     }
-    if x.status == FitStatus::MaxIterations {
+    if a.fit_status == FitStatus::MaxIterations {
         reasons.push(
             "the polish stopped at its iteration limit before converging (raise --polish-iters)"
                 .into(),
         );
     }
-    let suggestions = suggestions(x, &g, verdict, &slices);
+    let mut suggestions = a.poor_fit_suggestions.clone();
+    if matches!(verdict, Verdict::PoorFit | Verdict::Undetermined) {
+        suggestions.extend(fix_undetermined(&json.parameters));
+    }
+    if json.status == FitStatus::Interrupted && verdict != Verdict::Interrupted {
+        verdict = Verdict::Interrupted;
+        reasons.insert(
+            0,
+            "stopped by a signal (Ctrl-C or SIGTERM) while profiling: the intervals are the linearised standard errors only".into(),
+        );
+    }
+    if !matches!(verdict, Verdict::Failed | Verdict::Interrupted) {
+        let c = super::scan_design::caveats(&super::scan_design::Design::of(data), json);
+        if c.undetermined && verdict == Verdict::Good {
+            verdict = Verdict::Undetermined;
+        }
+        reasons.extend(c.reasons);
+        suggestions.extend(c.suggestions);
+    }
     Judgement {
         verdict,
         reasons,
-        goodness_of_fit: g,
+        goodness_of_fit: g.clone(),
         suggestions,
     }
 }
@@ -502,122 +572,4 @@ fn num(x: f64) -> String {
         let digits = (3 - x.abs().log10().floor().max(-1.0) as i32).max(0) as usize;
         format!("{x:.digits$}")
     }
-}
-
-/// Profiles run after [`judge`]: a parameter whose profile stays open is now `undetermined`
-/// (which downgrades `good`), and profiling stopped by a signal makes the fit `interrupted`.
-/// Then the data's design adds its caveats ([`super::scan_design`]).
-pub fn after_profiles(json: &mut FitJson, data: &FitData) {
-    if json.status == FitStatus::Interrupted && json.verdict != Verdict::Interrupted {
-        json.verdict = Verdict::Interrupted;
-        json.reasons.insert(
-            0,
-            "stopped by a signal (Ctrl-C or SIGTERM) while profiling: the intervals are the linearised standard errors only".into(),
-        );
-    }
-    let newly: Vec<String> = json
-        .parameters
-        .iter()
-        .filter(|p| p.status == ParamStatus::Undetermined)
-        .filter(|p| {
-            !json
-                .reasons
-                .iter()
-                .any(|r| r.starts_with(&format!("{} is undetermined", p.name)))
-        })
-        .map(|p| undetermined_reason(p, &json.warnings))
-        .collect();
-    if !newly.is_empty() {
-        if json.verdict == Verdict::Good {
-            json.verdict = Verdict::Undetermined;
-        }
-        if json.verdict != Verdict::Failed {
-            json.reasons.extend(newly);
-        }
-    }
-    super::scan_design::apply(json, data);
-}
-
-/// P(|z| > 5) for a standard normal.
-const GAUSSIAN_BEYOND_5SD: f64 = 5.733e-7;
-
-/// P(K ≥ k) for K ~ Poisson(λ) (1 for k = 0), summed directly: k is a count of samples.
-fn poisson_upper_tail(k: usize, lambda: f64) -> f64 {
-    if k == 0 {
-        return 1.0;
-    }
-    // 1 − Σ_{j<k} e^{−λ} λ^j / j!, terms built in log space so λ up to ~1e3 is safe.
-    let mut below = 0.0;
-    let mut log_term = -lambda;
-    for j in 0..k {
-        if j > 0 {
-            log_term += lambda.ln() - (j as f64).ln();
-        }
-        below += log_term.exp();
-    }
-    (1.0 - below).max(0.0)
-}
-
-/// `raw` (row-major, `nc` channels) minus each channel's median finite residual.
-/// Each sample's group of identical directions (angles equal to 1e-6°, φ wrapped), numbered in
-/// order of first appearance, and each group's size. Sorting keys rather than hashing them: a
-/// million samples group in a parallel sort, where a map of (direction, channel) keys took
-/// seconds and ~200 MB.
-fn direction_groups(angles: &[crate::geometry::Angles]) -> (Vec<usize>, Vec<usize>) {
-    // |wrap(φ)| ≤ 180° is at most 1.8e8 units of 1e-6°: an i32 (20 bytes per sample with its
-    // index, 200 MB at 10M samples where (i64 × 4, usize) took 400 MB).
-    let key = |v: f64| (crate::geometry::angles::wrap_deg(v.to_degrees()) * 1e6).round() as i32;
-    // Sample indices fit u32: the curves table numbers samples in u32 too.
-    let mut keyed: Vec<([i32; 4], u32)> = angles
-        .par_iter()
-        .enumerate()
-        .map(|(i, a)| ([a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(key), i as u32))
-        .collect();
-    keyed.par_sort_unstable();
-    // The first (smallest) sample index of each sample's run of equal keys.
-    let mut first = vec![0u32; angles.len()];
-    for run in keyed.chunk_by(|a, b| a.0 == b.0) {
-        for &(_, i) in run {
-            first[i as usize] = run[0].1;
-        }
-    }
-    drop(keyed);
-    let mut group = vec![usize::MAX; angles.len()];
-    let mut counts = Vec::new();
-    for (i, &f) in first.iter().enumerate() {
-        let f = f as usize;
-        // A run's first sample opens its group; later ones (f < i) join the group f opened.
-        if f == i {
-            group[i] = counts.len();
-            counts.push(0);
-        } else {
-            group[i] = group[f];
-        }
-        counts[group[i]] += 1;
-    }
-    (group, counts)
-}
-
-fn centre_per_channel(raw: &[f64], nc: usize) -> Vec<f64> {
-    let nc = nc.max(1);
-    let medians: Vec<f64> = (0..nc)
-        .map(|c| {
-            let mut v: Vec<f64> = raw
-                .iter()
-                .skip(c)
-                .step_by(nc)
-                .copied()
-                .filter(|r| r.is_finite())
-                .collect();
-            if v.is_empty() {
-                return 0.0;
-            }
-            let mid = v.len() / 2;
-            *v.select_nth_unstable_by(mid, f64::total_cmp).1
-        })
-        .collect();
-    raw.iter()
-        .enumerate()
-        .map(|(k, r)| r - medians[k % nc])
-        .collect()
 }

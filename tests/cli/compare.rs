@@ -564,3 +564,54 @@ fn compare_all_ranks_the_generating_family_first() {
         }
     }
 }
+
+/// Every fit of a comparison records the loader's settings and warnings as `hairfit fit` does:
+/// the fit takes them from the loader's report, so no command adds them afterwards (compare's
+/// fits lacked the warnings before). Angles that look like radians are the loader's warning.
+#[test]
+fn each_compared_fit_records_the_loaders_settings_and_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = small_data(dir.path());
+    // The same samples with their angles in radians and no unit line: read as degrees, they
+    // all lie within ±π, which the loader warns about.
+    let text = std::fs::read_to_string(&data).unwrap();
+    let mut rows = Vec::new();
+    for line in text.lines().filter(|l| !l.starts_with('#')) {
+        let cells: Vec<String> = line
+            .split(',')
+            .enumerate()
+            .map(|(k, c)| match c.parse::<f64>() {
+                Ok(v) if k < 4 => (v.to_radians()).to_string(),
+                _ => c.to_string(),
+            })
+            .collect();
+        rows.push(cells.join(","));
+    }
+    let radians = write(dir.path(), "radians.csv", rows.join("\n") + "\n");
+    let out = dir.path().join("C");
+    let families = [ModelFamily::KajiyaKay, ModelFamily::Karis];
+    hairfit_ok(&quick_compare_of(
+        &radians,
+        &out,
+        &families,
+        &["--models", "kajiya-kay,karis"],
+    ));
+    for f in families {
+        let path = out.join(f.as_str()).join("fit.json");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        let first = json["warnings"][0].as_str().unwrap_or("");
+        assert!(
+            first.starts_with("angles look like radians"),
+            "{}: warnings {}",
+            path.display(),
+            json["warnings"]
+        );
+        assert!(
+            json["options"]["load"].is_string(),
+            "{}: options.load {}",
+            path.display(),
+            json["options"]["load"]
+        );
+    }
+}
