@@ -27,6 +27,7 @@ pub mod karis;
 pub mod marschner;
 mod setup;
 pub mod table;
+pub use crate::geometry::FamilyFacts;
 pub use setup::{ChiangRecord, ModelRecords, ModelSetup};
 
 /// A model family: Marschner 2003 (MODEL.md), Chiang 2016 (CHIANG.md), or a table family
@@ -57,11 +58,7 @@ pub enum ModelFamily {
 impl ModelFamily {
     /// The `--model` / `"model"` spelling.
     pub fn as_str(self) -> &'static str {
-        match self {
-            ModelFamily::Marschner => "marschner",
-            ModelFamily::Chiang => "chiang",
-            other => other.table().expect("every other family is a table").name(),
-        }
+        self.facts().name()
     }
 
     /// Every family, Marschner first (the order `compare --models all` reports them in).
@@ -74,29 +71,31 @@ impl ModelFamily {
         ModelFamily::Frostbite,
     ];
 
+    /// The family's entry in the registry: the one place a `--model` name meets the family's
+    /// facts. A new family is its folder plus one line here (and its fit's line in
+    /// `crate::fit::registry`).
+    pub fn facts(self) -> &'static dyn FamilyFacts {
+        use table::Table;
+        use {deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
+        match self {
+            ModelFamily::Marschner => &marschner::MarschnerFamily,
+            ModelFamily::Chiang => &chiang::ChiangFamily,
+            ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
+            ModelFamily::DEon => &Table::<DEon>::NEW,
+            ModelFamily::Karis => &Table::<Karis>::NEW,
+            ModelFamily::Frostbite => &Table::<Frostbite>::NEW,
+        }
+    }
+
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
     pub fn title(self) -> &'static str {
-        match self {
-            ModelFamily::Marschner => "Marschner",
-            ModelFamily::Chiang => "Chiang",
-            other => other
-                .table()
-                .expect("every other family is a table")
-                .title(),
-        }
+        self.facts().title()
     }
 
     /// The family's model with its source, for help and lists ("Marschner 2003", "Karis 2016
     /// (Unreal Engine 5)").
     pub fn citation(self) -> &'static str {
-        match self {
-            ModelFamily::Marschner => "Marschner 2003",
-            ModelFamily::Chiang => "Chiang 2016 (pbrt-v4's hair)",
-            other => other
-                .table()
-                .expect("every other family is a table")
-                .title(),
-        }
+        self.facts().citation()
     }
 
     /// The table family this is, or `None` for Marschner and Chiang.
@@ -115,26 +114,17 @@ impl ModelFamily {
     /// The report's unit label of one of the family's parameters by its JSON name
     /// (`sigma_a[1]` included): `deg`, `per fiber radius`, or empty.
     pub fn unit_label(self, json_name: &str) -> &'static str {
-        match self {
-            ModelFamily::Marschner => {
-                crate::families::marschner::ParamName::from_json_name(json_name)
-                    .map_or("", |n| n.fact().unit.label())
-            }
-            ModelFamily::Chiang => crate::families::chiang::chiang_unit_label(json_name),
-            table => {
-                let base = json_name.split('[').next().unwrap_or(json_name);
-                let facts = table.table().map_or(&[][..], |t| t.facts());
-                facts
-                    .iter()
-                    .find(|f| f.name == base)
-                    .map_or("", |f| f.unit.label())
-            }
-        }
+        let base = json_name.split('[').next().unwrap_or(json_name);
+        self.facts()
+            .parameters()
+            .iter()
+            .find(|f| f.name == base)
+            .map_or("", |f| f.unit.label())
     }
 
     /// True when the family takes `--terms` (Chiang and every table family).
     pub fn takes_terms(self) -> bool {
-        self != ModelFamily::Marschner
+        self.own_options().contains(&"--terms")
     }
 
     /// A `--model` spelling (case-insensitive), or an error listing every family.
@@ -186,12 +176,7 @@ impl ModelFamily {
     /// `cli::compare` checks). A command that fits several families (`compare --models`) gives
     /// each one only these, and refuses such an option when no listed family takes it.
     pub fn own_options(self) -> &'static [&'static str] {
-        match self {
-            ModelFamily::Marschner => &["--mode", "--lobes", "--no-glints", "--no-eccentricity"],
-            ModelFamily::Chiang => &["--terms", "--width-nodes"],
-            _ if self.takes_terms() => &["--terms"],
-            _ => &[],
-        }
+        self.facts().own_options()
     }
 }
 

@@ -1,4 +1,5 @@
-//! The one parameter-fact type every family's table is made of ([`ParamFact`]): a parameter's
+//! The one parameter-fact type every family's table is made of ([`ParamFact`]), and what a
+//! family tells the commands about itself ([`FamilyFacts`]). A parameter fact holds a parameter's
 //! file name, symbol, unit, domain (with the one domain check and its one wording of the error),
 //! fit bounds, typical range, default and when a fit varies it. Numbers are in FILE units
 //! (degrees for angles); the accessors that return model values convert.
@@ -134,4 +135,22 @@ impl ParamFact {
     pub fn default_value(&self) -> Option<f64> {
         self.default.map(|v| self.unit.to_model(v))
     }
+}
+
+/// What a family tells every command about itself: its `--model` name, how sentences and
+/// help name it, its parameter table and the options only it takes. Each family's folder
+/// implements it once (every table family through `families::table::Table`);
+/// `families::ModelFamily::facts` is the registry. Here, below the families, so that a family
+/// implementing it and the registry naming the family do not import each other.
+pub trait FamilyFacts: Sync {
+    /// The `--model` / `"model"` spelling.
+    fn name(&self) -> &'static str;
+    /// The name in sentences and figure legends.
+    fn title(&self) -> &'static str;
+    /// The model with its source, for help and lists.
+    fn citation(&self) -> &'static str;
+    /// Every parameter's facts (name, unit, domain, bounds, typical range, default).
+    fn parameters(&self) -> &'static [ParamFact];
+    /// The flags of `cli::ModelArgs` only some families take that this one takes.
+    fn own_options(&self) -> &'static [&'static str];
 }

@@ -8,6 +8,6 @@ pub mod measurement;
 pub mod units;
 
 pub use angles::Angles;
-pub use fact::{Fitted, ParamFact};
+pub use fact::{FamilyFacts, Fitted, ParamFact};
 pub use measurement::Measurement;
 pub use units::{Interval, Unit};

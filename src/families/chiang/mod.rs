@@ -265,14 +265,25 @@ pub const PARAMETERS: [ParamFact; 5] = [
     },
 ];
 
-/// The report's unit label of a Chiang parameter by its JSON name (`sigma_a[1]` included), from
-/// [`PARAMETERS`]: `deg`, `per fiber radius`, or empty.
-pub fn chiang_unit_label(json_name: &str) -> &'static str {
-    let base = json_name.split('[').next().unwrap_or(json_name);
-    PARAMETERS
-        .iter()
-        .find(|f| f.name == base)
-        .map_or("", |f| f.unit.label())
+/// The Chiang family in the registry ([`crate::families::ModelFamily::facts`]).
+pub struct ChiangFamily;
+
+impl crate::geometry::FamilyFacts for ChiangFamily {
+    fn name(&self) -> &'static str {
+        "chiang"
+    }
+    fn title(&self) -> &'static str {
+        "Chiang"
+    }
+    fn citation(&self) -> &'static str {
+        "Chiang 2016 (pbrt-v4's hair)"
+    }
+    fn parameters(&self) -> &'static [ParamFact] {
+        &PARAMETERS
+    }
+    fn own_options(&self) -> &'static [&'static str] {
+        &["--terms", "--width-nodes"]
+    }
 }
 
 /// Chiang parameters, α in RADIANS, generic over the number type.

@@ -42,6 +42,27 @@ pub use lanes::scattering_lanes;
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
 
+/// The Marschner family in the registry ([`crate::families::ModelFamily::facts`]).
+pub struct MarschnerFamily;
+
+impl crate::geometry::FamilyFacts for MarschnerFamily {
+    fn name(&self) -> &'static str {
+        "marschner"
+    }
+    fn title(&self) -> &'static str {
+        "Marschner"
+    }
+    fn citation(&self) -> &'static str {
+        "Marschner 2003"
+    }
+    fn parameters(&self) -> &'static [crate::geometry::ParamFact] {
+        &parameters::TABLE
+    }
+    fn own_options(&self) -> &'static [&'static str] {
+        &["--mode", "--lobes", "--no-glints", "--no-eccentricity"]
+    }
+}
+
 /// How the roots of the exit-angle map are found (MODEL.md "Root modes").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]

@@ -341,6 +341,24 @@ pub trait DynTable: Sync {
     fn by_lobe(&self, p: &TableParams<f64>, on: TermSet, a: &Angles, out: &mut [[f64; 3]]);
 }
 
+impl<F: TableFamily> crate::geometry::FamilyFacts for Table<F> {
+    fn name(&self) -> &'static str {
+        F::NAME
+    }
+    fn title(&self) -> &'static str {
+        F::TITLE
+    }
+    fn citation(&self) -> &'static str {
+        F::TITLE
+    }
+    fn parameters(&self) -> &'static [ParamFact] {
+        F::PARAMETERS
+    }
+    fn own_options(&self) -> &'static [&'static str] {
+        &["--terms"]
+    }
+}
+
 impl<F: TableFamily> DynTable for Table<F> {
     fn name(&self) -> &'static str {
         F::NAME
