@@ -271,10 +271,18 @@ fn apply_longitudinal<T: DualNum<f64>>(
     out: &mut [Terms<T>],
 ) {
     let v_r = variance_r(&p.get(BETA_R, 0));
+    let v_r_value = variance_r(&p.get(BETA_R, 0).re());
     let alpha = p.get(ALPHA, 0);
     let inv_cos_i = a.theta_i.cos().recip();
     for k in (0..=RESIDUAL).filter(|&k| on.has(k)) {
-        let m = longitudinal(k, a.theta_i, a.theta_r, &alpha, &v_r) * inv_cos_i;
+        let mut m = longitudinal(k, a.theta_i, a.theta_r, &alpha, &v_r);
+        if T::NDERIV > 0 {
+            // The value part as the f64 pass computes it: a gradient pass's values are then
+            // the value pass's bits (`cheap_gradients`).
+            let re = longitudinal(k, a.theta_i, a.theta_r, &alpha.re(), &v_r_value);
+            m = m.clone() - m.re() + re;
+        }
+        let m = m * inv_cos_i;
         for o in out.iter_mut() {
             o[k] *= m.clone();
         }
@@ -408,6 +416,12 @@ impl TableFamily for DEon {
     ) {
         let how = Integration::standard(p.get(BETA_N, 0).re());
         scatter_shared(p, angles, on, &how, None, each);
+    }
+
+    /// With η held a gradient pass's width integral is the value pass's f64 loop plus a few
+    /// products per node (`gradient`), and its values are the value pass's bits.
+    fn cheap_gradients(seeded: u32) -> bool {
+        seeded & (1 << ETA) == 0
     }
 
     const SCREENING: Option<&'static str> = Some("with half the width nodes");

@@ -168,7 +168,7 @@ impl<F: TableFamily> TableForward<F> {
         }
         let pass = DualPass {
             screening: self.screening,
-            seeded: seeds.iter().fold(0, |bits, (q, _)| bits | 1 << q.fact),
+            seeded: seeded_lines(seeds.iter().map(|&(q, _)| q)),
         };
         let nc = p.n_channels;
         let nw = dim.value();
@@ -182,6 +182,11 @@ impl<F: TableFamily> TableForward<F> {
             }
         });
     }
+}
+
+/// The table lines of `params`, as bits (bit k: line k).
+fn seeded_lines<F>(params: impl IntoIterator<Item = TableParam<F>>) -> u32 {
+    params.into_iter().fold(0, |bits, q| bits | 1 << q.fact)
 }
 
 impl<F: TableFamily> Forward for TableForward<F> {
@@ -245,6 +250,10 @@ impl<F: TableFamily> Forward for TableForward<F> {
         let rows = angles.len() * p.n_channels;
         self.measurement.apply(angles, &mut out[..rows]);
         self.measurement.apply(angles, grad);
+    }
+
+    fn cheap_gradients(&self, free: &[TableParam<F>]) -> bool {
+        F::cheap_gradients(seeded_lines(free.iter().copied()))
     }
 
     fn by_lobe(&self, p: &TableParams<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {

@@ -300,6 +300,13 @@ pub trait TableFamily: Send + Sync + 'static {
             Self::scatter_each(p, angles, on, each)
         }
     }
+
+    /// Whether a gradient pass seeding the table lines `seeded` (bit k: line k) costs little more
+    /// than a value pass and gives its values to the bit (`Forward::cheap_gradients`): then
+    /// every value pass of the fit computes the gradients too. No by default.
+    fn cheap_gradients(_seeded: u32) -> bool {
+        false
+    }
 }
 
 /// What a gradient pass evaluates ([`TableFamily::dual_each`]).
