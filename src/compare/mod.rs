@@ -227,18 +227,38 @@ pub fn compare_command(
             out.display()
         )))
     };
-    for opts in fits {
-        let name = opts.family.as_str();
-        let mut outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
-        // A ranking of interrupted fits would be a ranking of best-so-far points.
-        if outcome.json.verdict == Verdict::Interrupted || stopped() {
-            return interrupted(format!("while fitting {name}"));
+    // Each fit's files and report are written on a thread of their own while the next family
+    // fits: writing is mostly serial, and the fits keep both cores busy around it.
+    let fitted = std::thread::scope(|scope| -> Result<Option<String>> {
+        let mut writing = None;
+        let mut collect = |writing: Option<(&str, std::thread::ScopedJoinHandle<'_, _>)>| {
+            if let Some((name, handle)) = writing {
+                let written: crate::report::publish::PublishedFit =
+                    handle.join().expect("the writer does not panic")?;
+                report_lines.push(written.report_line(&out.join(name)));
+                outcomes.push(written.outcome);
+            }
+            Ok::<_, Error>(())
+        };
+        for opts in fits {
+            let name = opts.family.as_str();
+            let mut outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
+            // A ranking of interrupted fits would be a ranking of best-so-far points.
+            if outcome.json.verdict == Verdict::Interrupted || stopped() {
+                return Ok(Some(name.to_string()));
+            }
+            outcome.json.options.load = Some(format!("{load_options:?}"));
+            let dir = set.sub_dir(name)?;
+            collect(writing.take())?;
+            let set = &set;
+            let write = move || crate::report::publish::write_fit(set, &dir, outcome);
+            writing = Some((name, scope.spawn(write)));
         }
-        outcome.json.options.load = Some(format!("{load_options:?}"));
-        let dir = set.sub_dir(name)?;
-        let written = crate::report::publish::write_fit(&set, &dir, outcome)?;
-        report_lines.push(written.report_line(&out.join(name)));
-        outcomes.push(written.outcome);
+        collect(writing)?;
+        Ok(None)
+    })?;
+    if let Some(name) = fitted {
+        return interrupted(format!("while fitting {name}"));
     }
     let written: Vec<WrittenFit<'_>> = families
         .iter()
