@@ -253,7 +253,7 @@ mod tests {
                     for c in 0..3 {
                         for k in 0..=RESIDUAL {
                             assert_eq!(hand[c][k].re.to_bits(), plain[c][k].to_bits());
-                            let e = |x: &D2| x.eps.clone().unwrap_generic(Const::<2>, U1);
+                            let e = |x: &D2| x.eps.unwrap_generic(Const::<2>, U1);
                             let (h, d) = (e(&hand[c][k]), e(&dual[c][k]));
                             for j in 0..2 {
                                 let tol = 1e-12 * d[j].abs().max(1e-6 * plain[c][k].abs());
