@@ -228,7 +228,7 @@ pub fn compare_command(
         )))
     };
     // Each fit's files and report are written on a thread of their own while the next family
-    // fits: writing is mostly serial, and the fits keep both cores busy around it.
+    // fits, which can then use whatever core the writing leaves idle.
     let fitted = std::thread::scope(|scope| -> Result<Option<String>> {
         let mut writing = None;
         let mut collect = |writing: Option<(&str, std::thread::ScopedJoinHandle<'_, _>)>| {
