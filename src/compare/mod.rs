@@ -227,17 +227,49 @@ pub fn compare_command(
             out.display()
         )))
     };
-    for opts in fits {
-        let name = opts.family.as_str();
-        let outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
-        // A ranking of interrupted fits would be a ranking of best-so-far points.
-        if outcome.json.verdict == Verdict::Interrupted || stopped() {
-            return interrupted(format!("while fitting {name}"));
+    // Each fit's files and report are written on a thread of their own while the next family
+    // fits, which can then use whatever core the writing leaves idle.
+    let fitted = std::thread::scope(|scope| -> Result<Option<String>> {
+        let mut writing = None;
+        let mut collect = |writing: Option<(&str, std::thread::ScopedJoinHandle<'_, _>)>| {
+            if let Some((name, handle)) = writing {
+                let written: crate::report::publish::PublishedFit =
+                    handle.join().map_err(|_| {
+                        Error::Other(format!(
+                            "writing {name}'s files and report failed (a panic)"
+                        ))
+                    })??;
+                report_lines.push(written.report_line(&out.join(name)));
+                outcomes.push(written.outcome);
+            }
+            Ok::<_, Error>(())
+        };
+        for opts in fits {
+            let name = opts.family.as_str();
+            let outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
+            // A ranking of interrupted fits would be a ranking of best-so-far points.
+            if outcome.json.verdict == Verdict::Interrupted || stopped() {
+                return Ok(Some(name.to_string()));
+            }
+            let dir = set.sub_dir(name)?;
+            collect(writing.take())?;
+            let set = &set;
+            let write = move || crate::report::publish::write_fit(set, &dir, outcome);
+            // Through Builder: a thread that cannot start (a memory cap) is an error, not a panic.
+            let handle = std::thread::Builder::new()
+                .spawn_scoped(scope, write)
+                .map_err(|e| {
+                    Error::Other(format!(
+                        "could not start a thread to write {name}'s files: {e}; nothing is published"
+                    ))
+                })?;
+            writing = Some((name, handle));
         }
-        let dir = set.sub_dir(name)?;
-        let written = crate::report::publish::write_fit(&set, &dir, outcome)?;
-        report_lines.push(written.report_line(&out.join(name)));
-        outcomes.push(written.outcome);
+        collect(writing)?;
+        Ok(None)
+    })?;
+    if let Some(name) = fitted {
+        return interrupted(format!("while fitting {name}"));
     }
     let written: Vec<WrittenFit<'_>> = families
         .iter()

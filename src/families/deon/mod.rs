@@ -13,12 +13,15 @@ use std::sync::{Arc, OnceLock};
 
 use num_dual::DualNum;
 
+mod gradient;
+
 use crate::families::chiang::azimuthal::ExitRefraction;
 use crate::families::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
 use crate::families::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
 use crate::families::chiang::quadrature::WidthRule;
 use crate::families::table::{
-    clear_terms, zero_terms, LobeColumn, ParamFact, TableFamily, TableParams, Term, TermSet, Terms,
+    clear_terms, zero_terms, DualPass, LobeColumn, ParamFact, TableFamily, TableParams, Term,
+    TermSet, Terms,
 };
 use crate::geometry::angles::{wrap, wrap_t};
 use crate::geometry::Angles;
@@ -268,10 +271,18 @@ fn apply_longitudinal<T: DualNum<f64>>(
     out: &mut [Terms<T>],
 ) {
     let v_r = variance_r(&p.get(BETA_R, 0));
+    let v_r_value = variance_r(&p.get(BETA_R, 0).re());
     let alpha = p.get(ALPHA, 0);
     let inv_cos_i = a.theta_i.cos().recip();
     for k in (0..=RESIDUAL).filter(|&k| on.has(k)) {
-        let m = longitudinal(k, a.theta_i, a.theta_r, &alpha, &v_r) * inv_cos_i;
+        let mut m = longitudinal(k, a.theta_i, a.theta_r, &alpha, &v_r);
+        if T::NDERIV > 0 {
+            // The value part as the f64 pass computes it: a gradient pass's values are then
+            // the value pass's bits (`cheap_gradients`).
+            let re = longitudinal(k, a.theta_i, a.theta_r, &alpha.re(), &v_r_value);
+            m = m.clone() - m.re() + re;
+        }
+        let m = m * inv_cos_i;
         for o in out.iter_mut() {
             o[k] *= m.clone();
         }
@@ -404,7 +415,13 @@ impl TableFamily for DEon {
         each: &mut dyn FnMut(usize, &[Terms<T>]),
     ) {
         let how = Integration::standard(p.get(BETA_N, 0).re());
-        scatter_shared(p, angles, on, &how, each);
+        scatter_shared(p, angles, on, &how, None, each);
+    }
+
+    /// With η held a gradient pass's width integral is the value pass's f64 loop plus a few
+    /// products per node (`gradient`), and its values are the value pass's bits.
+    fn cheap_gradients(seeded: u32) -> bool {
+        seeded & (1 << ETA) == 0
     }
 
     const SCREENING: Option<&'static str> = Some("with half the width nodes");
@@ -416,16 +433,36 @@ impl TableFamily for DEon {
         each: &mut dyn FnMut(usize, &[Terms<T>]),
     ) {
         let how = Integration::screening(p.get(BETA_N, 0).re());
-        scatter_shared(p, angles, on, &how, each);
+        scatter_shared(p, angles, on, &how, None, each);
+    }
+
+    /// [`DEon::scatter_each`] or `screen_each` with the width integral's derivatives taken by
+    /// hand in `f64` where they can be ([`gradient::add_azimuthal`]).
+    fn dual_each<T: DualNum<f64>>(
+        p: &TableParams<T>,
+        angles: &[Angles],
+        on: TermSet,
+        pass: DualPass,
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        let beta_n = p.get(BETA_N, 0).re();
+        let how = if pass.screening {
+            Integration::screening(beta_n)
+        } else {
+            Integration::standard(beta_n)
+        };
+        scatter_shared(p, angles, on, &how, Some(pass), each);
     }
 }
 
-/// [`DEon::scatter_each`] with the width integral taken as `how` says: once per (θ_d, φ).
+/// [`DEon::scatter_each`] with the width integral taken as `how` says: once per (θ_d, φ), its
+/// derivatives by hand when `pass` names a gradient pass's seeded lines.
 fn scatter_shared<T: DualNum<f64>>(
     p: &TableParams<T>,
     angles: &[Angles],
     on: TermSet,
     how: &Integration,
+    pass: Option<DualPass>,
     each: &mut dyn FnMut(usize, &[Terms<T>]),
 ) {
     let mut order: Vec<(AzimuthalKey, usize)> = angles
@@ -438,7 +475,13 @@ fn scatter_shared<T: DualNum<f64>>(
     let mut terms = zero_terms::<T>(p.n_channels);
     for group in order.chunk_by(|x, y| x.0 == y.0) {
         clear_terms(&mut shared);
-        add_azimuthal(p, &angles[group[0].1], on, how, &mut shared);
+        let a = &angles[group[0].1];
+        match pass {
+            Some(pass) if T::NDERIV > 0 => {
+                gradient::add_azimuthal(p, a, on, how, pass, &mut shared)
+            }
+            _ => add_azimuthal(p, a, on, how, &mut shared),
+        }
         for &(_, i) in group {
             terms.clone_from_slice(&shared);
             apply_longitudinal(p, &angles[i], on, &mut terms);

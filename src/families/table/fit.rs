@@ -11,7 +11,7 @@ use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::error::Result;
 use crate::families::table::{
-    every_parameter, fitted, lobes_config, param_name, total, DynTable, ParamFact, Table,
+    every_parameter, fitted, lobes_config, param_name, total, DualPass, DynTable, ParamFact, Table,
     TableFamily, TableParamFile, TableParams, TermSet, Terms,
 };
 use crate::families::{FamilyParams, ModelRecords};
@@ -147,12 +147,13 @@ impl<F: TableFamily> TableForward<F> {
         }
     }
 
-    /// Values and the `dim` derivative parts of `free` (seeded in that order).
+    /// Values and the `dim` derivative parts: each `(parameter, slot)` of `seeds` is seeded in
+    /// its slot (several parameters may share one when no row depends on two of them).
     fn dual_pass<D: Dim>(
         &self,
         dim: D,
         p: &TableParams<f64>,
-        free: &[TableParam<F>],
+        seeds: &[(TableParam<F>, usize)],
         angles: &[Angles],
         (out, grad): (&mut [f64], &mut [f64]),
     ) where
@@ -160,14 +161,18 @@ impl<F: TableFamily> TableForward<F> {
         DualVec64<D>: DualNum<f64>,
     {
         let mut pd = p.map(|&x| DualVec64::<D>::from_re(x));
-        for (j, q) in free.iter().enumerate() {
+        for &(q, j) in seeds {
             let (k, c) = q.at();
             let direction = Derivative::derivative_generic(dim, U1, j);
             pd.values[k][c] = DualVec64::new(p.values[k][c], direction);
         }
+        let pass = DualPass {
+            screening: self.screening,
+            seeded: seeded_lines(seeds.iter().map(|&(q, _)| q)),
+        };
         let nc = p.n_channels;
         let nw = dim.value();
-        self.each(&pd, angles, &mut |i, terms| {
+        F::dual_each(&pd, angles, self.on, pass, &mut |i, terms| {
             for (c, t) in terms.iter().enumerate() {
                 let r = i * nc + c;
                 let v = total(t);
@@ -177,6 +182,11 @@ impl<F: TableFamily> TableForward<F> {
             }
         });
     }
+}
+
+/// The table lines of `params`, as bits (bit k: line k).
+fn seeded_lines<F>(params: impl IntoIterator<Item = TableParam<F>>) -> u32 {
+    params.into_iter().fold(0, |bits, q| bits | 1 << q.fact)
 }
 
 impl<F: TableFamily> Forward for TableForward<F> {
@@ -201,16 +211,49 @@ impl<F: TableFamily> Forward for TableForward<F> {
         out: &mut [f64],
         grad: &mut [f64],
     ) {
+        let seeds: Vec<_> = free.iter().copied().zip(0..).collect();
         with_dual_dim!(free.len(), |dim| self.dual_pass(
             dim,
             p,
-            free,
+            &seeds,
             angles,
             (out, grad)
         ));
         let rows = angles.len() * p.n_channels;
         self.measurement.apply(angles, &mut out[..rows]);
         self.measurement.apply(angles, grad);
+    }
+
+    /// Every channel's local parameter seeded in the one last slot: a table family's channel
+    /// `c` reads only its own per-channel values (`p.get(k, c)`), so the slot holds
+    /// ∂value_c/∂local[c] exactly, at the cost of `shared.len() + 1` derivative parts instead
+    /// of one per channel more.
+    fn gradients_compressed(
+        &self,
+        p: &TableParams<f64>,
+        shared: &[TableParam<F>],
+        local: &[Option<TableParam<F>>],
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        let ns = shared.len();
+        let mut seeds: Vec<_> = shared.iter().copied().zip(0..).collect();
+        seeds.extend(local.iter().flatten().map(|&q| (q, ns)));
+        with_dual_dim!(ns + 1, |dim| self.dual_pass(
+            dim,
+            p,
+            &seeds,
+            angles,
+            (out, grad)
+        ));
+        let rows = angles.len() * p.n_channels;
+        self.measurement.apply(angles, &mut out[..rows]);
+        self.measurement.apply(angles, grad);
+    }
+
+    fn cheap_gradients(&self, free: &[TableParam<F>]) -> bool {
+        F::cheap_gradients(seeded_lines(free.iter().copied()))
     }
 
     fn by_lobe(&self, p: &TableParams<f64>, angles: &Angles, out: &mut [[f64; 3]]) -> bool {

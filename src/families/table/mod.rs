@@ -282,6 +282,47 @@ pub trait TableFamily: Send + Sync + 'static {
     ) {
         Self::scatter_each(p, angles, on, each)
     }
+
+    /// [`TableFamily::scatter_each`] (or `screen_each`, as `pass` says) in a gradient pass, whose
+    /// dual numbers carry derivative parts only on the table lines `pass.seeded`: a family may
+    /// take a part that reads few of them with shorter duals and chain it. By default the pass's
+    /// own `scatter_each` or `screen_each`.
+    fn dual_each<T: DualNum<f64>>(
+        p: &TableParams<T>,
+        angles: &[Angles],
+        on: TermSet,
+        pass: DualPass,
+        each: &mut dyn FnMut(usize, &[Terms<T>]),
+    ) {
+        if pass.screening {
+            Self::screen_each(p, angles, on, each)
+        } else {
+            Self::scatter_each(p, angles, on, each)
+        }
+    }
+
+    /// Whether a gradient pass seeding the table lines `seeded` (bit k: line k) costs little more
+    /// than a value pass and gives its values to the bit (`Forward::cheap_gradients`): then
+    /// every value pass of the fit computes the gradients too. No by default.
+    fn cheap_gradients(_seeded: u32) -> bool {
+        false
+    }
+}
+
+/// What a gradient pass evaluates ([`TableFamily::dual_each`]).
+#[derive(Debug, Clone, Copy)]
+pub struct DualPass {
+    /// The multi-start's screening forward (`screen_each`), not `scatter_each`.
+    pub screening: bool,
+    /// Bit k: table line k's values carry derivative parts (the others' are zero).
+    pub seeded: u32,
+}
+
+impl DualPass {
+    /// True when table line `k` carries derivative parts.
+    pub fn seeds(self, k: usize) -> bool {
+        self.seeded & (1 << k) != 0
+    }
 }
 
 /// The most terms a family has.
