@@ -45,21 +45,40 @@ pub fn normal(rng: &mut impl RngCore) -> f64 {
     let t = tables();
     loop {
         let bits = rng.next_u64();
-        let i = (bits & 0x7f) as usize;
         let u = ((bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)) * 2.0 - 1.0;
-        if u.abs() < t.ratio[i] {
-            return u * t.x[i];
-        }
-        if i == 0 {
-            return tail(rng, u < 0.0);
-        }
-        let x = u * t.x[i];
-        let f0 = (-0.5 * (t.x[i] * t.x[i] - x * x)).exp();
-        let f1 = (-0.5 * (t.x[i + 1] * t.x[i + 1] - x * x)).exp();
-        if f1 + crate::synth::random::uniform(rng) * (f0 - f1) < 1.0 {
+        if let Some(x) = attempt(t, (bits & 0x7f) as usize, u, rng) {
             return x;
         }
     }
+}
+
+/// A standard normal draw and an independent uniform in [0, 1) (25 bits), from one `u64` but
+/// for the ziggurat's rare retries: bits 0–6 choose the layer, 32–63 the position in it (32
+/// bits), 7–31 the uniform; no bit serves two draws, so they are independent.
+pub fn normal_and_uniform(rng: &mut impl RngCore) -> (f64, f64) {
+    let bits = rng.next_u64();
+    let v = ((bits >> 7) & ((1 << 25) - 1)) as f64 * (1.0 / (1u64 << 25) as f64);
+    let u = (bits >> 32) as f64 * (1.0 / (1u64 << 31) as f64) - 1.0;
+    match attempt(tables(), (bits & 0x7f) as usize, u, rng) {
+        Some(x) => (x, v),
+        None => (normal(rng), v),
+    }
+}
+
+/// One try of the ziggurat at layer `i`, position `u` ∈ [−1, 1): the draw, or `None` when the
+/// point fell outside the density (a fresh try follows).
+#[inline]
+fn attempt(t: &Tables, i: usize, u: f64, rng: &mut impl RngCore) -> Option<f64> {
+    if u.abs() < t.ratio[i] {
+        return Some(u * t.x[i]);
+    }
+    if i == 0 {
+        return Some(tail(rng, u < 0.0));
+    }
+    let x = u * t.x[i];
+    let f0 = (-0.5 * (t.x[i] * t.x[i] - x * x)).exp();
+    let f1 = (-0.5 * (t.x[i + 1] * t.x[i + 1] - x * x)).exp();
+    (f1 + crate::synth::random::uniform(rng) * (f0 - f1) < 1.0).then_some(x)
 }
 
 /// A draw from the normal's tail beyond R (Marsaglia 1964), negated when `negative`.

@@ -4,8 +4,9 @@
 
 use rand_chacha::rand_core::RngCore;
 
+mod facet;
+
 use super::fiber::Fiber;
-use super::normal::normal;
 use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
 use crate::synth::random::uniform;
@@ -99,19 +100,21 @@ impl Sampler {
     /// Draw one ray of the beam from `omega_i`: the section it meets (its rotation, when the
     /// fibre has none, weighted by the width it presents) and its offset `h` ∈ [−1, 1].
     fn draw_ray(&self, omega_i: V3, rng: &mut impl RngCore) -> (Section, f64) {
-        let len = omega_i[1].hypot(omega_i[2]);
-        let dir = [-omega_i[1] / len, -omega_i[2] / len];
         let section = match self.fiber.rotation {
             Some(psi) => Section::new(self.fiber.eccentricity, psi),
             None if self.fiber.eccentricity == 1.0 => Section::new(1.0, 0.0),
             // Orientations weighted by the width they present: a uniform beam on a random
             // fibre meets a wide one more often (the major half-width, 1, bounds it).
-            None => loop {
-                let s = Section::new(self.fiber.eccentricity, std::f64::consts::PI * uniform(rng));
-                if uniform(rng) < s.half_width(dir) {
-                    break s;
+            None => {
+                let dir = beam_dir(omega_i);
+                loop {
+                    let s =
+                        Section::new(self.fiber.eccentricity, std::f64::consts::PI * uniform(rng));
+                    if uniform(rng) < s.half_width(dir) {
+                        break s;
+                    }
                 }
-            },
+            }
         };
         let h = 2.0 * uniform(rng) - 1.0;
         (section, h)
@@ -193,6 +196,7 @@ impl Sampler {
         let max_seg = self.fiber.max_segments as usize;
         let mut lanes = Lanes::default();
         let mut exhausted = false;
+        let dir = beam_dir(omega_i);
         loop {
             // Refill, in lane order.
             let mut any = false;
@@ -200,7 +204,7 @@ impl Sampler {
                 while !lanes.active[k] && !exhausted {
                     match source(rng) {
                         Some((section, h)) => {
-                            self.enter(&mut lanes, k, &section, omega_i, h, rng, balance, exit)
+                            self.enter(&mut lanes, k, &section, omega_i, dir, h, rng, balance, exit)
                         }
                         None => exhausted = true,
                     }
@@ -232,10 +236,22 @@ impl Sampler {
                 let g1 = (c * pw - s * pv) * ia2;
                 let inv = 1.0 / (g0 * g0 + g1 * g1).sqrt();
                 let (g0, g1) = (g0 * inv, g1 * inv);
-                l.nv[k] = c * g0 - s * g1;
-                l.nw[k] = s * g0 + c * g1;
+                let (nv, nw) = (c * g0 - s * g1, s * g0 + c * g1);
+                l.nv[k] = nv;
+                l.nw[k] = nw;
+                // The facet draw's setup (square root, division) here, where lanes overlap.
+                let dn = l.dv[k] * nv + l.dw[k] * nw;
+                l.dn[k] = dn;
+                l.dt[k] = l.dw[k] * nv - l.dv[k] * nw;
+                (l.a[k], l.lambda[k]) = self.tangent(l.du[k], dn);
             }
-            // Absorption along the chord and the shading normal, lane by lane.
+            // The attenuation along the chord, every channel and lane (vectorised exp).
+            for (att, &sigma_a) in l.att.iter_mut().zip(sigma_a) {
+                for (att, &len) in att.iter_mut().zip(&l.len) {
+                    *att = exp_lane(-sigma_a * len);
+                }
+            }
+            // Absorption and the facet's slopes, lane by lane.
             for k in 0..LANES {
                 if !l.active[k] {
                     continue;
@@ -245,26 +261,22 @@ impl Sampler {
                     add_n(&mut balance.inside, &l.w[k], nc);
                     continue;
                 }
-                let len = l.len[k];
-                for ((w, sigma_a), absorbed) in l.w[k][..nc]
+                for (c, (w, absorbed)) in l.w[k][..nc]
                     .iter_mut()
-                    .zip(sigma_a)
                     .zip(balance.absorbed.iter_mut())
+                    .enumerate()
                 {
-                    let kept = *w * (-sigma_a * len).exp();
+                    let kept = *w * l.att[c][k];
                     *absorbed += *w - kept;
                     *w = kept;
                 }
-                let ng = [0.0, l.nv[k], l.nw[k]];
-                let m = self.shading_normal(ng, [l.du[k], l.dv[k], l.dw[k]], false, rng, balance);
-                l.mu[k] = m[0];
-                l.mv[k] = m[1];
-                l.mw[k] = m[2];
+                (l.sl[k], l.sa[k]) =
+                    self.slopes(l.a[k], l.lambda[k], l.du[k], l.dn[k], l.dt[k], rng, balance);
             }
             // Fresnel from inside, the refracted and the reflected directions, all lanes.
             for k in 0..LANES {
                 let d = [l.du[k], l.dv[k], l.dw[k]];
-                let m = [l.mu[k], l.mv[k], l.mw[k]];
+                let m = facet([0.0, l.nv[k], l.nw[k]], l.sl[k], l.sa[k]);
                 let cos_i = dot(d, m);
                 let (f, cos_t) = fresnel_lane(cos_i, eta);
                 l.f[k] = f;
@@ -314,6 +326,7 @@ impl Sampler {
         k: usize,
         section: &Section,
         omega_i: V3,
+        dir: [f64; 2],
         h: f64,
         rng: &mut impl RngCore,
         balance: &mut Balance,
@@ -322,8 +335,6 @@ impl Sampler {
         let nc = self.nc;
         let eta = self.fiber.eta;
         let d = [-omega_i[0], -omega_i[1], -omega_i[2]];
-        let len = d[1].hypot(d[2]);
-        let dir = [d[1] / len, d[2] / len];
         let offset = h * section.half_width(dir);
         let p0 = [
             -offset * dir[1] - 3.0 * dir[0],
@@ -365,68 +376,13 @@ impl Sampler {
         let n = section.normal(p);
         [0.0, n[0], n[1]]
     }
+}
 
-    /// The outward shading normal at an interface with geometric normal `ng`, for a ray `d`
-    /// arriving from outside (`outside`) or inside: the facet `ng + s_l·u + s_a·(u × ng)`
-    /// (normalised) with longitudinal slope `s_l = tan α + tan β·ξ₁` and azimuthal slope
-    /// `s_a = tan β_φ·ξ₂` (ξ standard normal by [`normal`], fresh at every interface), drawn among the facets
-    /// `d` can see with probability proportional to the cosine it sees them at (a facet's
-    /// projected area).
-    #[inline]
-    fn shading_normal(
-        &self,
-        ng: V3,
-        d: V3,
-        outside: bool,
-        rng: &mut impl RngCore,
-        balance: &mut Balance,
-    ) -> V3 {
-        let sees = |m: V3| if outside { -dot(d, m) } else { dot(d, m) };
-        if self.rough {
-            // Rejection against the cosine c = ±d·m over a bound B ≥ c, tested on the facet
-            // before normalising (c·√(1 + s_l² + s_a²) = ±d·(its unnormalised normal) = c_u):
-            // accept when c_u > 0 and ξ²·(1 + s_l² + s_a²)·B² < c_u². Without azimuthal
-            // roughness every facet lies in the plane of u and ng, where the cosine is at most
-            // B = |d's projection on that plane| = √(d_u² + (d·ng)²) (Cauchy–Schwarz); else B = 1.
-            let sign = if outside { -1.0 } else { 1.0 };
-            let (du, dn, dt) = (
-                sign * d[0],
-                sign * (d[1] * ng[1] + d[2] * ng[2]),
-                sign * (d[2] * ng[1] - d[1] * ng[2]),
-            );
-            let bound2 = if self.slope_sd_az == 0.0 {
-                du * du + dn * dn
-            } else {
-                1.0
-            };
-            for _ in 0..NORMAL_TRIES {
-                let x1 = normal(rng);
-                let x2 = if self.slope_sd_az == 0.0 {
-                    0.0
-                } else {
-                    normal(rng)
-                };
-                let (s_l, s_a) = (self.slope + self.slope_sd * x1, self.slope_sd_az * x2);
-                // ±d · (s_l, ng_v − s_a·ng_w, ng_w + s_a·ng_v).
-                let c = du * s_l + dn + s_a * dt;
-                if c > 0.0 {
-                    let x = uniform(rng);
-                    if x * x * (1.0 + s_l * s_l + s_a * s_a) * bound2 < c * c {
-                        return facet(ng, s_l, s_a);
-                    }
-                }
-            }
-            balance.fallbacks += 1;
-        }
-        let m = facet(ng, self.slope, 0.0);
-        if sees(m) > 0.0 {
-            return m;
-        }
-        if !self.rough {
-            balance.fallbacks += 1;
-        }
-        ng
-    }
+/// The beam's unit in-plane direction of travel (−ω_i's (v, w) part, normalised); once per
+/// incidence, not per ray (`hypot` is a libm call).
+fn beam_dir(omega_i: V3) -> [f64; 2] {
+    let len = omega_i[1].hypot(omega_i[2]);
+    [-omega_i[1] / len, -omega_i[2] / len]
 }
 
 /// Rays traced at once by [`Sampler::trace_batch`].
@@ -449,18 +405,54 @@ struct Lanes {
     dw: [f64; LANES],
     w: [Weights; LANES],
     seg: [usize; LANES],
-    /// Per step: chord found, its length, geometric normal, shading normal, reflectance,
-    /// refracted and reflected directions.
+    /// Per step: chord found, its length, the attenuation along it per channel, geometric
+    /// normal, reflectance, refracted and reflected directions.
     ok: [bool; LANES],
     len: [f64; LANES],
+    att: [[f64; LANES]; MAX_CHANNELS],
     nv: [f64; LANES],
     nw: [f64; LANES],
-    mu: [f64; LANES],
-    mv: [f64; LANES],
-    mw: [f64; LANES],
+    /// The ray's components along ng and u × ng, the facet draw's `(A, λ)`, the slopes drawn.
+    dn: [f64; LANES],
+    dt: [f64; LANES],
+    a: [f64; LANES],
+    lambda: [f64; LANES],
+    sl: [f64; LANES],
+    sa: [f64; LANES],
     f: [f64; LANES],
     out: [[f64; LANES]; 3],
     refl: [[f64; LANES]; 3],
+}
+
+/// `e^x` for x ≤ 0 without branches or libm, so a loop of it vectorises: x = n·ln 2 + r,
+/// |r| ≤ ln 2/2, `e^r` by its Taylor series to r¹³ (truncation 4e-18 relative), 2ⁿ built in
+/// the exponent bits (as `families::marschner::lanes`' exp); below −708 it gives e^−708.
+#[inline(always)]
+fn exp_lane(x: f64) -> f64 {
+    // 2⁵² + 2⁵¹: adding it rounds to an integer and leaves it in the low bits.
+    const INTEGER_BITS: f64 = 6_755_399_441_055_744.0;
+    // ln 2 in two parts, the first of 32 bits, so n·LN2_HI is exact.
+    const LN2_HI: f64 = 0.693_147_180_369_123_8;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    let x = if x < -708.0 { -708.0 } else { x };
+    let t = x * std::f64::consts::LOG2_E + INTEGER_BITS;
+    let n = t - INTEGER_BITS;
+    let r = (x - n * LN2_HI) - n * LN2_LO;
+    // 1/k!, k = 13 down to 0.
+    const TAYLOR: [f64; 14] = {
+        let (mut c, mut k, mut f) = ([0.0; 14], 0, 1.0);
+        while k < 14 {
+            c[13 - k] = 1.0 / f;
+            k += 1;
+            f *= k as f64;
+        }
+        c
+    };
+    let mut p = TAYLOR[0];
+    for &c in &TAYLOR[1..] {
+        p = p * r + c;
+    }
+    p * f64::from_bits((n + (INTEGER_BITS + 1023.0)).to_bits() << 52)
 }
 
 /// [`fresnel`] from inside a medium of index `eta` into air, without branches: the same

@@ -18,26 +18,26 @@ pub struct Detector {
     /// Sample indices per cell, cells row-major: `starts[k]..starts[k+1]`.
     starts: Vec<u32>,
     members: Vec<u32>,
+    /// `dirs[members[j]]`, contiguous: a cell's candidates are read in one pass.
+    member_dirs: Vec<V3>,
     /// Rows with at least one member: most exits fall in rows no cap reaches (a rig samples a
     /// few inclinations), and are dismissed before the column's arithmetic.
     row_used: Vec<bool>,
 }
 
 /// A monotone stand-in for φ ∈ [0, 2π) in [0, 4) from the in-plane components (the "diamond
-/// angle"): cells in it are at most twice as wide in φ as the mean.
+/// angle"): cells in it are at most twice as wide in φ as the mean. Written with selects, not
+/// branches: an exit's quadrant is random, so branches on it mispredict.
 fn pseudo_angle(x: f64, y: f64) -> f64 {
-    if x == 0.0 && y == 0.0 {
-        0.0
-    } else if y >= 0.0 {
-        if x >= 0.0 {
-            y / (x + y)
-        } else {
-            1.0 - x / (y - x)
-        }
-    } else if x < 0.0 {
-        2.0 - y / (-x - y)
+    // y/(|x| + |y|) ∈ [−1, 1]; (0, 0) gives 0.
+    let a = y / (x.abs() + y.abs()).max(f64::MIN_POSITIVE);
+    let left = 2.0 - a;
+    let lower = 4.0 + a;
+    let v = if y < 0.0 { lower } else { a };
+    if x < 0.0 {
+        left
     } else {
-        3.0 + x / (x - y)
+        v
     }
 }
 
@@ -89,6 +89,7 @@ impl Detector {
             members.extend_from_slice(l);
         }
         starts.push(members.len() as u32);
+        let member_dirs = members.iter().map(|&s| dirs[s as usize]).collect();
         let row_used = (0..n_rows)
             .map(|r| starts[r * n_cols] != starts[(r + 1) * n_cols])
             .collect();
@@ -99,6 +100,7 @@ impl Detector {
             n_cols,
             starts,
             members,
+            member_dirs,
             row_used,
         }
     }
@@ -120,8 +122,9 @@ impl Detector {
         let c =
             ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as usize).min(self.n_cols - 1);
         let k = r * self.n_cols + c;
-        for &s in &self.members[self.starts[k] as usize..self.starts[k + 1] as usize] {
-            if dot(self.dirs[s as usize], d) >= self.cos_kernel {
+        let (a, b) = (self.starts[k] as usize, self.starts[k + 1] as usize);
+        for (&m, &s) in self.member_dirs[a..b].iter().zip(&self.members[a..b]) {
+            if dot(m, d) >= self.cos_kernel {
                 hit(s as usize);
             }
         }

@@ -402,3 +402,37 @@ fn ziggurat_draws_are_standard_normal() {
         assert!((got - p).abs() < 5.0 * se, "|x| > {}: {got} vs {p}", cut[k]);
     }
 }
+
+/// `normal_and_uniform`'s pair from one `u64`: the normal's mean and variance those of N(0, 1),
+/// the uniform's mean 1/2 and variance 1/12, and the two uncorrelated, within 5 standard errors.
+#[test]
+fn ziggurat_pair_is_normal_and_independent_uniform() {
+    let mut r = rng(22);
+    let n = 1_000_000;
+    let (mut x1, mut x2, mut u1, mut u2, mut xu) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for _ in 0..n {
+        let (x, u) = hairfit::trace::normal::normal_and_uniform(&mut r);
+        assert!((0.0..1.0).contains(&u));
+        x1 += x;
+        x2 += x * x;
+        u1 += u;
+        u2 += u * u;
+        xu += x * (u - 0.5);
+    }
+    let nf = n as f64;
+    let se = 1.0 / nf.sqrt();
+    assert!((x1 / nf).abs() < 5.0 * se, "mean {}", x1 / nf);
+    assert!(
+        (x2 / nf - 1.0).abs() < 5.0 * 2f64.sqrt() * se,
+        "var {}",
+        x2 / nf
+    );
+    assert!(
+        (u1 / nf - 0.5).abs() < 5.0 * se / 12f64.sqrt(),
+        "u mean {}",
+        u1 / nf
+    );
+    let uvar = u2 / nf - (u1 / nf).powi(2);
+    assert!((uvar - 1.0 / 12.0).abs() < 5.0 * se * 0.075, "u var {uvar}");
+    assert!((xu / nf).abs() < 5.0 * se / 12f64.sqrt(), "cov {}", xu / nf);
+}
