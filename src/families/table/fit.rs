@@ -147,6 +147,29 @@ impl<F: TableFamily> TableForward<F> {
         }
     }
 
+    /// Values and gradients in the measured quantity with `slots` derivative parts, each
+    /// `(parameter, slot)` of `seeds` seeded in its slot ([`Self::dual_pass`]).
+    fn seeded_pass(
+        &self,
+        p: &TableParams<f64>,
+        seeds: &[(TableParam<F>, usize)],
+        slots: usize,
+        angles: &[Angles],
+        out: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        with_dual_dim!(slots, |dim| self.dual_pass(
+            dim,
+            p,
+            seeds,
+            angles,
+            (out, grad)
+        ));
+        let rows = angles.len() * p.n_channels;
+        self.measurement.apply(angles, &mut out[..rows]);
+        self.measurement.apply(angles, grad);
+    }
+
     /// Values and the `dim` derivative parts: each `(parameter, slot)` of `seeds` is seeded in
     /// its slot (several parameters may share one when no row depends on two of them).
     fn dual_pass<D: Dim>(
@@ -212,16 +235,7 @@ impl<F: TableFamily> Forward for TableForward<F> {
         grad: &mut [f64],
     ) {
         let seeds: Vec<_> = free.iter().copied().zip(0..).collect();
-        with_dual_dim!(free.len(), |dim| self.dual_pass(
-            dim,
-            p,
-            &seeds,
-            angles,
-            (out, grad)
-        ));
-        let rows = angles.len() * p.n_channels;
-        self.measurement.apply(angles, &mut out[..rows]);
-        self.measurement.apply(angles, grad);
+        self.seeded_pass(p, &seeds, free.len(), angles, out, grad);
     }
 
     /// Every channel's local parameter seeded in the one last slot: a table family's channel
@@ -240,16 +254,7 @@ impl<F: TableFamily> Forward for TableForward<F> {
         let ns = shared.len();
         let mut seeds: Vec<_> = shared.iter().copied().zip(0..).collect();
         seeds.extend(local.iter().flatten().map(|&q| (q, ns)));
-        with_dual_dim!(ns + 1, |dim| self.dual_pass(
-            dim,
-            p,
-            &seeds,
-            angles,
-            (out, grad)
-        ));
-        let rows = angles.len() * p.n_channels;
-        self.measurement.apply(angles, &mut out[..rows]);
-        self.measurement.apply(angles, grad);
+        self.seeded_pass(p, &seeds, ns + 1, angles, out, grad);
     }
 
     fn cheap_gradients(&self, free: &[TableParam<F>]) -> bool {
