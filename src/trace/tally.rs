@@ -44,8 +44,15 @@ fn pseudo_angle(x: f64, y: f64) -> f64 {
 impl Detector {
     /// Points at the unit directions `dirs`, caps of radius `kernel` (radians, in (0, π/2)).
     pub fn new(dirs: Vec<V3>, kernel: f64) -> Detector {
-        let n_rows = ((2.0 / kernel.sin()).ceil() as usize).max(1);
-        let n_cols = ((TAU / kernel).ceil() as usize).max(1);
+        let mut n_rows = ((2.0 / kernel.sin()).ceil() as usize).max(1);
+        let mut n_cols = ((TAU / kernel).ceil() as usize).max(1);
+        // Cells about κ/4 high and κ/2 wide (where the grid stays small) hold fewer caps an
+        // exit misses: near the poles a row of height sin κ spans several κ of θ.
+        if n_rows * n_cols * 8 <= 1 << 18 {
+            n_rows *= 4;
+            n_cols *= 2;
+        }
+        let cos_kernel = kernel.cos();
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n_rows * n_cols];
         for (s, &d) in dirs.iter().enumerate() {
             let (theta, phi) = angles_of(d);
@@ -75,6 +82,10 @@ impl Detector {
             };
             for r in lo..=hi {
                 for &c in &cols {
+                    // The box above is loose near the poles: keep only cells the cap reaches.
+                    if !reaches(theta, phi, cos_kernel, r, c, n_rows, n_cols) {
+                        continue;
+                    }
                     let list = &mut lists[r * n_cols + c];
                     if list.last() != Some(&(s as u32)) {
                         list.push(s as u32);
@@ -95,7 +106,7 @@ impl Detector {
             .collect();
         Detector {
             dirs,
-            cos_kernel: kernel.cos(),
+            cos_kernel,
             n_rows,
             n_cols,
             starts,
@@ -129,6 +140,54 @@ impl Detector {
             }
         }
     }
+}
+
+/// φ ∈ [0, 2π) of the pseudo-angle `p` ∈ [0, 4): the inverse of [`pseudo_angle`].
+fn phi_of_pseudo(p: f64) -> f64 {
+    let (x, y) = if p < 1.0 {
+        (1.0 - p, p)
+    } else if p < 3.0 {
+        let a = 2.0 - p;
+        (a.abs() - 1.0, a)
+    } else {
+        let a = p - 4.0;
+        (1.0 - a.abs(), a)
+    };
+    y.atan2(x).rem_euclid(TAU)
+}
+
+/// Whether the cap of cosine radius `cos_k` around (θ, φ) may reach cell (`r`, `c`): the
+/// largest cosine to any point of the cell, with a margin far above the rounding of an exit's
+/// cell and of its dot product, so no exit inside the cap is ever left out.
+fn reaches(theta: f64, phi: f64, cos_k: f64, r: usize, c: usize, nr: usize, nc: usize) -> bool {
+    let z = |k: usize| (2.0 * k as f64 / nr as f64 - 1.0).clamp(-1.0, 1.0).asin();
+    let (t0, t1) = (z(r), z(r + 1));
+    let p0 = phi_of_pseudo(4.0 * c as f64 / nc as f64);
+    let p1 = if c + 1 == nc {
+        TAU
+    } else {
+        phi_of_pseudo(4.0 * (c + 1) as f64 / nc as f64)
+    };
+    let ps = phi.rem_euclid(TAU);
+    let circ = |a: f64, b: f64| {
+        let d = (a - b).abs().rem_euclid(TAU);
+        d.min(TAU - d)
+    };
+    // Nearest azimuth of the cell: for each θ (cos θ ≥ 0) it maximises the cosine.
+    let dphi = if (p0..=p1).contains(&ps) {
+        0.0
+    } else {
+        circ(ps, p0).min(circ(ps, p1))
+    };
+    // Over θ ∈ [t0, t1], A cos θ + B sin θ peaks at atan2(B, A) or at an end.
+    let (a, b) = (theta.cos() * dphi.cos(), theta.sin());
+    let f = |t: f64| a * t.cos() + b * t.sin();
+    let peak = b.atan2(a);
+    let mut best = f(t0).max(f(t1));
+    if (t0..=t1).contains(&peak) {
+        best = best.max(a.hypot(b));
+    }
+    best >= cos_k - 1e-9
 }
 
 fn row(z: f64, n: usize) -> usize {
@@ -165,5 +224,64 @@ impl Collected {
 
     pub fn get(&self, s: usize, order: usize, c: usize) -> f64 {
         self.sums[(s * ORDERS + order) * self.nc + c]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::optics::{add, direction, normalize, scale};
+    use super::*;
+
+    /// A fixed xorshift: uniform numbers in [0, 1) without a crate.
+    fn uniform(state: &mut u64) -> f64 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn the_grid_finds_exactly_the_caps_holding_a_direction() {
+        let mut st = 0x9e37_79b9_7f4a_7c15u64;
+        for kernel_deg in [0.7, 2.0, 9.0, 30.0] {
+            let k = f64::to_radians(kernel_deg);
+            // A ring near the pole, as an azimuthal rig samples, and scattered points.
+            let mut dirs: Vec<V3> = (0..180)
+                .map(|j| direction(-1.31, (j as f64 + 1.0) * TAU / 180.0))
+                .collect();
+            for _ in 0..200 {
+                let t = (2.0 * uniform(&mut st) - 1.0).asin() * 0.99;
+                dirs.push(direction(t, TAU * uniform(&mut st)));
+            }
+            let det = Detector::new(dirs.clone(), k);
+            let mut probes = Vec::new();
+            for _ in 0..20_000 {
+                let t = (2.0 * uniform(&mut st) - 1.0).asin();
+                probes.push(direction(t, TAU * uniform(&mut st)));
+            }
+            // Exits on and just beside the caps' rims.
+            for &d in &dirs {
+                for e in [-1e-12, 0.0, 1e-12] {
+                    let a = TAU * uniform(&mut st);
+                    let side = normalize([d[1], -d[0], 0.0]);
+                    let up = normalize([
+                        d[1] * side[2] - d[2] * side[1],
+                        d[2] * side[0] - d[0] * side[2],
+                        d[0] * side[1] - d[1] * side[0],
+                    ]);
+                    let off = add(scale(side, a.cos()), scale(up, a.sin()));
+                    let r = k * (1.0 + e);
+                    probes.push(normalize(add(scale(d, r.cos()), scale(off, r.sin()))));
+                }
+            }
+            for p in probes {
+                let mut got = Vec::new();
+                det.visit(p, |s| got.push(s));
+                let want: Vec<usize> = (0..dirs.len())
+                    .filter(|&s| dot(dirs[s], p) >= k.cos())
+                    .collect();
+                assert_eq!(got, want, "kernel {kernel_deg}°, exit {p:?}");
+            }
+        }
     }
 }
