@@ -231,42 +231,58 @@ pub fn compare_command(
     // fits, which can then use whatever core the writing leaves idle.
     let fitted = std::thread::scope(|scope| -> Result<Option<String>> {
         let mut writing = None;
-        let mut collect = |writing: Option<(&str, std::thread::ScopedJoinHandle<'_, _>)>| {
-            if let Some((name, handle)) = writing {
-                let written: crate::report::publish::PublishedFit =
-                    handle.join().map_err(|_| {
+        let mut collect = |writing: Option<(&str, Writing<'_, _>)>| {
+            if let Some((name, pending)) = writing {
+                let written: crate::report::publish::PublishedFit = match pending {
+                    Writing::Thread(handle) => handle.join().map_err(|_| {
                         Error::Other(format!(
                             "writing {name}'s files and report failed (a panic)"
                         ))
-                    })??;
+                    })??,
+                    Writing::Done(result) => result?,
+                };
                 report_lines.push(written.report_line(&out.join(name)));
                 outcomes.push(written.outcome);
             }
             Ok::<_, Error>(())
         };
-        for opts in fits {
-            let name = opts.family.as_str();
-            let outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
-            // A ranking of interrupted fits would be a ranking of best-so-far points.
-            if outcome.json.verdict == Verdict::Interrupted || stopped() {
-                return Ok(Some(name.to_string()));
+        // Every return joins the writer still running first: a thread left unjoined that
+        // panicked would make the scope panic instead of returning an error.
+        let run = (|| -> Result<Option<String>> {
+            for opts in fits {
+                let name = opts.family.as_str();
+                let outcome = crate::fit::registry::fit_family(&data, &file, report.clone(), opts)?;
+                // A ranking of interrupted fits would be a ranking of best-so-far points.
+                if outcome.json.verdict == Verdict::Interrupted || stopped() {
+                    return Ok(Some(name.to_string()));
+                }
+                let dir = set.sub_dir(name)?;
+                collect(writing.take())?;
+                let set = &set;
+                // A thread that cannot start (a memory cap) is no error: this thread writes.
+                let slot = std::sync::Arc::new(std::sync::Mutex::new(Some((dir, outcome))));
+                let theirs = slot.clone();
+                let write = move || {
+                    let taken = theirs.lock().ok().and_then(|mut s| s.take());
+                    let (dir, outcome) = taken.expect("the writer takes the outcome once");
+                    crate::report::publish::write_fit(set, &dir, outcome)
+                };
+                let pending = match std::thread::Builder::new().spawn_scoped(scope, write) {
+                    Ok(handle) => Writing::Thread(handle),
+                    Err(_) => {
+                        let taken = slot.lock().ok().and_then(|mut s| s.take());
+                        let (dir, outcome) = taken.expect("no thread took the outcome");
+                        Writing::Done(crate::report::publish::write_fit(set, &dir, outcome))
+                    }
+                };
+                writing = Some((name, pending));
             }
-            let dir = set.sub_dir(name)?;
-            collect(writing.take())?;
-            let set = &set;
-            let write = move || crate::report::publish::write_fit(set, &dir, outcome);
-            // Through Builder: a thread that cannot start (a memory cap) is an error, not a panic.
-            let handle = std::thread::Builder::new()
-                .spawn_scoped(scope, write)
-                .map_err(|e| {
-                    Error::Other(format!(
-                        "could not start a thread to write {name}'s files: {e}; nothing is published"
-                    ))
-                })?;
-            writing = Some((name, handle));
-        }
-        collect(writing)?;
-        Ok(None)
+            Ok(None)
+        })();
+        let last = collect(writing.take());
+        let fitted = run?;
+        last?;
+        Ok(fitted)
     })?;
     if let Some(name) = fitted {
         return interrupted(format!("while fitting {name}"));
@@ -350,4 +366,11 @@ pub fn summary_text(c: &Comparison, out: &Path) -> String {
     }
     s += &format!("compare: {}\n", out.join("index.html").display());
     s
+}
+
+/// A fit's files and report being written: on a thread of their own, or already written here
+/// (no thread could start, as under a memory cap).
+enum Writing<'scope, T> {
+    Thread(std::thread::ScopedJoinHandle<'scope, T>),
+    Done(T),
 }
