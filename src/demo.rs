@@ -132,7 +132,7 @@ pub fn demo_truth_file(family: ModelFamily) -> FamilyParams {
         }
         other => {
             let table = other.table().expect("every other family is a table");
-            let truth = crate::families::table::demo_params(table.facts(), DEMO_SCALE.len());
+            let truth = crate::families::table::demo_params(table.parameters(), DEMO_SCALE.len());
             TableParamFile::from_params(table, &truth).into()
         }
     }

@@ -71,19 +71,28 @@ impl ModelFamily {
         ModelFamily::Frostbite,
     ];
 
-    /// The family's entry in the registry: the one place a `--model` name meets the family's
-    /// facts. A new family is its folder plus one line here (and its fit's line in
-    /// `crate::fit::registry`).
-    pub fn facts(self) -> &'static dyn FamilyFacts {
+    /// The family's entry in the registry: the one place a `--model` name meets the type that
+    /// implements the family. A new family is its folder plus one line here (and its fit's
+    /// line in `crate::fit::registry`).
+    fn entry(self) -> Entry {
         use table::Table;
         use {deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
         match self {
-            ModelFamily::Marschner => &marschner::MarschnerFamily,
-            ModelFamily::Chiang => &chiang::ChiangFamily,
-            ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
-            ModelFamily::DEon => &Table::<DEon>::NEW,
-            ModelFamily::Karis => &Table::<Karis>::NEW,
-            ModelFamily::Frostbite => &Table::<Frostbite>::NEW,
+            ModelFamily::Marschner => Entry::Own(&marschner::MarschnerFamily),
+            ModelFamily::Chiang => Entry::Own(&chiang::ChiangFamily),
+            ModelFamily::KajiyaKay => Entry::Table(&Table::<KajiyaKay>::NEW),
+            ModelFamily::DEon => Entry::Table(&Table::<DEon>::NEW),
+            ModelFamily::Karis => Entry::Table(&Table::<Karis>::NEW),
+            ModelFamily::Frostbite => Entry::Table(&Table::<Frostbite>::NEW),
+        }
+    }
+
+    /// What every command reads of the family: name, title, citation, parameter table and
+    /// family-only options.
+    pub fn facts(self) -> &'static dyn FamilyFacts {
+        match self.entry() {
+            Entry::Own(facts) => facts,
+            Entry::Table(table) => table,
         }
     }
 
@@ -100,14 +109,9 @@ impl ModelFamily {
 
     /// The table family this is, or `None` for Marschner and Chiang.
     pub fn table(self) -> Option<&'static dyn DynTable> {
-        use table::Table;
-        use {deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
-        match self {
-            ModelFamily::Marschner | ModelFamily::Chiang => None,
-            ModelFamily::KajiyaKay => Some(&Table::<KajiyaKay>::NEW),
-            ModelFamily::DEon => Some(&Table::<DEon>::NEW),
-            ModelFamily::Karis => Some(&Table::<Karis>::NEW),
-            ModelFamily::Frostbite => Some(&Table::<Frostbite>::NEW),
+        match self.entry() {
+            Entry::Own(_) => None,
+            Entry::Table(table) => Some(table),
         }
     }
 
@@ -178,6 +182,13 @@ impl ModelFamily {
     pub fn own_options(self) -> &'static [&'static str] {
         self.facts().own_options()
     }
+}
+
+/// How a family is implemented: its own types (parameter file, model, fit), or a table family
+/// whose file, model and fit [`table`] writes once.
+enum Entry {
+    Own(&'static dyn FamilyFacts),
+    Table(&'static dyn DynTable),
 }
 
 impl std::fmt::Display for ModelFamily {
@@ -353,7 +364,7 @@ impl FamilyParams {
             FamilyParams::Chiang(p) => &mut p.sigma_a,
             FamilyParams::Table(p) => {
                 let mut replicated = Vec::new();
-                for (f, v) in p.table.facts().iter().zip(&mut p.values) {
+                for (f, v) in p.table.parameters().iter().zip(&mut p.values) {
                     if !f.per_channel || v.len() == n {
                         continue;
                     }

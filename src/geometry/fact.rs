@@ -140,7 +140,7 @@ impl ParamFact {
 /// What a family tells every command about itself: its `--model` name, how sentences and
 /// help name it, its parameter table and the options only it takes. Each family's folder
 /// implements it once (every table family through `families::table::Table`);
-/// `families::ModelFamily::facts` is the registry. Here, below the families, so that a family
+/// `families::ModelFamily::entry` is the registry. Here, below the families, so that a family
 /// implementing it and the registry naming the family do not import each other.
 pub trait FamilyFacts: Sync {
     /// The `--model` / `"model"` spelling.

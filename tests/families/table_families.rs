@@ -57,7 +57,7 @@ fn every_family_documents_its_table() {
     for t in tables() {
         let page = format!("docs/{}.md", t.name());
         let text = std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{page}: {e}"));
-        let missing: Vec<String> = hairfit::families::table::markdown_table(t.facts())
+        let missing: Vec<String> = hairfit::families::table::markdown_table(t.parameters())
             .into_iter()
             .filter(|row| !text.lines().any(|l| l.trim() == row))
             .collect();
@@ -117,7 +117,7 @@ fn switched_off_terms_fit_none_of_their_parameters<F: TableFamily>() {
 /// and fit it with the default options (2 starts are enough from the Latin hypercube).
 fn synth_and_fit(t: &'static dyn DynTable, noise: f64) -> (TableParams<f64>, FitJson) {
     let family = ModelFamily::parse(t.name()).unwrap();
-    let truth = demo_params(t.facts(), 3);
+    let truth = demo_params(t.parameters(), 3);
     let file = FamilyParams::Table(TableParamFile::from_params(t, &truth));
     let setup = ModelSetup::default();
     let model = FamilyModel::new(&file, &setup);
@@ -187,7 +187,7 @@ fn value_of(file: &TableParamFile, name: &str) -> f64 {
     };
     let k = file
         .table
-        .facts()
+        .parameters()
         .iter()
         .position(|f| f.name == base)
         .unwrap();

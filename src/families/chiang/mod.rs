@@ -265,7 +265,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
     },
 ];
 
-/// The Chiang family in the registry ([`crate::families::ModelFamily::facts`]).
+/// The Chiang family in the registry ([`crate::families::ModelFamily::facts`], listed by `ModelFamily::entry`).
 pub struct ChiangFamily;
 
 impl crate::geometry::FamilyFacts for ChiangFamily {

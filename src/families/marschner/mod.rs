@@ -42,7 +42,7 @@ pub use lanes::scattering_lanes;
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
 
-/// The Marschner family in the registry ([`crate::families::ModelFamily::facts`]).
+/// The Marschner family in the registry ([`crate::families::ModelFamily::facts`], listed by `ModelFamily::entry`).
 pub struct MarschnerFamily;
 
 impl crate::geometry::FamilyFacts for MarschnerFamily {

@@ -52,7 +52,7 @@ impl TableParamFile {
     /// The parameters in model units; a per-channel value written once applies to every channel.
     pub fn to_params(&self) -> TableParams<f64> {
         let nc = self.n_channels();
-        let facts = self.table.facts();
+        let facts = self.table.parameters();
         let values = facts
             .iter()
             .zip(&self.values)
@@ -72,7 +72,7 @@ impl TableParamFile {
     /// The file form of `params` (radians to degrees); one channel writes numbers.
     pub fn from_params(table: &'static dyn DynTable, params: &TableParams<f64>) -> TableParamFile {
         let values = table
-            .facts()
+            .parameters()
             .iter()
             .zip(&params.values)
             .map(|(f, v)| v.iter().map(|x| x * f.unit.file_factor()).collect())
@@ -82,7 +82,7 @@ impl TableParamFile {
 
     /// Check every value's domain.
     pub fn validate(&self) -> Result<()> {
-        self.to_params().validate(self.table.facts())
+        self.to_params().validate(self.table.parameters())
     }
 
     /// Parse JSON text as a parameter file of `table` (its `"model"`, when present, must name
@@ -107,7 +107,7 @@ impl TableParamFile {
 /// What a parameter file of `table` holds, for error messages.
 fn hint(table: &dyn DynTable) -> String {
     let keys: Vec<String> = table
-        .facts()
+        .parameters()
         .iter()
         .map(|f| {
             let list = if f.per_channel {
@@ -133,7 +133,7 @@ impl Serialize for TableParamFile {
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         let mut map = s.serialize_map(Some(self.values.len() + 1))?;
         map.serialize_entry("model", self.table.name())?;
-        for (f, v) in self.table.facts().iter().zip(&self.values) {
+        for (f, v) in self.table.parameters().iter().zip(&self.values) {
             if v.len() == 1 {
                 map.serialize_entry(f.name, &v[0])?;
             } else {
@@ -245,7 +245,7 @@ fn resolve(
     table: &'static dyn DynTable,
     mut entries: Vec<(String, Written)>,
 ) -> std::result::Result<TableParamFile, String> {
-    let facts = table.facts();
+    let facts = table.parameters();
     let keys = || facts.iter().map(|f| f.name).collect::<Vec<_>>().join(", ");
     if let Some((key, _)) = entries
         .iter()

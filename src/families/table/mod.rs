@@ -368,12 +368,10 @@ impl<F> Table<F> {
     pub const NEW: Table<F> = Table(PhantomData);
 }
 
-/// A table family behind a pointer, chosen at run time by `--model`.
-pub trait DynTable: Sync {
-    fn name(&self) -> &'static str;
-    fn title(&self) -> &'static str;
+/// A table family behind a pointer, chosen at run time by `--model`; its name, title and
+/// parameter table are its [`FamilyFacts`](crate::geometry::FamilyFacts).
+pub trait DynTable: crate::geometry::FamilyFacts {
     fn terms(&self) -> &'static [Term];
-    fn facts(&self) -> &'static [ParamFact];
     /// The terms on without `--terms`.
     fn default_terms(&self) -> TermSet;
     /// `S` of a batch, `out[k·nc + c]`.
@@ -401,17 +399,8 @@ impl<F: TableFamily> crate::geometry::FamilyFacts for Table<F> {
 }
 
 impl<F: TableFamily> DynTable for Table<F> {
-    fn name(&self) -> &'static str {
-        F::NAME
-    }
-    fn title(&self) -> &'static str {
-        F::TITLE
-    }
     fn terms(&self) -> &'static [Term] {
         F::TERMS
-    }
-    fn facts(&self) -> &'static [ParamFact] {
-        F::PARAMETERS
     }
     fn default_terms(&self) -> TermSet {
         F::default_terms()
