@@ -26,12 +26,7 @@ impl ModelSetup {
     /// the table families, the lobes they draw), Chiang's record, a table family's terms.
     pub fn records(&self, family: ModelFamily) -> ModelRecords {
         if let Some(table) = family.table() {
-            let on = self.table_terms(table);
-            return ModelRecords {
-                config: table::lobes_config(table.terms(), on),
-                chiang: None,
-                terms: Some(on.names(table.terms())),
-            };
+            return self.table_records(table);
         }
         match family {
             ModelFamily::Chiang => ModelRecords {
@@ -47,6 +42,17 @@ impl ModelSetup {
                 chiang: None,
                 terms: None,
             },
+        }
+    }
+
+    /// What result files record of the table family `table`'s configuration: the lobes its
+    /// terms draw and the terms that are on.
+    pub fn table_records(&self, table: &dyn DynTable) -> ModelRecords {
+        let on = self.table_terms(table);
+        ModelRecords {
+            config: table::lobes_config(table.terms(), on),
+            chiang: None,
+            terms: Some(on.names(table.terms())),
         }
     }
 

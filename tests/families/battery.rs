@@ -16,13 +16,15 @@ use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::fit::Marschner;
 use hairfit::families::marschner::{Lobes, ModelConfig};
 use hairfit::families::table::fit::TableForward;
-use hairfit::families::table::{Table, TableFamily, TermSet};
+use hairfit::families::table::{
+    demo_params, DynTable, Table, TableFamily, TableParamFile, TermSet,
+};
 use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
 use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use hairfit::files::{FitJson, LoadReport, ParamStatus, Verdict};
-use hairfit::fit::family::Family;
+use hairfit::fit::family::{Family, FamilyFit, FitInput};
 use hairfit::fit::problem::{FitParam, Forward, ParamSet};
-use hairfit::fit::registry::fit_family;
+use hairfit::fit::registry::family_fit;
 use hairfit::fit::FitOptions;
 use hairfit::geometry::{Angles, Measurement};
 use hairfit::synth::{Acquisition, Noise, Source};
@@ -30,7 +32,7 @@ use hairfit::synth::{Acquisition, Noise, Source};
 /// Which swap of incidence and exit leaves what unchanged, and for which of `by_lobe`'s
 /// columns (R, TT, TRT), as the family's page states it.
 #[derive(Clone, Copy)]
-enum Reciprocity {
+pub enum Reciprocity {
     /// The page says the model is not reciprocal: nothing to check.
     None,
     /// `S(i, r) = S(r, i)` for these columns.
@@ -40,13 +42,13 @@ enum Reciprocity {
 }
 
 /// What a family's page documents of its symmetries and energy.
-struct Documented {
+pub struct Documented {
     /// `S(φ) = S(−φ)`.
-    even_in_phi: bool,
-    reciprocity: Reciprocity,
+    pub even_in_phi: bool,
+    pub reciprocity: Reciprocity,
     /// The most a fibre with the demo truth returns of a white furnace ([`energy_bounded`]):
     /// 1 for a model that conserves energy; more for the models whose pages say they do not.
-    energy: f64,
+    pub energy: f64,
 }
 
 /// Each family's documented symmetries, from its page (docs/NAME.md, docs/model.md).
@@ -83,32 +85,32 @@ fn documented(family: ModelFamily) -> Documented {
 
 #[test]
 fn marschner() {
-    battery(ModelFamily::Marschner);
+    battery(&Subject::registered(ModelFamily::Marschner));
 }
 
 #[test]
 fn chiang() {
-    battery(ModelFamily::Chiang);
+    battery(&Subject::registered(ModelFamily::Chiang));
 }
 
 #[test]
 fn kajiya_kay() {
-    battery(ModelFamily::KajiyaKay);
+    battery(&Subject::registered(ModelFamily::KajiyaKay));
 }
 
 #[test]
 fn deon() {
-    battery(ModelFamily::DEon);
+    battery(&Subject::registered(ModelFamily::DEon));
 }
 
 #[test]
 fn karis() {
-    battery(ModelFamily::Karis);
+    battery(&Subject::registered(ModelFamily::Karis));
 }
 
 #[test]
 fn frostbite() {
-    battery(ModelFamily::Frostbite);
+    battery(&Subject::registered(ModelFamily::Frostbite));
 }
 
 /// The tests above name every registered family: one more in the registry fails here until
@@ -130,27 +132,83 @@ fn every_registered_family_runs_the_battery() {
     );
 }
 
-fn battery(family: ModelFamily) {
+/// A family as the battery holds it: what every check reads of it, reached the way commands
+/// reach it (its model through [`FamilyModel`], its fit through the [`FamilyFit`] the
+/// registry hands out), so a family a test defines ([`Subject::table`]) runs the same checks
+/// as a registered one.
+pub struct Subject {
+    pub name: String,
+    /// The demo's truth (3 channels) as the family's parameter file.
+    pub truth: FamilyParams,
+    /// Its table, for a table family.
+    pub table: Option<&'static dyn DynTable>,
+    pub documented: Documented,
+    /// Its fit, as `--model` picks it.
+    pub fit: &'static dyn FamilyFit,
+    /// Its `--model` entry; `None` for a family only a test knows.
+    pub registered: Option<ModelFamily>,
+    /// AD against finite differences on its forward model with every term on.
+    pub jacobian: fn(&Subject),
+}
+
+impl Subject {
+    /// A family of the registry.
+    pub fn registered(family: ModelFamily) -> Subject {
+        Subject {
+            name: family.as_str().to_string(),
+            truth: demo_truth_file(family),
+            table: family.table(),
+            documented: documented(family),
+            fit: family_fit(family),
+            registered: Some(family),
+            jacobian: ad_matches_finite_differences,
+        }
+    }
+
+    /// The table family `F`, registered or not: one type implementing [`TableFamily`] is all
+    /// the battery needs.
+    pub fn table<F: TableFamily>(documented: Documented) -> Subject {
+        let table: &'static dyn DynTable = const { &Table::<F>::NEW };
+        let truth = demo_params(F::PARAMETERS, DEMO_SCALE.len());
+        Subject {
+            name: F::NAME.to_string(),
+            truth: TableParamFile::from_params(table, &truth).into(),
+            table: Some(table),
+            documented,
+            fit: const { &Table::<F>::NEW },
+            registered: None,
+            jacobian: |s| table_jacobian::<F>(s),
+        }
+    }
+}
+
+impl std::fmt::Display for Subject {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name)
+    }
+}
+
+pub fn battery(family: &Subject) {
     finite_and_non_negative_over_the_sphere(family);
     symmetries_where_documented(family);
     energy_bounded(family);
-    ad_matches_finite_differences(family);
+    (family.jacobian)(family);
     file_round_trips(family);
     terms_switch_off_exactly(family);
     noise_free_fit_recovers_truth_and_is_good(family);
 }
 
-/// The family's demo truth (3 channels) and its model with every term on.
-fn model(family: ModelFamily, setup: &ModelSetup) -> FamilyModel {
-    FamilyModel::new(&demo_truth_file(family), setup)
+/// The family's demo truth (3 channels) and its model under `setup`.
+fn model(family: &Subject, setup: &ModelSetup) -> FamilyModel {
+    FamilyModel::new(&family.truth, setup)
 }
 
 /// Every term on: Marschner's lobes and effects, Chiang's four terms (with a plain 256-node
 /// width rule: the automatic rule places its nodes by the terms that are on, so its sums over
 /// different term sets would differ by its quadrature error), each table term.
-fn all_on(family: ModelFamily) -> ModelSetup {
+fn all_on(family: &Subject) -> ModelSetup {
     ModelSetup {
-        terms: family.table().map(|t| TermSet::all(t.terms().len())),
+        terms: family.table.map(|t| TermSet::all(t.terms().len())),
         chiang: ChiangModel::new(ChiangEffects::default(), 256).unwrap(),
         ..ModelSetup::default()
     }
@@ -196,7 +254,7 @@ fn directions() -> Vec<Angles> {
 
 /// S is a radiance ratio: every value finite and ≥ 0, grazing directions included (exactly,
 /// no tolerance: a negative or NaN value is a bug at any size).
-fn finite_and_non_negative_over_the_sphere(family: ModelFamily) {
+fn finite_and_non_negative_over_the_sphere(family: &Subject) {
     let m = model(family, &all_on(family));
     let angles = sphere();
     for (k, s) in eval(&m, &angles).iter().enumerate() {
@@ -212,8 +270,8 @@ fn finite_and_non_negative_over_the_sphere(family: ModelFamily) {
 /// arithmetic on mirrored or swapped inputs, so they agree to rounding: 1e-12 relative (of the
 /// larger value; 1e-300 absolute below the deepest tails), well above a few hundred operations'
 /// rounding and far below any real asymmetry (a few percent where a model is not symmetric).
-fn symmetries_where_documented(family: ModelFamily) {
-    let doc = documented(family);
+fn symmetries_where_documented(family: &Subject) {
+    let doc = &family.documented;
     let m = model(family, &all_on(family));
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()) + 1e-300;
     for a in directions() {
@@ -301,8 +359,8 @@ fn albedo(m: &FamilyModel, theta_r: f64, n: usize) -> [f64; 3] {
 /// The tolerance is the quadrature's own error, measured: the rule at 96 and at 192 nodes, and
 /// `E₁₉₂ + |E₁₉₂ − E₉₆| ≤ 1` (the demo lobes, β ≥ 5°, span ≥ 10 nodes at 96, so the difference
 /// overstates the error of the finer rule).
-fn energy_bounded(family: ModelFamily) {
-    let bound = documented(family).energy;
+fn energy_bounded(family: &Subject) {
+    let bound = family.documented.energy;
     let m = model(family, &all_on(family));
     for theta_r in [-60.0f64, -15.0, 30.0] {
         let coarse = albedo(&m, theta_r.to_radians(), 96);
@@ -336,9 +394,12 @@ where
 }
 
 /// The family's forward model with every term on, its parameter set and its free parameters,
-/// handed to [`jacobian_check`]: one arm per family, so a new family must give its own.
-fn ad_matches_finite_differences(family: ModelFamily) {
-    let file = demo_truth_file(family);
+/// handed to [`jacobian_check`]: one arm per registered family, so a new family must give its
+/// own.
+fn ad_matches_finite_differences(subject: &Subject) {
+    let family = subject.registered.expect("a registered family");
+    let file = &subject.truth;
+    let name = subject.name.as_str();
     match family {
         ModelFamily::Marschner => {
             let forward = MarschnerForward {
@@ -346,7 +407,7 @@ fn ad_matches_finite_differences(family: ModelFamily) {
                 measurement: Measurement::S,
             };
             let p = file.marschner().unwrap().to_params();
-            jacobian_check(family, &forward, &p, &Marschner::parameters(3));
+            jacobian_check(name, &forward, &p, &Marschner::parameters(3));
         }
         ModelFamily::Chiang => {
             // A plain 128-node width rule: the Jacobian is of the discrete sum, which any node
@@ -356,21 +417,26 @@ fn ad_matches_finite_differences(family: ModelFamily) {
                 measurement: Measurement::S,
             };
             let p = file.chiang().unwrap().to_params();
-            jacobian_check(family, &forward, &p, &Chiang::parameters(3));
+            jacobian_check(name, &forward, &p, &Chiang::parameters(3));
         }
-        ModelFamily::KajiyaKay => table_jacobian::<KajiyaKay>(family, &file),
-        ModelFamily::DEon => table_jacobian::<DEon>(family, &file),
-        ModelFamily::Karis => table_jacobian::<Karis>(family, &file),
-        ModelFamily::Frostbite => table_jacobian::<Frostbite>(family, &file),
+        ModelFamily::KajiyaKay => table_jacobian::<KajiyaKay>(subject),
+        ModelFamily::DEon => table_jacobian::<DEon>(subject),
+        ModelFamily::Karis => table_jacobian::<Karis>(subject),
+        ModelFamily::Frostbite => table_jacobian::<Frostbite>(subject),
     }
 }
 
-fn table_jacobian<F: TableFamily>(family: ModelFamily, file: &FamilyParams) {
-    let FamilyParams::Table(t) = file else {
-        panic!("{family}: a table family's file")
+fn table_jacobian<F: TableFamily>(subject: &Subject) {
+    let FamilyParams::Table(t) = &subject.truth else {
+        panic!("{subject}: a table family's file")
     };
     let forward = TableForward::<F>::new(TermSet::all(F::TERMS.len()), Measurement::S);
-    jacobian_check(family, &forward, &t.to_params(), &Table::<F>::parameters(3));
+    jacobian_check(
+        &subject.name,
+        &forward,
+        &t.to_params(),
+        &Table::<F>::parameters(3),
+    );
 }
 
 /// The dual-number Jacobian is the derivative of the values: against central differences with
@@ -380,12 +446,8 @@ fn table_jacobian<F: TableFamily>(family: ModelFamily, file: &FamilyParams) {
 /// lobe peaks and interpolation-table knots and nothing more. The values of the gradient pass
 /// are the values pass's to 64 ulp (a dual number divides by multiplying with the reciprocal,
 /// which rounds the last bits of some of a value's ~100 operations differently).
-fn jacobian_check<W: Forward>(
-    family: ModelFamily,
-    forward: &W,
-    truth: &ParamSet<W>,
-    free: &[W::Param],
-) where
+fn jacobian_check<W: Forward>(family: &str, forward: &W, truth: &ParamSet<W>, free: &[W::Param])
+where
     ParamSet<W>: Clone,
 {
     let p = nudged::<W>(truth, free);
@@ -432,31 +494,45 @@ fn jacobian_check<W: Forward>(
 }
 
 /// A parameter file reads back as the parameters it was written from (JSON text, bit for bit),
-/// names its family, and is refused under another family's `--model` with the file's name.
-fn file_round_trips(family: ModelFamily) {
-    let file = demo_truth_file(family);
+/// names its family, and is refused under another family's `--model` with the file's name. A
+/// registered family is read as `--model NAME` reads it; one only a test knows, as that path
+/// reads a table family's file once `NAME` has found its table.
+fn file_round_trips(subject: &Subject) {
+    let file = &subject.truth;
     let path = std::path::Path::new("p.json");
-    let text = serde_json::to_string_pretty(&file).unwrap();
-    let back = FamilyParams::from_json_text(text.clone(), path, family).unwrap();
-    assert_eq!(back, file, "{family}");
-    assert_eq!(back.family(), family);
-    let tagged: FamilyParams = serde_json::from_str(&text).unwrap();
-    assert_eq!(tagged, file, "{family}: fit.json's params read by the tag");
+    let text = serde_json::to_string_pretty(file).unwrap();
+    let back = match (subject.registered, subject.table) {
+        (Some(family), _) => {
+            let back = FamilyParams::from_json_text(text.clone(), path, family).unwrap();
+            assert_eq!(back.family(), family);
+            let tagged: FamilyParams = serde_json::from_str(&text).unwrap();
+            assert_eq!(
+                &tagged, file,
+                "{subject}: fit.json's params read by the tag"
+            );
+            back
+        }
+        (None, Some(table)) => TableParamFile::from_json_str(&text, path, table)
+            .unwrap()
+            .into(),
+        (None, None) => panic!("{subject}: only a table family can be unregistered"),
+    };
+    assert_eq!(&back, file, "{subject}");
     let other = ModelFamily::ALL
         .into_iter()
-        .find(|f| *f != family && *f != ModelFamily::Marschner)
+        .find(|f| Some(*f) != subject.registered && *f != ModelFamily::Marschner)
         .unwrap();
     let e = FamilyParams::from_json_text(text, path, other)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("p.json"), "{family} read as {other}: {e}");
+    assert!(e.contains("p.json"), "{subject} read as {other}: {e}");
 }
 
 /// Each switchable term of the family, as (its name, the setup without it, the setup with it
 /// alone): Marschner's lobes, Chiang's four terms, each table term.
-fn switches(family: ModelFamily) -> Vec<(String, ModelSetup, ModelSetup)> {
+fn switches(family: &Subject) -> Vec<(String, ModelSetup, ModelSetup)> {
     let all = all_on(family);
-    if let Some(t) = family.table() {
+    if let Some(t) = family.table {
         let n = t.terms().len();
         let every = TermSet::all(n);
         return (0..n)
@@ -474,7 +550,7 @@ fn switches(family: ModelFamily) -> Vec<(String, ModelSetup, ModelSetup)> {
             })
             .collect();
     }
-    match family {
+    match family.registered.expect("a registered family") {
         ModelFamily::Chiang => {
             let set = |e: &mut ChiangEffects, k: usize, v: bool| match k {
                 0 => e.r = v,
@@ -525,7 +601,7 @@ fn switches(family: ModelFamily) -> Vec<(String, ModelSetup, ModelSetup)> {
 /// With one term off, S is the sum of the others: total = without + alone, and the by-lobe
 /// columns sum to S, to a few ulps (sums of the same terms in different orders: 1e-12
 /// relative).
-fn terms_switch_off_exactly(family: ModelFamily) {
+fn terms_switch_off_exactly(family: &Subject) {
     let angles = directions();
     let m = model(family, &all_on(family));
     let total = eval(&m, &angles);
@@ -558,15 +634,18 @@ fn terms_switch_off_exactly(family: ModelFamily) {
 }
 
 /// Synthesize the demo geometry from the family's demo truth without noise and fit it with the
-/// default options.
-fn noise_free_fit(family: ModelFamily) -> FitJson {
-    let file = demo_truth_file(family);
+/// default options, through the family's [`FamilyFit`] (what `--model NAME` runs).
+fn noise_free_fit(family: &Subject) -> FitJson {
+    let file = &family.truth;
     let setup = ModelSetup::default();
-    let model = FamilyModel::new(&file, &setup);
+    let model = FamilyModel::new(file, &setup);
     let source = Source {
         model: &model,
-        file: &file,
-        records: setup.records(family),
+        file,
+        records: match family.table {
+            Some(table) => setup.table_records(table),
+            None => setup.records(family.registered.unwrap()),
+        },
     };
     let how = Acquisition {
         directions: &demo_directions(),
@@ -579,22 +658,21 @@ fn noise_free_fit(family: ModelFamily) -> FitJson {
     let (dataset, _) = hairfit::synth::synthesize_model(&source, &how).unwrap();
     let data = hairfit::fit::fit_data(&dataset);
     let opts = FitOptions {
-        family,
+        family: family.registered.unwrap_or_default(),
         intervals: hairfit::fit::Intervals::Linear,
         ..FitOptions::default()
     };
-    fit_family(&data, "battery.csv", LoadReport::default(), &opts)
-        .unwrap()
-        .json
+    let input = FitInput::new(&data, "battery.csv", LoadReport::default(), &opts);
+    family.fit.fit(input).unwrap().json
 }
 
 /// Noise-free data are an exact zero of the residual: the verdict is `good`, every free
 /// parameter and scale is recovered to 1e-6 relative (the solver's stopping tolerance, far
 /// above rounding; 1e-6 absolute for a parameter whose truth is within 1e-3 of zero).
-fn noise_free_fit_recovers_truth_and_is_good(family: ModelFamily) {
+fn noise_free_fit_recovers_truth_and_is_good(family: &Subject) {
     let fit = noise_free_fit(family);
     assert_eq!(fit.verdict, Verdict::Good, "{family}: {:?}", fit.reasons);
-    let truth = serde_json::to_value(demo_truth_file(family)).unwrap();
+    let truth = serde_json::to_value(&family.truth).unwrap();
     for e in fit
         .parameters
         .iter()

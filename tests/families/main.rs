@@ -16,6 +16,7 @@ mod chiang_quadrature;
 mod deon_invariants;
 mod deon_values;
 mod eval_rows;
+mod family_from_a_test;
 mod frostbite_azimuthal;
 mod frostbite_values;
 mod karis_values;
