@@ -348,7 +348,7 @@ impl FamilyParams {
             FamilyParams::Chiang(p) => &p.sigma_a,
             FamilyParams::Table(p) => return p.is_scalar(),
         };
-        matches!(s, crate::families::marschner::params::SigmaA::Scalar(_))
+        matches!(s, crate::geometry::SigmaA::Scalar(_))
     }
 
     /// Write every per-channel value given once as `n` values (`hairfit synth --channels n`);
@@ -358,7 +358,7 @@ impl FamilyParams {
         &mut self,
         n: usize,
     ) -> std::result::Result<Option<String>, (&'static str, usize)> {
-        use crate::families::marschner::params::SigmaA;
+        use crate::geometry::SigmaA;
         let sigma_a = match self {
             FamilyParams::Marschner(p) => &mut p.sigma_a,
             FamilyParams::Chiang(p) => &mut p.sigma_a,

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::families::marschner::params::SigmaA;
+use crate::geometry::SigmaA;
 use crate::json_file::ParameterFile;
 
 /// Most internal segments a path may be followed for (`max_segments`).

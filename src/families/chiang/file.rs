@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ChiangParams;
 use crate::error::{Error, Result};
-use crate::families::marschner::params::SigmaA;
+use crate::geometry::SigmaA;
 pub use crate::json_file::ParameterFile;
 
 /// The model tag a Chiang file may carry.
