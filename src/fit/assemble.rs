@@ -531,7 +531,6 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<Param
         ev,
         e: &e,
         worst_row_misfit: worst_row,
-        config: &records.config,
         params: &params,
         status,
         parameters: &parameters,

@@ -3,7 +3,6 @@
 //! the suggestions both read it without importing each other.
 
 use super::problem::{Evaluation, Evaluator, FitData, Forward, ParamSet};
-use crate::families::marschner::ModelConfig;
 use crate::files::{FitStatus, ParameterEntry, ScaleEntry, TraceStage};
 
 /// A residual beyond this many robust noise levels is "large" (evidence for a robust loss).
@@ -17,7 +16,6 @@ pub struct Evidence<'a, 'e, 'f, F: Forward> {
     pub e: &'a Evaluation,
     /// The worst row's relative misfit (see [`super::EXACT_MISFIT`]).
     pub worst_row_misfit: f64,
-    pub config: &'a ModelConfig,
     /// Every parameter at the optimum (natural units).
     pub params: &'a ParamSet<F>,
     pub status: FitStatus,

@@ -8,7 +8,6 @@ use rayon::prelude::*;
 use super::evidence::{Evidence, LARGE_RESIDUAL};
 use super::gof;
 use super::problem::{FitParam, Forward, ScaleMode, Space, CHUNK};
-use crate::families::marschner::RootMode;
 use crate::files::{GoodnessOfFit, ParamStatus, ParameterEntry, Suggestion};
 use crate::fit::Loss;
 use crate::geometry::Measurement;
@@ -140,11 +139,6 @@ fn robust_loss<F: Forward>(
 }
 
 fn exact_mode<F: Forward>(x: &Evidence<'_, '_, '_, F>, g: &GoodnessOfFit) -> Option<Suggestion> {
-    if x.config.mode != RootMode::Cubic
-        || !(x.config.effects.lobes.tt || x.config.effects.lobes.trt)
-    {
-        return None;
-    }
     let nc = x.data.n_channels().max(1);
     // The exact root map at the fitted parameters and scales: how the residuals would change if
     // the data followed it (in the fit's normalised units).

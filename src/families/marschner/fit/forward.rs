@@ -104,7 +104,11 @@ impl Forward for MarschnerForward {
         self.measurement
     }
     fn exact_values(&self, p: &Params<f64>, angles: &[Angles], out: &mut [f64]) -> bool {
-        if self.config.mode == crate::families::marschner::RootMode::Exact {
+        // Only the transmitted lobes' root maps differ between the modes.
+        let lobes = self.config.effects.lobes;
+        if self.config.mode == crate::families::marschner::RootMode::Exact
+            || !(lobes.tt || lobes.trt)
+        {
             return false;
         }
         let exact = MarschnerForward {
