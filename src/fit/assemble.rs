@@ -601,22 +601,29 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<Param
     })
 }
 
-/// A fit measured at its optimum whose verdict is not decided yet: the profiles add their
-/// intervals to it, then [`FitDraft::finish`] decides the verdict once and hands the outcome
-/// over, not to be edited again.
+/// A fit measured at its optimum whose verdict is not decided yet: the interval stage reads it
+/// ([`super::profile::intervals`]), then [`FitDraft::finish`] writes the stage's findings, decides
+/// the verdict once and hands the outcome over, not to be edited again.
 pub struct FitDraft<P> {
     pub outcome: FitOutcome<P>,
     pub assessment: Assessment,
 }
 
 impl<P> FitDraft<P> {
-    /// The finished outcome: the verdict, its reasons and suggestions decided from the
-    /// assessment and the profiled parameters ([`super::verdict::decide`]).
-    pub fn finish(self, data: &FitData) -> FitOutcome<P> {
+    /// The finished outcome: the interval stage's intervals written, then the verdict, its
+    /// reasons and suggestions decided from the assessment and the profiled parameters
+    /// ([`super::verdict::decide`]).
+    pub fn finish(
+        self,
+        data: &FitData,
+        intervals: super::profile::IntervalStage,
+        started: std::time::Instant,
+    ) -> FitOutcome<P> {
         let FitDraft {
             mut outcome,
             assessment,
         } = self;
+        super::profile::write_into(&mut outcome, intervals, started);
         let judgement = super::verdict::decide(&assessment, &outcome.json, data);
         outcome.json.verdict = judgement.verdict;
         outcome.json.reasons = judgement.reasons;

@@ -376,7 +376,7 @@ pub fn fit_with<F: Forward>(
         ));
     }
     let x_best = ev_full.natural(&best.u[..run.free.len()]);
-    let mut out = assemble::assemble(assemble::Assembly {
+    let draft = assemble::assemble(assemble::Assembly {
         data,
         file: run.input.file,
         load_report: run.input.load_report,
@@ -408,8 +408,8 @@ pub fn fit_with<F: Forward>(
         max_iters: opts.polish_iters,
         cancel: opts.cancel.clone(),
     };
-    profile::intervals(&mut out, optimum, &best, opts, run.input.started)?;
-    Ok(out.finish(data))
+    let intervals = profile::intervals(&draft, optimum, &best, opts)?;
+    Ok(draft.finish(data, intervals, run.input.started))
 }
 
 /// An evaluator of `d` with the run's fixed values and free parameters (loss scale 1 until the

@@ -491,55 +491,96 @@ pub fn profile_all<F: Forward>(
     Ok(Some(profiles))
 }
 
-/// The fit's interval stage: decide (`--intervals`), profile every free parameter of `opt`
-/// (`best`: the polish run, whose cost is the reference), and write the result
-/// into `out`. Ctrl-C stops it: the linearised intervals stand and the status is `interrupted`.
+/// What the interval stage decided and found, for [`FitDraft::finish`] to write into fit.json
+/// (the stage itself edits nothing).
+pub struct IntervalStage {
+    /// `linear` or `profile` (fit.json `options.intervals`), and why (`intervals_reason`).
+    pub method: &'static str,
+    pub reason: String,
+    /// Each free parameter's profile, by its fit.json name and reporting factor.
+    pub profiles: Vec<Profile<Label>>,
+    /// Ctrl-C stopped the profiles: the linearised standard errors stand.
+    pub interrupted: bool,
+    /// The profiles' wall time (timing.json stage `profile`), when they ran.
+    pub wall_s: Option<f64>,
+}
+
+impl IntervalStage {
+    fn linear(reason: impl Into<String>) -> IntervalStage {
+        IntervalStage {
+            method: "linear",
+            reason: reason.into(),
+            profiles: Vec::new(),
+            interrupted: false,
+            wall_s: None,
+        }
+    }
+}
+
+/// A profiled parameter as fit.json names it: its name and the factor from natural to reporting
+/// units.
+pub struct Label {
+    pub json_name: String,
+    pub factor: f64,
+}
+
+impl<P: FitParam> Profile<P> {
+    /// The profile with its parameter as fit.json names it.
+    pub fn labelled(self) -> Profile<Label> {
+        Profile {
+            name: Label {
+                json_name: self.name.json_name(),
+                factor: self.name.report_factor(),
+            },
+            points: self.points,
+            end_68: self.end_68,
+            end_95: self.end_95,
+            iterations: self.iterations,
+            solves: self.solves,
+            methods: self.methods,
+        }
+    }
+}
+
+/// The fit's interval stage: decide (`--intervals`) from the draft, then profile every free
+/// parameter of `opt` (`best`: the polish run, whose cost is the reference). Ctrl-C stops it:
+/// the linearised intervals stand and the status is `interrupted`.
 pub fn intervals<F: Forward, Q>(
-    draft: &mut FitDraft<Q>,
+    draft: &FitDraft<Q>,
     mut opt: Optimum<'_, F>,
     best: &LocalRun,
     opts: &FitOptions,
-    started: std::time::Instant,
-) -> Result<()> {
+) -> Result<IntervalStage> {
     let t0 = std::time::Instant::now();
     let nf = opt.free.len();
-    let FitDraft {
-        outcome: out,
-        assessment,
-    } = draft;
-    let record = |out: &mut FitOutcome<Q>, method: &str, reason: String| {
-        out.json.options.intervals = method.into();
-        out.json.options.intervals_reason = reason;
-    };
-    let dof = out.json.residuals.dof;
+    let (json, assessment) = (&draft.outcome.json, &draft.assessment);
+    let dof = json.residuals.dof;
     if nf == 0 || dof == 0 || !(best.cost.is_finite() && best.cost > 0.0) {
-        record(out, "linear", "nothing to profile (no free parameter, no residual degrees of freedom, or a zero cost)".into());
-        return Ok(());
+        return Ok(IntervalStage::linear("nothing to profile (no free parameter, no residual degrees of freedom, or a zero cost)"));
     }
-    if matches!(out.json.status, FitStatus::Failed | FitStatus::Interrupted) {
-        record(out, "linear", format!("the fit ended {}", out.json.status));
-        return Ok(());
+    if matches!(json.status, FitStatus::Failed | FitStatus::Interrupted) {
+        return Ok(IntervalStage::linear(format!(
+            "the fit ended {}",
+            json.status
+        )));
     }
     // Noise-free data: the cost is rounding, so Δχ² (and every interval) would be rounding noise.
-    let relative = out.worst_row_misfit;
+    let relative = draft.outcome.worst_row_misfit;
     if relative.is_finite() && relative <= super::EXACT_MISFIT {
-        record(out, "linear", format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile"));
-        return Ok(());
+        return Ok(IntervalStage::linear(format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile")));
     }
     // A profile interval is where Δχ² of a model that describes the data crosses a quantile; on
     // a poor fit the misfit, not the noise, shapes χ², so its intervals mean no more than the
     // linearised errors (already scaled by √(reduced χ²)) and cost most of the run (re-fits of a
     // mismatched model settle slowly). `--intervals profile` still computes them.
     if opts.intervals == Intervals::Auto && assessment.is_poor_fit() {
-        record(out, "linear", "auto: the fit is poor_fit, so the model does not describe the data and profile intervals (which assume it does) are no more meaningful than the linearised standard errors; pass --intervals profile to compute them anyway".into());
-        return Ok(());
+        return Ok(IntervalStage::linear("auto: the fit is poor_fit, so the model does not describe the data and profile intervals (which assume it does) are no more meaningful than the linearised standard errors; pass --intervals profile to compute them anyway"));
     }
     let n_cols = opt.u.len();
-    let n_residuals = dof + nf + out.json.scale.len();
+    let n_residuals = dof + nf + json.scale.len();
     let (go, reason) = decide(opts.intervals, nf, n_residuals, n_cols);
     if !go {
-        record(out, "linear", reason);
-        return Ok(());
+        return Ok(IntervalStage::linear(reason));
     }
     opt.chi2_unit = 2.0 * best.cost / dof as f64;
     opt.dof = dof;
@@ -547,17 +588,15 @@ pub fn intervals<F: Forward, Q>(
         .free
         .iter()
         .map(|&p| {
-            out.json
-                .parameters
+            json.parameters
                 .iter()
                 .find(|e| e.name == p.json_name())
                 .and_then(|e| e.std_error)
                 .map(|se| se / p.report_factor())
         })
         .collect();
-    match profile_all(&opt, &steps)? {
+    let stage = match profile_all(&opt, &steps)? {
         Some(profiles) => {
-            apply(&mut out.json, &profiles);
             let iterations: u64 = profiles.iter().map(|p| p.iterations).sum();
             let solves: usize = profiles.iter().map(|p| p.solves).sum();
             let quadratic = profiles
@@ -566,28 +605,44 @@ pub fn intervals<F: Forward, Q>(
                 .filter(|m| *m != ProfileMethod::Refits)
                 .count();
             let sides = 2 * profiles.len();
-            record(
-                out,
-                "profile",
-                format!(
+            IntervalStage {
+                method: "profile",
+                reason: format!(
                     "{reason}; ran {solves} solves, {iterations} LM iterations; {quadratic} of {sides} sides settled by the local quadratic (fit.json `profile_method`; wall time: timing.json stage `profile`)"
                 ),
-            );
+                profiles: profiles.into_iter().map(Profile::labelled).collect(),
+                interrupted: false,
+                wall_s: None,
+            }
         }
-        None => {
-            record(
-                out,
-                "linear",
-                "profiling interrupted (Ctrl-C): the linearised standard errors stand".into(),
-            );
-            out.json.warnings.push("profiling was interrupted: the parameter intervals are the linearised standard errors only".into());
-            out.json.status = FitStatus::Interrupted;
-        }
+        None => IntervalStage {
+            interrupted: true,
+            ..IntervalStage::linear(
+                "profiling interrupted (Ctrl-C): the linearised standard errors stand",
+            )
+        },
+    };
+    Ok(IntervalStage {
+        wall_s: Some(t0.elapsed().as_secs_f64()),
+        ..stage
+    })
+}
+
+/// Write the interval stage into `out`: the method and its reason, each profile's intervals,
+/// an interruption's warning and status, the stage's time.
+pub fn write_into<Q>(out: &mut FitOutcome<Q>, stage: IntervalStage, started: std::time::Instant) {
+    out.json.options.intervals = stage.method.into();
+    out.json.options.intervals_reason = stage.reason;
+    record::apply(&mut out.json, &stage.profiles);
+    if stage.interrupted {
+        out.json.warnings.push("profiling was interrupted: the parameter intervals are the linearised standard errors only".into());
+        out.json.status = FitStatus::Interrupted;
     }
-    out.timing.stages.push(StageTiming {
-        stage: "profile".into(),
-        wall_s: t0.elapsed().as_secs_f64(),
-    });
-    out.timing.wall_time_s = started.elapsed().as_secs_f64();
-    Ok(())
+    if let Some(wall_s) = stage.wall_s {
+        out.timing.stages.push(StageTiming {
+            stage: "profile".into(),
+            wall_s,
+        });
+        out.timing.wall_time_s = started.elapsed().as_secs_f64();
+    }
 }

@@ -438,7 +438,7 @@ fn a_profile_open_inside_the_bounds_makes_the_parameter_undetermined_naming_the_
         solves: 1,
         methods: [ProfileMethod::Refits; 2],
     };
-    profile::apply(&mut out.json, &[fake]);
+    profile::apply(&mut out.json, &[fake.labelled()]);
     let e = out
         .json
         .parameters

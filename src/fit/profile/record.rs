@@ -1,16 +1,15 @@
 //! Writing finished profiles into fit.json: each parameter's intervals, points and method per
 //! side, and the status and warnings of a profile that stays open inside the bounds.
 
-use super::{End, Profile, SEARCH_RANGES};
+use super::{End, Label, Profile, SEARCH_RANGES};
 use crate::files::{FitJson, Interval, ParamStatus};
-use crate::fit::problem::FitParam;
 
 /// Write `profiles` into fit.json's parameter entries (reporting units): intervals, profile
 /// points, and the status and warnings of a profile that stays open inside the bounds.
-pub fn apply<P: FitParam>(json: &mut FitJson, profiles: &[Profile<P>]) {
+pub fn apply(json: &mut FitJson, profiles: &[Profile<Label>]) {
     for pr in profiles {
-        let name = pr.name.json_name();
-        let f = pr.name.report_factor();
+        let name = pr.name.json_name.clone();
+        let f = pr.name.factor;
         let Some(entry) = json.parameters.iter_mut().find(|e| e.name == name) else {
             continue;
         };
