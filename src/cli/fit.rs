@@ -195,6 +195,7 @@ impl FitArgs {
             loss: self.loss,
             loss_scale: self.loss_scale,
             starts: self.starts,
+            agreeing_starts: FitOptions::default().agreeing_starts,
             seed: self.seed,
             global: self.global,
             fix: self.fix.clone(),

@@ -418,6 +418,10 @@ pub struct OptionsRecord {
     pub space: Space,
     pub start_iters: u64,
     pub starts: usize,
+    /// Starts the multi-start ran (it stops early once a batch of them agree); absent in files
+    /// written before it could.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub starts_run: Option<usize>,
     /// Samples the multi-start used.
     pub subsample: usize,
 }

@@ -83,8 +83,11 @@ pub struct FitOptions {
     pub loss: Loss,
     /// Robust-loss scale C (normalised residual units), or estimated from the residuals.
     pub loss_scale: LossScale,
-    /// Number of multi-start points.
+    /// Number of multi-start points (the most run).
     pub starts: usize,
+    /// The multi-start runs its starts in batches of this many and stops once every run so far
+    /// ended at one point ([`stages::multistart`]); 0 runs every start.
+    pub agreeing_starts: usize,
     pub seed: u64,
     pub global: Global,
     /// `--fix NAME=VALUE` (MODEL.md JSON names, degrees for `*_deg`).
@@ -126,6 +129,7 @@ impl Default for FitOptions {
             loss: Loss::L2,
             loss_scale: LossScale::Auto,
             starts: 16,
+            agreeing_starts: 8,
             seed: 1,
             global: Global::None,
             fix: Vec::new(),
@@ -320,9 +324,9 @@ pub fn fit_with<F: Forward>(
             let (runs, order) =
                 stages::multistart("loss-scale-l2", &ev_l2, &starts, opts, &mut log);
             let e = ev_l2.eval_internal(&runs[order[0]].u, false);
-            // Its best point also starts the robust multi-start (outliers bias it, but it lies
-            // in the right basin far more often than a design point).
-            starts.push(ev_l2.natural(&runs[order[0]].u[..run.free.len()]));
+            // Its best point also starts the robust multi-start, first (outliers bias it, but it
+            // lies in the right basin far more often than a design point).
+            starts.insert(0, ev_l2.natural(&runs[order[0]].u[..run.free.len()]));
             loss::noise_mad(&e.raw).map_or(1.0, |s| opts.loss.tuning() * s)
         }
     };
@@ -357,6 +361,7 @@ pub fn fit_with<F: Forward>(
 
     let mut options = (run.options)(sub_idx.len(), ev_full.explicit_scale, floored);
     options.loss_scale = ev_full.loss_scale;
+    options.starts_run = Some(runs.len());
     // After Ctrl-C the user wants the best parameters now: a large fit writes the summary
     // curves (what the report draws) instead of spending seconds per million rows on the rest.
     let rows = data.len() * data.n_channels();

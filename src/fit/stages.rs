@@ -91,8 +91,12 @@ fn to_internal<F: Forward>(ev: &Evaluator<'_, F>, x: &[f64]) -> Vec<f64> {
     u
 }
 
-/// Short LM runs from every start on the subsample (parallel), recorded as stage `stage`;
-/// returns the runs and their order by cost.
+/// Short LM runs from the starts on the subsample (parallel), recorded as stage `stage`;
+/// returns the runs and their order by cost. The starts run in batches of
+/// [`FitOptions::agreeing_starts`] in design order, and the stage ends after a batch once every
+/// run so far ended at the best point ([`same_point`]): on a landscape where that many starts
+/// from across the design box all fall into one basin, the rest would land there too (each of
+/// the demos' 16 starts does). Any disagreement runs the whole design.
 pub fn multistart<F: Forward>(
     stage: &str,
     ev_sub: &Evaluator<'_, F>,
@@ -102,9 +106,14 @@ pub fn multistart<F: Forward>(
 ) -> (Vec<LocalRun>, Vec<usize>) {
     let ts = Instant::now();
     let bar = &log.bar;
-    let runs: Vec<LocalRun> = starts
-        .par_iter()
-        .map(|x0| {
+    let batch = match opts.agreeing_starts {
+        0 => starts.len(),
+        k => k,
+    };
+    let ranges: Vec<(f64, f64)> = ev_sub.free.iter().map(|p| p.typical_range()).collect();
+    let mut runs: Vec<LocalRun> = Vec::with_capacity(starts.len());
+    for chunk in starts.chunks(batch.max(1)) {
+        runs.par_extend(chunk.par_iter().map(|x0| {
             // After Ctrl-C, starts not yet begun are skipped rather than initialised on the data
             // (each costs a Jacobian evaluation before it would see the flag).
             if is_cancelled(&opts.cancel) {
@@ -127,8 +136,12 @@ pub fn multistart<F: Forward>(
             );
             bar.inc(1);
             r
-        })
-        .collect();
+        }));
+        if runs.len() < starts.len() && all_at_best(ev_sub, &runs, &ranges) {
+            bar.inc((starts.len() - runs.len()) as u64);
+            break;
+        }
+    }
     let mut order: Vec<usize> = (0..runs.len()).collect();
     order.sort_by(|&a, &b| runs[a].cost.total_cmp(&runs[b].cost).then(a.cmp(&b)));
     log.record(
@@ -139,6 +152,32 @@ pub fn multistart<F: Forward>(
         runs[order[0]].history.clone(),
     );
     (runs, order)
+}
+
+/// Two natural points within 1e-3 of every typical range of each other: one minimum.
+fn same_point(x: &[f64], y: &[f64], ranges: &[(f64, f64)]) -> bool {
+    x.iter()
+        .zip(y)
+        .zip(ranges)
+        .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
+}
+
+/// True when the best run's cost is finite and every run ended at its point.
+fn all_at_best<F: Forward>(
+    ev_sub: &Evaluator<'_, F>,
+    runs: &[LocalRun],
+    ranges: &[(f64, f64)],
+) -> bool {
+    let nf = ev_sub.free.len();
+    let Some(best) = runs.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)) else {
+        return false;
+    };
+    if !best.cost.is_finite() {
+        return false;
+    }
+    let xb = ev_sub.natural(&best.u[..nf]);
+    runs.iter()
+        .all(|r| r.cost.is_finite() && same_point(&ev_sub.natural(&r.u[..nf]), &xb, ranges))
 }
 
 /// The best few *distinct* minima: starts that reached the same point (within 1e-3 of every
@@ -163,12 +202,7 @@ pub fn distinct_candidates<F: Forward>(
             break;
         }
         let x = ev_sub.natural(&runs[k].u[..nf]);
-        let same = chosen_x.iter().any(|y| {
-            x.iter()
-                .zip(y)
-                .zip(ranges)
-                .all(|((a, b), (lo, hi))| (a - b).abs() <= 1e-3 * (hi - lo))
-        });
+        let same = chosen_x.iter().any(|y| same_point(&x, y, ranges));
         // A runner-up whose subsample cost is worse by more than POLISH_CHI2 χ² units would
         // need that much improvement from data it has not seen: skip its full-data polish.
         let far = best_cost > 0.0
@@ -390,6 +424,7 @@ pub fn options_record<P: FitParam>(
         space: opts.space,
         start_iters: opts.start_iters,
         starts: opts.starts,
+        starts_run: None,
         subsample,
     }
 }

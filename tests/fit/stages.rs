@@ -42,11 +42,17 @@ fn multistart_never_ends_worse_than_a_single_start() {
         global: Global::Pso,
         ..single.clone()
     };
+    // The design as the fit runs it (stopping once its first batch agrees) and every start run.
+    let every = FitOptions {
+        agreeing_starts: 0,
+        ..base()
+    };
     let configs = [
         ("single start", single),
         ("single + Nelder-Mead", nm),
         ("16-start design", base()),
         ("single + PSO", pso),
+        ("16-start design, every start", every),
     ];
     let n_sets = 24;
     let mut costs = vec![Vec::new(); configs.len()];
@@ -80,6 +86,10 @@ fn multistart_never_ends_worse_than_a_single_start() {
         );
     }
     assert!(stuck(&costs[2]) <= stuck(&costs[0]));
+    assert!(
+        stuck(&costs[2]) <= stuck(&costs[4]),
+        "stopping the design early lost a minimum"
+    );
     assert!(
         stuck(&costs[2]) * 10 <= n_sets as usize,
         "multi-start stuck too often"
