@@ -38,7 +38,9 @@ pub struct FitArgs {
     /// estimated cost is at most a few seconds; fit.json records the choice and why).
     #[arg(long, default_value = "auto")]
     pub intervals: Intervals,
-    /// Number of multi-start points (Latin hypercube over the typical ranges of docs/model.md).
+    /// Multi-start points, at most (Latin hypercube over the typical ranges of docs/model.md).
+    /// They run 8 at a time, and the stage stops once every run so far ended at one point:
+    /// fit.json `options.starts_run` says how many ran.
     #[arg(long, default_value_t = 16)]
     pub starts: usize,
     /// Seed of the start design and the subsample.
