@@ -413,7 +413,7 @@ pub fn fit_with<F: Forward>(
         max_iters: opts.polish_iters,
         cancel: opts.cancel.clone(),
     };
-    let intervals = profile::intervals(&draft, optimum, &best, opts)?;
+    let intervals = profile::intervals(&draft.outcome, &draft.assessment, optimum, &best, opts)?;
     Ok(draft.finish(data, intervals, run.input.started))
 }
 

@@ -20,10 +20,10 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::assemble::FitDraft;
 use super::bounds::Bound;
 use super::problem::{Evaluator, FitData, FitParam, Forward, ParamSet, Space};
 use super::solve::{is_cancelled, run_lm, LocalRun};
+use super::verdict::Assessment;
 use super::Loss;
 use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
@@ -491,7 +491,7 @@ pub fn profile_all<F: Forward>(
     Ok(Some(profiles))
 }
 
-/// What the interval stage decided and found, for [`FitDraft::finish`] to write into fit.json
+/// What the interval stage decided and found, for `assemble::FitDraft::finish` to write into fit.json
 /// (the stage itself edits nothing).
 pub struct IntervalStage {
     /// `linear` or `profile` (fit.json `options.intervals`), and why (`intervals_reason`).
@@ -542,18 +542,20 @@ impl<P: FitParam> Profile<P> {
     }
 }
 
-/// The fit's interval stage: decide (`--intervals`) from the draft, then profile every free
+/// The fit's interval stage: decide (`--intervals`) from the draft's outcome and assessment
+/// (`assemble::FitDraft`), then profile every free
 /// parameter of `opt` (`best`: the polish run, whose cost is the reference). Ctrl-C stops it:
 /// the linearised intervals stand and the status is `interrupted`.
 pub fn intervals<F: Forward, Q>(
-    draft: &FitDraft<Q>,
+    draft: &FitOutcome<Q>,
+    assessment: &Assessment,
     mut opt: Optimum<'_, F>,
     best: &LocalRun,
     opts: &FitOptions,
 ) -> Result<IntervalStage> {
     let t0 = std::time::Instant::now();
     let nf = opt.free.len();
-    let (json, assessment) = (&draft.outcome.json, &draft.assessment);
+    let json = &draft.json;
     let dof = json.residuals.dof;
     if nf == 0 || dof == 0 || !(best.cost.is_finite() && best.cost > 0.0) {
         return Ok(IntervalStage::linear("nothing to profile (no free parameter, no residual degrees of freedom, or a zero cost)"));
@@ -565,7 +567,7 @@ pub fn intervals<F: Forward, Q>(
         )));
     }
     // Noise-free data: the cost is rounding, so Δχ² (and every interval) would be rounding noise.
-    let relative = draft.outcome.worst_row_misfit;
+    let relative = draft.worst_row_misfit;
     if relative.is_finite() && relative <= super::EXACT_MISFIT {
         return Ok(IntervalStage::linear(format!("the fit is exact to {relative:.1e} relative (noise-free data): no statistical interval to profile")));
     }
