@@ -7,7 +7,7 @@ use rand_chacha::rand_core::RngCore;
 mod facet;
 
 use super::fiber::Fiber;
-use super::optics::{dot, reflect, refract, V3};
+use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
 use crate::synth::random::uniform;
 
@@ -343,7 +343,8 @@ impl Sampler {
     /// The ray from `omega_i` at `offset` from the axis across the beam meets `section`'s
     /// surface: lane `k` gets the point, the geometric normal, the facet drawn and weight 1,
     /// and becomes active, its R and refraction pending for [`enter_finish`](Self::enter_finish)
-    /// (the draws of the next lanes depend on this one's, the rest does not). `false`: the ray
+    /// (the draws of the next lanes depend on this one's, the rest does not, so it need not
+    /// wait). `false`: the ray
     /// missed by rounding at the very edge, lane `k` is untouched.
     #[allow(clippy::too_many_arguments)]
     fn enter(
@@ -388,49 +389,35 @@ impl Sampler {
         true
     }
 
-    /// The pending entries of [`enter`](Self::enter): the facet, Fresnel from outside, the
-    /// reflected and refracted directions for all lanes without branches, then lane by lane
-    /// R leaves and the rest is refracted in.
+    /// The pending entries of [`enter`](Self::enter), lane by lane: the facet, Fresnel from
+    /// outside, R leaves and the rest is refracted in. Only the lanes entered (about 2 of 8 a
+    /// step): their chains are independent of the draws and overlap with each other.
     fn enter_finish(
         &self,
         l: &mut Lanes,
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        if !l.pending.iter().any(|&p| p) {
-            return;
-        }
         let nc = self.nc;
         let eta = self.fiber.eta;
-        let e = 1.0 / eta;
-        for k in 0..LANES {
-            let d = [l.du[k], l.dv[k], l.dw[k]];
-            let m = facet([0.0, l.nv[k], l.nw[k]], l.sl[k], l.sa[k]);
-            let cos_i = -dot(d, m);
-            let (f, cos_t) = fresnel_enter(cos_i, eta);
-            l.f[k] = f;
-            let (r, t) = (reflect(d, m), refract(d, m, e, cos_i, cos_t));
-            for j in 0..3 {
-                l.refl[j][k] = r[j];
-                l.out[j][k] = t[j];
-            }
-        }
         for k in 0..LANES {
             if !l.pending[k] {
                 continue;
             }
             l.pending[k] = false;
+            let d = [l.du[k], l.dv[k], l.dw[k]];
             let ng = [0.0, l.nv[k], l.nw[k]];
-            let f = l.f[k];
-            let r = [l.refl[0][k], l.refl[1][k], l.refl[2][k]];
-            let r = keep_side(r, ng, true, balance);
+            let m = facet(ng, l.sl[k], l.sa[k]);
+            let cos_i = -dot(d, m);
+            let (f, cos_t) = fresnel(cos_i, 1.0, eta);
+            let r = keep_side(reflect(d, m), ng, true, balance);
             let mut wr = l.w[k];
             wr[..nc].iter_mut().for_each(|x| *x *= f);
             add_n(&mut balance.tallied[0], &wr, nc);
             exit(0, r, &wr);
             // From outside the reflectance is below 1 (no total internal reflection there).
             l.w[k][..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
-            let t = [l.out[0][k], l.out[1][k], l.out[2][k]];
+            let t = refract(d, m, 1.0 / eta, cos_i, cos_t);
             [l.du[k], l.dv[k], l.dw[k]] = keep_side(t, ng, false, balance);
         }
     }
@@ -527,7 +514,7 @@ fn exp_lane(x: f64) -> f64 {
     p * f64::from_bits((n + (INTEGER_BITS + 1023.0)).to_bits() << 52)
 }
 
-/// [`fresnel`](super::optics::fresnel) from inside a medium of index `eta` into air, without branches: the same
+/// [`fresnel`] from inside a medium of index `eta` into air, without branches: the same
 /// reflectance and refracted cosine (1 and 0 under total internal reflection).
 #[inline]
 fn fresnel_lane(cos_i: f64, eta: f64) -> (f64, f64) {
@@ -536,25 +523,6 @@ fn fresnel_lane(cos_i: f64, eta: f64) -> (f64, f64) {
     let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
     let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let f = (rs * rs + rp * rp) / 2.0;
-    if tir {
-        (1.0, 0.0)
-    } else {
-        (f, cos_t)
-    }
-}
-
-/// [`fresnel`](super::optics::fresnel) from air into a medium of index `eta` > 1, without branches: the same
-/// reflectance and refracted cosine, operation for operation.
-#[inline]
-fn fresnel_enter(cos_i: f64, eta: f64) -> (f64, f64) {
-    let e = 1.0 / eta;
-    let sin2_t = e * e * (1.0 - cos_i * cos_i).max(0.0);
-    // Never from outside (η > 1); kept so the select matches `fresnel` for any η.
-    let tir = sin2_t >= 1.0;
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let f = (rs * rs + rp * rp) / 2.0;
     if tir {
         (1.0, 0.0)
