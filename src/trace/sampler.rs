@@ -97,12 +97,20 @@ impl Sampler {
         self.nc
     }
 
+    /// The section every ray meets, when the fibre has one rotation (or is round).
+    fn fixed_section(&self) -> Option<Section> {
+        match self.fiber.rotation {
+            Some(psi) => Some(Section::new(self.fiber.eccentricity, psi)),
+            None if self.fiber.eccentricity == 1.0 => Some(Section::new(1.0, 0.0)),
+            None => None,
+        }
+    }
+
     /// Draw one ray of the beam from `omega_i`: the section it meets (its rotation, when the
     /// fibre has none, weighted by the width it presents) and its offset `h` ∈ [−1, 1].
     fn draw_ray(&self, omega_i: V3, rng: &mut impl RngCore) -> (Section, f64) {
-        let section = match self.fiber.rotation {
-            Some(psi) => Section::new(self.fiber.eccentricity, psi),
-            None if self.fiber.eccentricity == 1.0 => Section::new(1.0, 0.0),
+        let section = match self.fixed_section() {
+            Some(s) => s,
             // Orientations weighted by the width they present: a uniform beam on a random
             // fibre meets a wide one more often (the major half-width, 1, bounds it).
             None => {
@@ -145,12 +153,17 @@ impl Sampler {
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
         let mut left = n;
+        let dir = beam_dir(omega_i);
+        // One section for every ray: its half-width once, not per ray.
+        let fixed_hw = self.fixed_section().map(|s| s.half_width(dir));
         self.trace_lanes(
             omega_i,
             &mut |rng| {
                 (left > 0).then(|| {
                     left -= 1;
-                    self.draw_ray(omega_i, rng)
+                    let (section, h) = self.draw_ray(omega_i, rng);
+                    let hw = fixed_hw.unwrap_or_else(|| section.half_width(dir));
+                    (section, h * hw)
                 })
             },
             rng,
@@ -172,11 +185,12 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        let mut one = Some((*section, h));
+        let mut one = Some((*section, h * section.half_width(beam_dir(omega_i))));
         self.trace_lanes(omega_i, &mut |_| one.take(), rng, balance, exit);
     }
 
-    /// The rays `source` gives (it draws from the generator it is passed, or not), followed
+    /// The rays `source` gives (their section and offset from the axis, drawn from the
+    /// generator it is passed, or not), followed
     /// [`LANES`] at a time in lock step: a lane that finishes takes the next ray, in lane
     /// order. The arithmetic of one internal interface runs over all lanes in loops without
     /// branches (independent rays: the divisions, square roots and the Fresnel terms of
@@ -203,14 +217,24 @@ impl Sampler {
             for k in 0..LANES {
                 while !lanes.active[k] && !exhausted {
                     match source(rng) {
-                        Some((section, h)) => {
-                            self.enter(&mut lanes, k, &section, omega_i, dir, h, rng, balance, exit)
+                        Some((section, offset)) => {
+                            if !self
+                                .enter(&mut lanes, k, &section, omega_i, dir, offset, rng, balance)
+                            {
+                                // A grazing miss leaves after the R of the lanes entered before.
+                                self.enter_finish(&mut lanes, balance, exit);
+                                let w = self.unit_weights();
+                                balance.grazing += 1;
+                                add_n(&mut balance.tallied[0], &w, nc);
+                                exit(0, [-omega_i[0], -omega_i[1], -omega_i[2]], &w);
+                            }
                         }
                         None => exhausted = true,
                     }
                 }
                 any |= lanes.active[k];
             }
+            self.enter_finish(&mut lanes, balance, exit);
             if !any {
                 break;
             }
@@ -316,9 +340,12 @@ impl Sampler {
         }
     }
 
-    /// The ray from `omega_i` at offset `h` of `section`'s half-width meets the surface: R
-    /// leaves, the rest is refracted into lane `k`, which becomes active (a ray that misses by
-    /// rounding at the very edge leaves whole as grazing R instead).
+    /// The ray from `omega_i` at `offset` from the axis across the beam meets `section`'s
+    /// surface: lane `k` gets the point, the geometric normal, the facet drawn and weight 1,
+    /// and becomes active, its R and refraction pending for [`enter_finish`](Self::enter_finish)
+    /// (the draws of the next lanes depend on this one's, the rest does not, so it need not
+    /// wait). `false`: the ray
+    /// missed by rounding at the very edge, lane `k` is untouched.
     #[allow(clippy::too_many_arguments)]
     fn enter(
         &self,
@@ -327,49 +354,79 @@ impl Sampler {
         section: &Section,
         omega_i: V3,
         dir: [f64; 2],
-        h: f64,
+        offset: f64,
         rng: &mut impl RngCore,
         balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
-    ) {
-        let nc = self.nc;
-        let eta = self.fiber.eta;
+    ) -> bool {
         let d = [-omega_i[0], -omega_i[1], -omega_i[2]];
-        let offset = h * section.half_width(dir);
         let p0 = [
             -offset * dir[1] - 3.0 * dir[0],
             offset * dir[0] - 3.0 * dir[1],
         ];
-        let mut w: Weights = [0.0; MAX_CHANNELS];
-        w[..nc].fill(1.0);
         let Some(t) = section.entry(p0, [d[1], d[2]]) else {
-            // Rounding at the very edge: a grazing hit, where the reflectance is 1.
-            balance.grazing += 1;
-            add_n(&mut balance.tallied[0], &w, nc);
-            exit(0, d, &w);
-            return;
+            return false;
         };
         let p = [p0[0] + t * d[1], p0[1] + t * d[2]];
         let ng = self.geometric_normal(section, p);
-        let m = self.shading_normal(ng, d, true, rng, balance);
-        let cos_i = -dot(d, m);
-        let (f, cos_t) = fresnel(cos_i, 1.0, eta);
-        let r = keep_side(reflect(d, m), ng, true, balance);
-        let mut wr = w;
-        wr[..nc].iter_mut().for_each(|x| *x *= f);
-        add_n(&mut balance.tallied[0], &wr, nc);
-        exit(0, r, &wr);
-        // From outside the reflectance is below 1 (no total internal reflection there).
-        w[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
-        let d = keep_side(refract(d, m, 1.0 / eta, cos_i, cos_t), ng, false, balance);
+        // shading_normal's slopes, for a ray from outside.
+        let (du, dn, dt) = (
+            -d[0],
+            -(d[1] * ng[1] + d[2] * ng[2]),
+            -(d[2] * ng[1] - d[1] * ng[2]),
+        );
+        let (a, lambda) = self.tangent(du, dn);
+        (l.sl[k], l.sa[k]) = self.slopes(a, lambda, du, dn, dt, rng, balance);
         l.active[k] = true;
+        l.pending[k] = true;
         l.c[k] = section.c;
         l.s[k] = section.s;
         l.ia2[k] = section.ia2;
         [l.pv[k], l.pw[k]] = p;
         [l.du[k], l.dv[k], l.dw[k]] = d;
-        l.w[k] = w;
+        [l.nv[k], l.nw[k]] = [ng[1], ng[2]];
+        l.w[k] = self.unit_weights();
         l.seg[k] = 1;
+        true
+    }
+
+    /// The pending entries of [`enter`](Self::enter), lane by lane: the facet, Fresnel from
+    /// outside, R leaves and the rest is refracted in. Only the lanes entered (about 2 of 8 a
+    /// step): their chains are independent of the draws and overlap with each other.
+    fn enter_finish(
+        &self,
+        l: &mut Lanes,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
+        let nc = self.nc;
+        let eta = self.fiber.eta;
+        for k in 0..LANES {
+            if !l.pending[k] {
+                continue;
+            }
+            l.pending[k] = false;
+            let d = [l.du[k], l.dv[k], l.dw[k]];
+            let ng = [0.0, l.nv[k], l.nw[k]];
+            let m = facet(ng, l.sl[k], l.sa[k]);
+            let cos_i = -dot(d, m);
+            let (f, cos_t) = fresnel(cos_i, 1.0, eta);
+            let r = keep_side(reflect(d, m), ng, true, balance);
+            let mut wr = l.w[k];
+            wr[..nc].iter_mut().for_each(|x| *x *= f);
+            add_n(&mut balance.tallied[0], &wr, nc);
+            exit(0, r, &wr);
+            // From outside the reflectance is below 1 (no total internal reflection there).
+            l.w[k][..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
+            let t = refract(d, m, 1.0 / eta, cos_i, cos_t);
+            [l.du[k], l.dv[k], l.dw[k]] = keep_side(t, ng, false, balance);
+        }
+    }
+
+    /// Weight 1 in every channel the fibre has.
+    fn unit_weights(&self) -> Weights {
+        let mut w: Weights = [0.0; MAX_CHANNELS];
+        w[..self.nc].fill(1.0);
+        w
     }
 
     fn geometric_normal(&self, section: &Section, p: [f64; 2]) -> V3 {
@@ -393,6 +450,8 @@ pub const LANES: usize = 8;
 #[derive(Default)]
 struct Lanes {
     active: [bool; LANES],
+    /// Entered, the R and the refraction not yet done.
+    pending: [bool; LANES],
     /// The lane's section: cos ψ, sin ψ, 1/a².
     c: [f64; LANES],
     s: [f64; LANES],

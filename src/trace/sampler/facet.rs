@@ -3,38 +3,16 @@
 
 use rand_chacha::rand_core::RngCore;
 
-use super::{facet, Balance, Sampler, NORMAL_TRIES};
+use super::{Balance, Sampler, NORMAL_TRIES};
 use crate::trace::normal::{normal, normal_and_uniform};
-use crate::trace::optics::V3;
 
 impl Sampler {
-    /// The outward shading normal at an interface with geometric normal `ng`, for a ray `d`
-    /// arriving from outside (`outside`) or inside: the facet `ng + s_l·u + s_a·(u × ng)`
-    /// (normalised) with longitudinal slope `s_l = tan α + tan β·ξ₁` and azimuthal slope
-    /// `s_a = tan β_φ·ξ₂` (ξ standard normal by [`normal`], fresh at every interface), drawn
-    /// among the facets `d` can see with probability proportional to the cosine it sees them
-    /// at (a facet's projected area).
-    pub(super) fn shading_normal(
-        &self,
-        ng: V3,
-        d: V3,
-        outside: bool,
-        rng: &mut impl RngCore,
-        balance: &mut Balance,
-    ) -> V3 {
-        let sign = if outside { -1.0 } else { 1.0 };
-        let (du, dn, dt) = (
-            sign * d[0],
-            sign * (d[1] * ng[1] + d[2] * ng[2]),
-            sign * (d[2] * ng[1] - d[1] * ng[2]),
-        );
-        let (a, lambda) = self.tangent(du, dn);
-        let (s_l, s_a) = self.slopes(a, lambda, du, dn, dt, rng, balance);
-        facet(ng, s_l, s_a)
-    }
-
-    /// The slopes `(s_l, s_a)` of [`shading_normal`](Self::shading_normal)'s facet, from the
-    /// ray's components ±d·u, ±d·ng, ±d·(u × ng) (`du`, `dn`, `dt`, signed so that a facet
+    /// The slopes of the outward shading normal at an interface with geometric normal `ng`,
+    /// the facet `ng + s_l·u + s_a·(u × ng)` (normalised, [`facet`](super::facet)): longitudinal slope
+    /// `s_l = tan α + tan β·ξ₁`, azimuthal slope `s_a = tan β_φ·ξ₂` (ξ standard normal by
+    /// [`normal`], fresh at every interface), drawn among the facets the ray sees with
+    /// probability proportional to the cosine it sees them at (a facet's projected area). From
+    /// the ray's components ±d·u, ±d·ng, ±d·(u × ng) (`du`, `dn`, `dt`, signed so that a facet
     /// the ray sees has a positive cosine) and [`tangent`](Self::tangent)'s `(A, λ)` for them.
     /// After [`NORMAL_TRIES`] failed tries, the tilted normal (s_l = tan α) if the ray sees it,
     /// else the geometric one (0, 0).
