@@ -491,8 +491,8 @@ pub fn profile_all<F: Forward>(
     Ok(Some(profiles))
 }
 
-/// What the interval stage decided and found, for `assemble::FitDraft::finish` to write into fit.json
-/// (the stage itself edits nothing).
+/// What the interval stage decided and found, for `assemble::FitDraft::finish` to write into
+/// fit.json (the stage itself edits nothing).
 pub struct IntervalStage {
     /// `linear` or `profile` (fit.json `options.intervals`), and why (`intervals_reason`).
     pub method: &'static str,
@@ -543,9 +543,9 @@ impl<P: FitParam> Profile<P> {
 }
 
 /// The fit's interval stage: decide (`--intervals`) from the draft's outcome and assessment
-/// (`assemble::FitDraft`), then profile every free
-/// parameter of `opt` (`best`: the polish run, whose cost is the reference). Ctrl-C stops it:
-/// the linearised intervals stand and the status is `interrupted`.
+/// (`assemble::FitDraft`), then profile every free parameter of `opt` (`best`: the polish run,
+/// whose cost is the reference). Ctrl-C stops it: the linearised intervals stand and the status
+/// is `interrupted`.
 pub fn intervals<F: Forward, Q>(
     draft: &FitOutcome<Q>,
     assessment: &Assessment,
