@@ -1,28 +1,35 @@
-//! The fit's registry: which type fits each model family (`--model NAME`), the one list every
-//! command that fits (fit, demo, compare, batch, cost, Python) reads. It sits apart from
-//! [`super::family`] (the trait) so that a family's fit adaptor, which implements the trait,
-//! and the list that names it do not import each other.
+//! The fit's side of the registry: which type fits each model family (`--model NAME`), what
+//! every command that fits (fit, demo, compare, batch, cost, Python) reads. Made from the one
+//! family list (`crate::families::registry`); it sits apart from [`super::family`] (the trait)
+//! so that a family's fit adaptor, which implements the trait, and this lookup do not import
+//! each other.
 
 use super::family::{FamilyFit, FitInput};
 use super::{FitData, FitOptions, FitOutcome};
 use crate::error::Result;
 use crate::families::table::Table;
-use crate::families::{chiang, marschner};
-use crate::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
 use crate::families::{FamilyParams, ModelFamily};
 use crate::files::LoadReport;
 
-/// The fit of `family`.
-pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
-    match family {
-        ModelFamily::Marschner => &marschner::fit::Marschner,
-        ModelFamily::Chiang => &chiang::fit::Chiang,
-        ModelFamily::KajiyaKay => &Table::<KajiyaKay>::NEW,
-        ModelFamily::DEon => &Table::<DEon>::NEW,
-        ModelFamily::Karis => &Table::<Karis>::NEW,
-        ModelFamily::Frostbite => &Table::<Frostbite>::NEW,
-    }
+/// [`family_fit`] from the registry's list (`crate::families::registry`): an `Own` family's type
+/// is its own fit; a table family's fit is its [`Table`], as its facts are.
+macro_rules! family_fit {
+    ($($variant:ident => $kind:ident($ty:path)),* $(,)?) => {
+        /// The fit of `family`.
+        pub fn family_fit(family: ModelFamily) -> &'static dyn FamilyFit {
+            match family {
+                $(ModelFamily::$variant => family_fit!(@fit $kind($ty)),)*
+            }
+        }
+    };
+    (@fit Own($ty:path)) => {
+        &$ty
+    };
+    (@fit Table($ty:path)) => {
+        &Table::<$ty>::NEW
+    };
 }
+crate::families::registry!(family_fit);
 
 /// Fit `data` with the model family `opts.family` (through its [`FamilyFit`]); the
 /// outcome's parameters as a parameter file of that family.

@@ -10,10 +10,11 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use hairfit::demo::{demo_directions, demo_truth_file, DEMO_SCALE};
-use hairfit::families::chiang::fit::{Chiang, ChiangForward};
+use hairfit::families::chiang::fit::ChiangForward;
+use hairfit::families::chiang::ChiangFamily;
 use hairfit::families::chiang::{ChiangEffects, ChiangModel};
 use hairfit::families::marschner::fit::forward::MarschnerForward;
-use hairfit::families::marschner::fit::Marschner;
+use hairfit::families::marschner::MarschnerFamily;
 use hairfit::families::marschner::{Lobes, ModelConfig};
 use hairfit::families::table::fit::TableForward;
 use hairfit::families::table::{
@@ -407,7 +408,7 @@ fn ad_matches_finite_differences(subject: &Subject) {
                 measurement: Measurement::S,
             };
             let p = file.marschner().unwrap().to_params();
-            jacobian_check(name, &forward, &p, &Marschner::parameters(3));
+            jacobian_check(name, &forward, &p, &MarschnerFamily::parameters(3));
         }
         ModelFamily::Chiang => {
             // A plain 128-node width rule: the Jacobian is of the discrete sum, which any node
@@ -417,7 +418,7 @@ fn ad_matches_finite_differences(subject: &Subject) {
                 measurement: Measurement::S,
             };
             let p = file.chiang().unwrap().to_params();
-            jacobian_check(name, &forward, &p, &Chiang::parameters(3));
+            jacobian_check(name, &forward, &p, &ChiangFamily::parameters(3));
         }
         ModelFamily::KajiyaKay => table_jacobian::<KajiyaKay>(subject),
         ModelFamily::DEon => table_jacobian::<DEon>(subject),

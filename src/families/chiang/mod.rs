@@ -265,7 +265,7 @@ pub const PARAMETERS: [ParamFact; 5] = [
     },
 ];
 
-/// The Chiang family in the registry ([`crate::families::ModelFamily::facts`], listed by `ModelFamily::entry`).
+/// The Chiang family: its facts here, its fit in [`fit`]; listed in `crate::families::registry`.
 pub struct ChiangFamily;
 
 impl crate::geometry::FamilyFacts for ChiangFamily {

@@ -42,7 +42,7 @@ pub use lanes::scattering_lanes;
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
 
-/// The Marschner family in the registry ([`crate::families::ModelFamily::facts`], listed by `ModelFamily::entry`).
+/// The Marschner family: its facts here, its fit in [`fit`]; listed in `crate::families::registry`.
 pub struct MarschnerFamily;
 
 impl crate::geometry::FamilyFacts for MarschnerFamily {

@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use crate::error::Result;
 use crate::families::chiang::{
-    all_parameters, lobes_config, reference_params, ChiangEffects, ChiangModel, ChiangParamFile,
-    ChiangParamName, ChiangParams, WidthNodes,
+    all_parameters, lobes_config, reference_params, ChiangEffects, ChiangFamily, ChiangModel,
+    ChiangParamFile, ChiangParamName, ChiangParams, WidthNodes,
 };
 use crate::families::{ChiangRecord, FamilyParams};
 use crate::files::{Floored, LoadReport};
@@ -22,10 +22,9 @@ use crate::geometry::angles::wrap;
 use crate::geometry::Fitted;
 pub use forward::ChiangForward;
 
-/// The Chiang 2016 family (CHIANG.md).
-pub struct Chiang;
-
-impl Family for Chiang {
+/// The Chiang family's fit: the registry hands this same type out as the family's facts and as
+/// its fit.
+impl Family for ChiangFamily {
     type Param = ChiangParamName;
     const PARAMETER_WORD: &'static str = "Chiang parameter";
     const FIX_EXAMPLE: &'static str = "beta_n=0.3 or --fix alpha_deg=-2";
@@ -114,7 +113,7 @@ pub fn fit_chiang(
     let wanted = |p: &ChiangParamName| p.fact().fitted != Fitted::OnRequest || opts.free_eta;
     let wanted_of = |e: &ChiangEffects| e.parameters(nc).into_iter().filter(wanted).collect();
     let set = FreeSet::new(
-        Chiang::parse_fixes(&opts.fix, nc)?,
+        ChiangFamily::parse_fixes(&opts.fix, nc)?,
         reference_params(nc),
         wanted_of(&effects),
         wanted_of(&ChiangEffects::default()),

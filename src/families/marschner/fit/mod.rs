@@ -12,7 +12,7 @@ use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::all_parameters;
 use crate::families::marschner::parameters::{fitted_parameters, reference_params};
 use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::{Effects, ParamName, Params};
+use crate::families::marschner::{Effects, MarschnerFamily, ParamName, Params};
 use crate::families::FamilyParams;
 use crate::files::LoadReport;
 use crate::fit::family::{Family, FitInput};
@@ -22,10 +22,9 @@ use crate::fit::{fit_with, require_samples, stages, FitData, FitOptions, FitOutc
 /// A Marschner fit's outcome, its parameters as the model's own set.
 pub type MarschnerOutcome = FitOutcome<Params<f64>>;
 
-/// The Marschner 2003 family (MODEL.md).
-pub struct Marschner;
-
-impl Family for Marschner {
+/// The Marschner family's fit: the registry hands this same type out as the family's facts and
+/// as its fit.
+impl Family for MarschnerFamily {
     type Param = ParamName;
     const PARAMETER_WORD: &'static str = "parameter";
     const FIX_EXAMPLE: &'static str = "eccentricity=1 or --fix alpha_r_deg=-7";
@@ -92,7 +91,7 @@ fn free_set(
     warnings: &mut Vec<String>,
 ) -> Result<FreeSet<ParamName>> {
     Ok(FreeSet::new(
-        Marschner::parse_fixes(&opts.fix, nc)?,
+        MarschnerFamily::parse_fixes(&opts.fix, nc)?,
         reference_params(nc),
         fitted_parameters(effects, nc, opts.free_eta),
         fitted_parameters(&Effects::default(), nc, opts.free_eta),
