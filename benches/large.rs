@@ -60,11 +60,7 @@ fn bench(c: &mut Criterion) {
             free,
         )
         .expect("positive data");
-        let x: Vec<f64> = ev
-            .free
-            .iter()
-            .map(|&n| hairfit::fit::param(&truth, n))
-            .collect();
+        let x: Vec<f64> = ev.free.iter().map(|&n| truth.get(n)).collect();
         let u = ev.internal(&x);
         let id = format!("{samples}x{nc}");
         group.bench_function(format!("cost {id}"), |b| {

@@ -142,11 +142,10 @@ pub fn demo_truth_file(family: ModelFamily) -> FamilyParams {
 pub fn demo_synthesis(opts: &FitOptions) -> Result<(crate::data::Dataset, crate::files::Truth)> {
     let setup = ModelSetup {
         config: ModelConfig {
-            mode: opts.mode,
+            mode: opts.model.config.mode,
             ..ModelConfig::default()
         },
-        chiang: opts.chiang.clone(),
-        terms: opts.terms,
+        ..opts.model.clone()
     };
     let file = demo_truth_file(opts.family);
     let model = FamilyModel::new(&file, &setup);

@@ -120,7 +120,7 @@ impl FitArgs {
             || self.model.no_glints
             || self.model.no_eccentricity;
         let effects = if explicit {
-            EffectsChoice::Explicit(cfg.effects)
+            EffectsChoice::Explicit
         } else {
             match self
                 .effects
@@ -203,7 +203,6 @@ impl FitArgs {
             fix: self.fix.clone(),
             free_eta,
             effects,
-            mode: cfg.mode,
             measurement: self.measurement.measurement,
             subsample: self.subsample,
             polish: self.polish,
@@ -213,8 +212,7 @@ impl FitArgs {
             progress: !self.no_progress,
             intervals: self.intervals,
             family: self.model.family,
-            chiang: self.model.chiang()?,
-            terms: self.model.setup()?.terms,
+            model: self.model.setup()?,
             curves: self.curves.0,
         })
     }

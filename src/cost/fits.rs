@@ -11,7 +11,7 @@ use crate::families::marschner::fit::fit;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::parameters::typical_range;
 use crate::families::marschner::{Effects, ModelConfig};
-use crate::fit::{param, EffectsChoice, FitData, FitOptions, Global};
+use crate::fit::{EffectsChoice, FitData, FitOptions, Global};
 
 /// The seeded synthetic data of the fit section (the demo's geometry, truth, scale and noise).
 pub(super) fn synthetic_data() -> FitData {
@@ -92,7 +92,7 @@ pub(super) fn fit_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>> {
             .iter()
             .map(|&p| {
                 let (lo, hi) = typical_range(p);
-                let e = (param(&out.params, p) - param(&truth, p)).abs() / (hi - lo);
+                let e = (out.params.get(p) - truth.get(p)).abs() / (hi - lo);
                 (if e.is_finite() { e } else { f64::INFINITY }, p.json_name())
             })
             .collect();

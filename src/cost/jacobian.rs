@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::{Effects, ModelConfig};
-use crate::fit::{param, Evaluator, FitData, Loss, Space};
+use crate::fit::{Evaluator, FitData, Loss, Space};
 use crate::geometry::Measurement;
 
 /// Jacobian section: exact forward-mode AD against central finite differences in the solver's
@@ -30,7 +30,7 @@ pub(super) fn jacobian_rows(data: &FitData, quick: bool) -> Result<Vec<CostRow>>
         truth.clone(),
         free.clone(),
     )?;
-    let x: Vec<f64> = free.iter().map(|&n| param(&truth, n)).collect();
+    let x: Vec<f64> = free.iter().map(|&n| truth.get(n)).collect();
     let u = ev.internal(&x);
     let n = u.len();
     let m = ev.n_residuals();

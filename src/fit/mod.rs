@@ -43,9 +43,7 @@ pub use crate::files::settings::Global;
 
 use crate::data::Dataset;
 use crate::error::{Error, Result};
-use crate::families::chiang::ChiangModel;
-use crate::families::marschner::{Effects, ParamName, Params, RootMode};
-use crate::families::{FamilyParams, ModelFamily};
+use crate::families::{FamilyParams, ModelFamily, ModelSetup};
 use crate::files::{Curves, CurvesMode, FitJson, FitStatus, Floored, OptionsRecord, Timing};
 use crate::geometry::Measurement;
 
@@ -72,8 +70,9 @@ pub enum EffectsChoice {
     Auto,
     /// Every lobe and effect.
     All,
-    /// Exactly these (from `--lobes/--no-glints/--no-eccentricity`).
-    Explicit(Effects),
+    /// Exactly those of the family's configuration ([`FitOptions::model`], from
+    /// `--lobes/--no-glints/--no-eccentricity`).
+    Explicit,
 }
 
 /// Everything a fit needs besides the data.
@@ -95,7 +94,6 @@ pub struct FitOptions {
     /// `--free eta`.
     pub free_eta: bool,
     pub effects: EffectsChoice,
-    pub mode: RootMode,
     /// What the values are: `scale·S`, or radiance `scale·S·cos θ_i`.
     pub measurement: Measurement,
     /// Samples used by the multi-start stage (all when the data has fewer).
@@ -113,10 +111,9 @@ pub struct FitOptions {
     pub intervals: Intervals,
     /// The model family [`fit_family`] fits (`--model`).
     pub family: ModelFamily,
-    /// The Chiang model's terms and width nodes (`--terms`, `--width-nodes`), for `--model chiang`.
-    pub chiang: ChiangModel,
-    /// A table family's terms (`--terms`; `None`: all), for the table families.
-    pub terms: Option<crate::families::table::TermSet>,
+    /// What the command line configures of the family's model (`--mode`, `--terms`,
+    /// `--width-nodes`, …); the fitted family reads its part.
+    pub model: ModelSetup,
     /// How much of the curves the fit's directory gets (`--curves`); `None`: auto (full up to
     /// [`AUTO_FULL_CURVES_ROWS`] rows, the summary above).
     pub curves: Option<CurvesMode>,
@@ -135,7 +132,6 @@ impl Default for FitOptions {
             fix: Vec::new(),
             free_eta: false,
             effects: EffectsChoice::Auto,
-            mode: RootMode::Cubic,
             measurement: Measurement::S,
             subsample: 2000,
             polish: 2,
@@ -144,9 +140,8 @@ impl Default for FitOptions {
             cancel: None,
             progress: false,
             intervals: Intervals::Auto,
-            family: ModelFamily::Marschner,
-            chiang: ChiangModel::default(),
-            terms: None,
+            family: ModelFamily::default(),
+            model: ModelSetup::default(),
             curves: None,
         }
     }
@@ -428,9 +423,4 @@ fn evaluator_for<'e, F: Forward>(
     free: &[F::Param],
 ) -> Result<(Evaluator<'e, F>, Floored)> {
     Evaluator::new(forward, d, space, loss, 1.0, base.clone(), free.to_vec())
-}
-
-/// `get` re-exported for callers that index parameters by name.
-pub fn param(p: &Params<f64>, name: ParamName) -> f64 {
-    p.get(name)
 }

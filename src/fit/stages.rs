@@ -412,7 +412,7 @@ pub fn options_record<P: FitParam>(
         },
         loss_scale_auto: opts.loss_scale == super::LossScale::Auto,
         measurement: opts.measurement,
-        mode: opts.mode,
+        mode: opts.model.config.mode,
         polish: opts.polish,
         polish_iters: opts.polish_iters,
         scale: if explicit_scale {

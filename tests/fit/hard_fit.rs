@@ -193,11 +193,11 @@ fn data_exactly_on_the_glint_fits_cleanly() {
         for space in [Space::Log, Space::Linear] {
             let dir = tempfile::tempdir().unwrap();
             let what = format!("on the glint, {mode}, {space}");
-            let opts = FitOptions {
-                mode,
+            let mut opts = FitOptions {
                 effects: EffectsChoice::All,
                 ..quick(space)
             };
+            opts.model.config.mode = mode;
             let j = fit_and_write(&data, &opts, dir.path(), &what)
                 .unwrap_or_else(|e| panic!("{what}: {e}"));
             assert_honest_status(&j, &what);
@@ -492,12 +492,13 @@ proptest! {
         let mut data = synthesize(&p, &cfg, &grid(), &[scale], noise, seed);
         data.channels = vec!["radiance".into()];
         let space = if linear { Space::Linear } else { Space::Log };
-        let opts = FitOptions { mode, seed, effects: EffectsChoice::All, ..quick(space) };
+        let mut opts = FitOptions { seed, effects: EffectsChoice::All, ..quick(space) };
+        opts.model.config.mode = mode;
         let outcome = fit(&data, "prop", Default::default(), &opts).unwrap();
         let j = serde_json::to_value(&outcome.json).unwrap();
         assert_params_in_bounds(&j, "proptest fit");
         for name in hairfit::families::marschner::parameters::all_parameters(1) {
-            let v = hairfit::fit::param(&outcome.params, name);
+            let v = outcome.params.get(name);
             prop_assert_eq!(fit_bound(name).clamp(v), v, "{} = {}", name.json_name(), v);
         }
         prop_assert!(outcome.params.validate().is_ok());

@@ -47,10 +47,7 @@ fn check_with(
     // rule (projection included) is exercised.
     let x: Vec<f64> = {
         let p = support::fit::random_params(seed + 100, 3);
-        ev.free
-            .iter()
-            .map(|&n| hairfit::fit::param(&p, n))
-            .collect()
+        ev.free.iter().map(|&n| p.get(n)).collect()
     };
     let mut u = ev.internal(&x);
     if ev.explicit_scale {

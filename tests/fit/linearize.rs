@@ -60,11 +60,7 @@ fn check(space: Space, loss: Loss, fixed: bool) {
     let free = fitted_parameters(&Effects::default(), NC, true);
     let (ev, _) = Evaluator::new(&fwd, &d, space, loss, 0.5, reference_params(NC), free).unwrap();
     let p = support::fit::random_params(104, NC);
-    let x: Vec<f64> = ev
-        .free
-        .iter()
-        .map(|&n| hairfit::fit::param(&p, n))
-        .collect();
+    let x: Vec<f64> = ev.free.iter().map(|&n| p.get(n)).collect();
     let (dense, lin) = if fixed {
         let col: Vec<f64> = (0..x.len()).map(|j| 1.0 + 0.1 * j as f64).collect();
         let scale = [0.7, 1.3, 2.0];
@@ -163,7 +159,7 @@ fn linearisation_is_identical_for_any_thread_count_and_its_size_does_not_grow_wi
         let u = ev.internal(
             &ev.free
                 .iter()
-                .map(|&n| hairfit::fit::param(&support::fit::random_params(104, NC), n))
+                .map(|&n| support::fit::random_params(104, NC).get(n))
                 .collect::<Vec<_>>(),
         );
         let pool = rayon::ThreadPoolBuilder::new()
@@ -212,11 +208,7 @@ fn extra_columns_keep_their_inner_products_with_the_jacobian() {
     )
     .unwrap();
     let p = support::fit::random_params(105, NC);
-    let x: Vec<f64> = ev
-        .free
-        .iter()
-        .map(|&n| hairfit::fit::param(&p, n))
-        .collect();
+    let x: Vec<f64> = ev.free.iter().map(|&n| p.get(n)).collect();
     let ones = vec![1.0; x.len()];
     let scale = [0.7, 1.3, 2.0];
     let dense = ev.evaluate(&x, &ones, ScaleMode::FixedNatural(&scale), true);

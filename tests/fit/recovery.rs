@@ -58,7 +58,7 @@ fn noise_free_data_recovers_every_free_parameter() {
         let (geom, out) = run(&truth, set, 0.0, seed);
         assert_eq!(out.json.status.as_str(), "converged", "set {set} ({geom})");
         for p in free(&out) {
-            let want = hairfit::fit::param(&truth, p) * report_factor(p);
+            let want = truth.get(p) * report_factor(p);
             let (got, _, _) = reported(&out, p);
             // Noise-free data: the optimum is the truth, and LM runs to rounding level, so the
             // task's 1e-6 relative (1e-4° for angles) holds with margin for weakly determined
@@ -104,7 +104,7 @@ fn noisy_data_errors_lie_within_three_reported_standard_errors() {
         let truth = support::fit::random_params(seed, nc);
         let (geom, out) = run(&truth, set, 0.02, seed);
         for p in free(&out) {
-            let want = hairfit::fit::param(&truth, p) * report_factor(p);
+            let want = truth.get(p) * report_factor(p);
             let (got, se, status) = reported(&out, p);
             total += 1;
             match se {

@@ -44,7 +44,7 @@ fn compare(
                     e.value.unwrap(),
                     e.std_error,
                     e.status.to_string(),
-                    hairfit::fit::param(&t, p) * report_factor(p),
+                    t.get(p) * report_factor(p),
                 )
             })
         })
@@ -98,10 +98,8 @@ fn specular_cone_scan_cannot_fix_the_longitudinal_lobes() {
 fn additive_floor_noise_sphere_in_exact_mode() {
     // Synthesised in exact root mode with additive noise σ = 1e-3: half the readings are not
     // significantly positive and must be fitted linearly inside the log fit.
-    let opts = FitOptions {
-        mode: hairfit::families::marschner::RootMode::Exact,
-        ..FitOptions::default()
-    };
+    let mut opts = FitOptions::default();
+    opts.model.config.mode = hairfit::families::marschner::RootMode::Exact;
     let (out, truth) = fit_file("sphere_1ch", &opts);
     assert_eq!(out.json.status.as_str(), "converged");
     let chi2 = out.json.residuals.reduced_chi2.unwrap();

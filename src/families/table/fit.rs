@@ -318,13 +318,13 @@ fn why_undetermined<F: TableFamily>(
     )
 }
 
-/// Fit the table family `F` under `opts.terms` (all when absent).
+/// Fit the table family `F` under `opts.model.terms` (all when absent).
 fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f64>>> {
     let FitInput {
         data, file, opts, ..
     } = i;
     let nc = require_samples(data, file)?;
-    let on = opts.terms.unwrap_or(F::default_terms());
+    let on = opts.model.terms.unwrap_or(F::default_terms());
     let forward = TableForward::<F>::new(on, opts.measurement);
     let screening = forward.screening();
     let mut warnings = Vec::new();

@@ -83,7 +83,7 @@ fn why_undetermined(
     }
 }
 
-/// Fit the Chiang model (`opts.chiang`: terms and width nodes) to `data`.
+/// Fit the Chiang model (`opts.model.chiang`: terms and width nodes) to `data`.
 pub fn fit_chiang(
     data: &FitData,
     file: &str,
@@ -99,14 +99,14 @@ pub fn fit_chiang(
     let grouped = data.subset(&order);
     let data = &grouped;
     let mut warnings = Vec::new();
-    let effects = opts.chiang.effects;
+    let effects = opts.model.chiang.effects;
     let forward = ChiangForward {
-        model: opts.chiang.clone(),
+        model: opts.model.chiang.clone(),
         measurement: opts.measurement,
     };
     // The multi-start only looks for basins: a coarser width rule there, the polish at the
     // requested one (so the result is the requested model's optimum).
-    let screening = screening_model(&opts.chiang)?.map(|model| ChiangForward {
+    let screening = screening_model(&opts.model.chiang)?.map(|model| ChiangForward {
         model,
         measurement: opts.measurement,
     });
@@ -137,7 +137,7 @@ pub fn fit_chiang(
     let reasons = vec![format!(
         "Chiang 2016 model, terms {} (--terms), width nodes {} (--width-nodes{screened})",
         terms.join("+"),
-        opts.chiang.width()
+        opts.model.chiang.width()
     )];
     let options = |sub: usize, explicit: bool, floored: Floored| {
         let choice = crate::fit::stages::ModelChoice {
@@ -166,7 +166,7 @@ pub fn fit_chiang(
                 config: lobes_config(&effects),
                 chiang: Some(ChiangRecord {
                     effects,
-                    width_nodes: opts.chiang.width(),
+                    width_nodes: opts.model.chiang.width(),
                 }),
                 terms: None,
             },

@@ -185,7 +185,7 @@ pub fn choose_effects(data: &FitData, mode: RootMode) -> AutoChoice {
 pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
     let (effects, effects_choice, reasons) = match opts.effects {
         EffectsChoice::Auto => {
-            let c = choose_effects(data, opts.mode);
+            let c = choose_effects(data, opts.model.config.mode);
             (c.effects, EffectsSource::Auto, c.reasons)
         }
         EffectsChoice::All => (
@@ -193,15 +193,15 @@ pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
             EffectsSource::All,
             vec!["--effects all".into()],
         ),
-        EffectsChoice::Explicit(e) => (
-            e,
+        EffectsChoice::Explicit => (
+            opts.model.config.effects,
             EffectsSource::Explicit,
             vec!["--lobes/--no-glints/--no-eccentricity".into()],
         ),
     };
     ModelChoice {
         config: ModelConfig {
-            mode: opts.mode,
+            mode: opts.model.config.mode,
             effects,
         },
         effects_choice,
