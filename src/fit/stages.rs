@@ -10,14 +10,13 @@ pub use super::fixes::FreeSet;
 use super::problem::{self, Evaluator, FitData, FitParam, Forward};
 use super::solve::{self, is_cancelled, run_local, LocalRun};
 use super::{FitOptions, Global};
-use crate::families::marschner::ModelConfig;
 use crate::files::{
     EffectsSource, FitStatus, Floored, OptionsRecord, ScaleMethod, StageTiming, TraceStage,
 };
 
-/// The model the fit uses and why.
+/// How the family's effects or terms were chosen and why (fit.json `options.effects_choice`
+/// and `effects_reasons`).
 pub struct ModelChoice {
-    pub config: ModelConfig,
     pub effects_choice: EffectsSource,
     pub reasons: Vec<String>,
 }

@@ -348,7 +348,6 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
         terms: Some(on.names(F::TERMS)),
     };
     let choice = ModelChoice {
-        config: records.config,
         effects_choice: EffectsSource::Explicit,
         reasons: vec![format!(
             "{} model, terms {} (--terms){}",

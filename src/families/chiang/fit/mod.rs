@@ -141,7 +141,6 @@ pub fn fit_chiang(
     )];
     let options = |sub: usize, explicit: bool, floored: Floored| {
         let choice = crate::fit::stages::ModelChoice {
-            config: lobes_config(&effects),
             effects_choice: crate::files::EffectsSource::Explicit,
             reasons: reasons.clone(),
         };

@@ -181,8 +181,14 @@ pub fn choose_effects(data: &FitData, mode: RootMode) -> AutoChoice {
     }
     AutoChoice { effects, reasons }
 }
+/// The model a Marschner fit uses, and how its effects were chosen.
+pub struct AutoModel {
+    pub config: ModelConfig,
+    pub choice: ModelChoice,
+}
+
 /// Effects: from the data's geometry (`auto`), all, or as given.
-pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
+pub fn choose_model(data: &FitData, opts: &FitOptions) -> AutoModel {
     let (effects, effects_choice, reasons) = match opts.effects {
         EffectsChoice::Auto => {
             let c = choose_effects(data, opts.model.config.mode);
@@ -199,12 +205,14 @@ pub fn choose_model(data: &FitData, opts: &FitOptions) -> ModelChoice {
             vec!["--lobes/--no-glints/--no-eccentricity".into()],
         ),
     };
-    ModelChoice {
+    AutoModel {
         config: ModelConfig {
             mode: opts.model.config.mode,
             effects,
         },
-        effects_choice,
-        reasons,
+        choice: ModelChoice {
+            effects_choice,
+            reasons,
+        },
     }
 }

@@ -50,17 +50,17 @@ pub fn fit(
     let input = FitInput::new(data, file, load_report, opts);
     let nc = require_samples(data, file)?;
     let mut warnings = Vec::new();
-    let choice = auto::choose_model(data, opts);
+    let auto = auto::choose_model(data, opts);
     let forward = MarschnerForward {
-        config: choice.config,
+        config: auto.config,
         measurement: opts.measurement,
     };
-    let set = free_set(&choice.config.effects, nc, opts, &mut warnings)?;
+    let set = free_set(&auto.config.effects, nc, opts, &mut warnings)?;
     let options = |sub: usize, explicit: bool, floored| {
-        stages::options_record(opts, &choice, &set, sub, explicit, floored)
+        stages::options_record(opts, &auto.choice, &set, sub, explicit, floored)
     };
     let why = |p: ParamName, params: &Params<f64>, partners: &[String]| {
-        diagnostics::why_undetermined(p, data, choice.config.mode, params, partners)
+        diagnostics::why_undetermined(p, data, auto.config.mode, params, partners)
     };
     fit_with(
         FitRun {
@@ -71,7 +71,7 @@ pub fn fit(
             free: set.free.clone(),
             options: &options,
             records: crate::families::ModelRecords {
-                config: choice.config,
+                config: auto.config,
                 chiang: None,
                 terms: None,
             },
