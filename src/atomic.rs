@@ -271,22 +271,29 @@ pub fn sync_deferred(dir: &Path) -> Result<()> {
         return Ok(());
     }
     let per_thread = files.len().div_ceil(16);
+    let sync_all = |chunk: &[PathBuf]| chunk.iter().try_for_each(|f| sync_file(f));
     std::thread::scope(|s| {
-        let threads: Vec<_> = files
-            .chunks(per_thread)
-            .map(|chunk| s.spawn(move || chunk.iter().try_for_each(|f| sync_file(f))))
-            .collect();
-        threads
-            .into_iter()
-            .map(|t| {
-                t.join().unwrap_or_else(|_| {
-                    Err(Error::Other(format!(
-                        "{}: a sync thread panicked",
-                        dir.display()
-                    )))
-                })
-            })
-            .collect::<Result<Vec<()>>>()
+        let mut results = Vec::new();
+        let mut threads = Vec::new();
+        for chunk in files.chunks(per_thread) {
+            // A thread the system refuses (a memory cap) is no error: its files are synced here.
+            match std::thread::Builder::new()
+                .stack_size(64 << 10)
+                .spawn_scoped(s, move || sync_all(chunk))
+            {
+                Ok(t) => threads.push(t),
+                Err(_) => results.push(sync_all(chunk)),
+            }
+        }
+        for t in threads {
+            results.push(t.join().unwrap_or_else(|_| {
+                Err(Error::Other(format!(
+                    "{}: a sync thread failed",
+                    dir.display()
+                )))
+            }));
+        }
+        results.into_iter().collect::<Result<Vec<()>>>()
     })?;
     Ok(())
 }
