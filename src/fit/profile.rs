@@ -12,9 +12,7 @@
 //! Where the first step (the linearised SE) lands on Δχ² ≈ 1, the profile is the local
 //! quadratic there, so the next solve is aimed at the quadratic's 95% point and accepted as it
 //! stands when it lands within the crossing tolerance: two solves a side instead of three.
-//! Every solve is warm-started: a side's first where the covariance's local quadratic puts the
-//! other parameters (the upper side's from the lower side's, mirrored), later ones from the
-//! nearest solved points. Parameters run in parallel (rayon);
+//! Every solve is warm-started from the nearest solved point. Parameters run in parallel (rayon);
 //! each parameter's sequence of solves is fixed, so results are identical for any thread count.
 
 use std::sync::atomic::AtomicBool;
@@ -229,32 +227,6 @@ impl<F: Forward> Pinned<'_, '_, F> {
         }
     }
 
-    /// The others' solver coordinates where the local quadratic puts them with the pinned
-    /// parameter at `x0 + h`: each free one moved by `slopes[k]·h` (natural units, the
-    /// covariance's regression of it on the pinned one), explicit scales as at the optimum.
-    /// `None` when that leaves a bound (the solve then starts at the optimum, as before).
-    fn linear_start(&self, u0: &[f64], slopes: &[f64], h: f64) -> Option<Vec<f64>> {
-        let nf = self.ev.free.len();
-        if slopes.len() != nf || !(h.is_finite() && h != 0.0) {
-            return None;
-        }
-        let x: Vec<f64> = self
-            .ev
-            .free
-            .iter()
-            .zip(slopes)
-            .map(|(q, k)| q.get(&self.opt.params) + k * h)
-            .collect();
-        let inside = self.ev.free.iter().zip(&x).all(|(q, &v)| match q.bound() {
-            Bound::Free => v.is_finite(),
-            Bound::Lower(lo) => v > lo,
-            Bound::Both(lo, hi) => v > lo && v < hi,
-        });
-        let mut u = self.ev.internal(&x);
-        u.extend_from_slice(&u0[nf.min(u0.len())..]);
-        (inside && u.len() == u0.len() && u.iter().all(|v| v.is_finite())).then_some(u)
-    }
-
     /// The fit's LM runner ([`run_lm`]) with a relative cost tolerance of [`SOLVE_CHI2_TOL`] χ²
     /// units and no linearisation at its last point: `(u, cost, iterations)`, never worse than
     /// the start (the solver's best point, whose cost it has: no extra passes over the data for
@@ -421,7 +393,6 @@ pub fn profile_parameter<F: Forward>(
     opt: &Optimum<'_, F>,
     j: usize,
     step: Option<f64>,
-    slopes: Option<&[f64]>,
 ) -> Result<Option<Profile<F::Param>>> {
     let p = opt.free[j];
     let free: Vec<F::Param> = opt.free.iter().copied().filter(|&q| q != p).collect();
@@ -460,8 +431,7 @@ pub fn profile_parameter<F: Forward>(
     let mut ends = [[End::Closed(x0); 2]; 2];
     let mut methods = [ProfileMethod::Refits; 2];
     let mut points = Vec::new();
-    // The lower side's first solve starts where the covariance puts the others at −step.
-    let mut mirrored = slopes.and_then(|k| pin.linear_start(&u0, k, -step.min(lo_room)));
+    let mut mirrored = None;
     for (side, (dir, room, bounded)) in [(-1.0, lo_room, lo_bounded), (1.0, hi_room, hi_bounded)]
         .into_iter()
         .enumerate()
@@ -511,22 +481,9 @@ pub fn profile_all<F: Forward>(
     opt: &Optimum<'_, F>,
     steps: &[Option<f64>],
 ) -> Result<Option<Vec<Profile<F::Param>>>> {
-    profile_all_from(opt, steps, &[])
-}
-
-/// [`profile_all`] whose lower sides' first solves start where the local quadratic puts the
-/// others (`slopes[j]`: see [`linear_slopes`]; missing: from the optimum).
-pub fn profile_all_from<F: Forward>(
-    opt: &Optimum<'_, F>,
-    steps: &[Option<f64>],
-    slopes: &[Option<Vec<f64>>],
-) -> Result<Option<Vec<Profile<F::Param>>>> {
     let out: Vec<Result<Option<Profile<F::Param>>>> = (0..opt.free.len())
         .into_par_iter()
-        .map(|j| {
-            let k = slopes.get(j).and_then(|k| k.as_deref());
-            profile_parameter(opt, j, steps.get(j).copied().flatten(), k)
-        })
+        .map(|j| profile_parameter(opt, j, steps.get(j).copied().flatten()))
         .collect();
     let mut profiles = Vec::with_capacity(out.len());
     for r in out {
@@ -644,8 +601,7 @@ pub fn intervals<F: Forward, Q>(
                 .map(|se| se / p.report_factor())
         })
         .collect();
-    let slopes = linear_slopes(json, &opt.free, &steps);
-    let stage = match profile_all_from(&opt, &steps, &slopes)? {
+    let stage = match profile_all(&opt, &steps)? {
         Some(profiles) => {
             let iterations: u64 = profiles.iter().map(|p| p.iterations).sum();
             let solves: usize = profiles.iter().map(|p| p.solves).sum();
@@ -676,34 +632,6 @@ pub fn intervals<F: Forward, Q>(
         wall_s: Some(t0.elapsed().as_secs_f64()),
         ..stage
     })
-}
-
-/// For each free parameter `j`, how the other free parameters (in `free`'s order without `j`)
-/// move per unit of it along the local quadratic's profile: `corr[k][j]·SE[k]/SE[j]` (natural
-/// units; `se`: the natural standard errors). `None` where fit.json lacks a correlation or SE.
-fn linear_slopes<P: FitParam>(
-    json: &crate::files::FitJson,
-    free: &[P],
-    se: &[Option<f64>],
-) -> Vec<Option<Vec<f64>>> {
-    let c = &json.correlation;
-    let index: Vec<Option<usize>> = free
-        .iter()
-        .map(|p| c.names.iter().position(|n| *n == p.json_name()))
-        .collect();
-    (0..free.len())
-        .map(|j| {
-            let (cj, sj) = (index[j]?, se[j].filter(|s| *s > 0.0)?);
-            (0..free.len())
-                .filter(|&k| k != j)
-                .map(|k| {
-                    let r = (*c.matrix.get(index[k]?)?.get(cj)?)?;
-                    let v = r * se[k]? / sj;
-                    v.is_finite().then_some(v)
-                })
-                .collect()
-        })
-        .collect()
 }
 
 /// Write the interval stage into `out`: the method and its reason, each profile's intervals,
