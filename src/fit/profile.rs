@@ -233,9 +233,8 @@ impl<F: Forward> Pinned<'_, '_, F> {
     /// the start's and the end's cost, which were two of a solve's ~eight).
     fn run(&self, u0: &[f64], max_iters: u64) -> (Vec<f64>, f64, u64) {
         let ftol = (SOLVE_CHI2_TOL / self.opt.dof.max(1) as f64).clamp(super::solve::FTOL, 1e-4);
-        // Also stop where the Gauss–Newton step predicts less than the same χ² gain: a start
-        // already that close (the local quadratic's) is the solve's answer. Without this test
-        // the Frostbite demo's profile took 100 LM iterations from such starts (39 before them).
+        // Also stop where the Gauss–Newton step predicts less than the same χ² gain: a warm
+        // start already that close is the solve's answer, with no trial step to confirm it.
         let solver = crate::lm::LevenbergMarquardt::new()
             .with_tolerances(ftol, crate::lm::DEFAULT_XTOL, 0.0)
             .and_then(|lm| lm.with_statistical_tolerance(self.opt.dof.max(1), SOLVE_CHI2_TOL))
