@@ -194,6 +194,8 @@ where
     remove_dead_temporaries(&target);
     let mut staged = StagedFiles::new();
     let tmp = staged.stage_resolved(target.clone());
+    // Inside an output set's staging directory the set's publication syncs it ([`sync_deferred`]).
+    let deferred = is_deferred(&target);
     {
         // The name is this process's alone (its pid and a counter); a file already there is a
         // leftover of a dead process that had the same pid, so it is overwritten.
@@ -202,12 +204,107 @@ where
         fill(&mut out)?;
         out.flush().map_err(|e| Error::io(path, e))?;
         drop(out);
-        file.sync_all().map_err(|e| Error::io(path, e))?;
+        if !deferred {
+            file.sync_all().map_err(|e| Error::io(path, e))?;
+        }
     }
     staged.publish().map_err(|e| match e {
         Error::Io { source, .. } => Error::io(path, source),
         other => other,
-    })
+    })?;
+    // The set was published (or abandoned) meanwhile: sync here, as without deferral.
+    if deferred && !note_deferred(&target) {
+        sync_file(&target)?;
+    }
+    Ok(())
+}
+
+/// Output sets' staging directories whose files are synced together when the set is published
+/// ([`defer_sync_under`]), each with the files written into it since.
+static DEFERRED: Mutex<Vec<(PathBuf, Vec<PathBuf>)>> = Mutex::new(Vec::new());
+
+/// From now on [`write_atomically`] leaves the fsync of files under `dir` (an output set's
+/// staging directory, never visible as a result) to [`sync_deferred`], which the set calls
+/// before it is published: each fsync waits for the disk (~4 ms here), and a report's dozen
+/// files synced one after another cost ~55 ms where syncing them together costs ~6 ms. Every
+/// file is still on disk before the set's publishing rename.
+pub fn defer_sync_under(dir: &Path) {
+    let mut list = DEFERRED.lock().unwrap_or_else(|e| e.into_inner());
+    list.push((dir.to_path_buf(), Vec::new()));
+}
+
+/// Whether `target` lies under a directory of [`defer_sync_under`].
+fn is_deferred(target: &Path) -> bool {
+    let list = DEFERRED.lock().unwrap_or_else(|e| e.into_inner());
+    list.iter().any(|(dir, _)| target.starts_with(dir))
+}
+
+/// Record `target` (written, not synced) for its set's [`sync_deferred`]; false when no
+/// directory of [`defer_sync_under`] holds it any more.
+pub(crate) fn note_deferred(target: &Path) -> bool {
+    let mut list = DEFERRED.lock().unwrap_or_else(|e| e.into_inner());
+    match list.iter_mut().find(|(dir, _)| target.starts_with(dir)) {
+        Some((_, files)) => {
+            files.push(target.to_path_buf());
+            true
+        }
+        None => false,
+    }
+}
+
+/// fsync the file at `path` (a file no longer there is not part of the set: nothing to sync).
+fn sync_file(path: &Path) -> Result<()> {
+    match std::fs::File::open(path) {
+        Ok(f) => f.sync_all().map_err(|e| Error::io(path, e)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(Error::io(path, e)),
+    }
+}
+
+/// Stop deferring under `dir` and fsync every file written there since [`defer_sync_under`],
+/// concurrently (at most 16 threads); the first error names its file.
+pub fn sync_deferred(dir: &Path) -> Result<()> {
+    let mut files = forget_deferred(dir);
+    files.sort();
+    files.dedup();
+    if files.is_empty() {
+        return Ok(());
+    }
+    let per_thread = files.len().div_ceil(16);
+    let sync_all = |chunk: &[PathBuf]| chunk.iter().try_for_each(|f| sync_file(f));
+    std::thread::scope(|s| {
+        let mut results = Vec::new();
+        let mut threads = Vec::new();
+        for chunk in files.chunks(per_thread) {
+            // A thread the system refuses (a memory cap) is no error: its files are synced here.
+            match std::thread::Builder::new()
+                .stack_size(64 << 10)
+                .spawn_scoped(s, move || sync_all(chunk))
+            {
+                Ok(t) => threads.push(t),
+                Err(_) => results.push(sync_all(chunk)),
+            }
+        }
+        for t in threads {
+            results.push(t.join().unwrap_or_else(|_| {
+                Err(Error::Other(format!(
+                    "{}: a sync thread failed",
+                    dir.display()
+                )))
+            }));
+        }
+        results.into_iter().collect::<Result<Vec<()>>>()
+    })?;
+    Ok(())
+}
+
+/// Stop deferring under `dir` (a set dropped unpublished); the files written there since.
+pub fn forget_deferred(dir: &Path) -> Vec<PathBuf> {
+    let mut list = DEFERRED.lock().unwrap_or_else(|e| e.into_inner());
+    match list.iter().position(|(d, _)| d == dir) {
+        Some(i) => list.swap_remove(i).1,
+        None => Vec::new(),
+    }
 }
 
 /// Write a device, FIFO or socket through an ordinary open (no create, no truncation, no fsync:

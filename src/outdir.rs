@@ -584,6 +584,8 @@ impl OutputSet {
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .push(staging.clone());
+        // The staged files are synced together in `publish`, before the set becomes visible.
+        crate::atomic::defer_sync_under(&staging);
         Ok(OutputSet {
             dir: dir.to_path_buf(),
             target: abs.clone(),
@@ -695,8 +697,12 @@ impl OutputSet {
         let path = dir.join(MARKER);
         let mut file = File::create(&path).map_err(|e| Error::io(&path, e))?;
         file.write_all(marker.text().as_bytes())
-            .and_then(|()| file.sync_all())
-            .map_err(|e| Error::io(&path, e))
+            .map_err(|e| Error::io(&path, e))?;
+        // Synced with the set's other files before publication (or now, when not deferred).
+        if !crate::atomic::note_deferred(&path) {
+            file.sync_all().map_err(|e| Error::io(&path, e))?;
+        }
+        Ok(())
     }
 
     /// Carry what the user put into the old set's directory `old` (and into its marked
@@ -746,6 +752,7 @@ impl OutputSet {
         }
         self.seal(&self.staging, self.kind)
             .map_err(|e| self.explain(e))?;
+        crate::atomic::sync_deferred(&self.staging).map_err(|e| self.explain(e))?;
         if self.target.is_dir() {
             self.carry_over(&self.target, &self.staging, self.old.as_ref())?;
         }
@@ -765,6 +772,7 @@ impl Drop for OutputSet {
             let _ = std::fs::remove_dir_all(&self.staging);
             forget(&IN_FLIGHT, &self.staging);
         }
+        crate::atomic::forget_deferred(&self.staging);
     }
 }
 

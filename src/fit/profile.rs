@@ -46,8 +46,7 @@ const JACOBIAN_ENTRIES_PER_S: f64 = 5e6;
 const SEARCH_RANGES: f64 = 3.0;
 /// Bracketing steps per side at most.
 const MAX_BRACKET: usize = 10;
-/// Regula-falsi steps per crossing at most.
-const MAX_REFINE: usize = 4;
+const MAX_REFINE: usize = 4; // Regula-falsi steps per crossing at most.
 /// A crossing is accepted when `√Δχ²` is this close to its target (Δχ² within ~2% at 68%).
 const SQRT_TOL: f64 = 0.01;
 /// A side's 95% end is the local quadratic's, without a re-fit there, when the re-fit at the
@@ -227,14 +226,15 @@ impl<F: Forward> Pinned<'_, '_, F> {
         }
     }
 
-    /// The fit's LM runner ([`run_lm`]) with a relative cost tolerance of [`SOLVE_CHI2_TOL`] χ²
-    /// units and no linearisation at its last point: `(u, cost, iterations)`, never worse than
-    /// the start (the solver's best point, whose cost it has: no extra passes over the data for
-    /// the start's and the end's cost, which were two of a solve's ~eight).
+    /// The fit's LM runner ([`run_lm`]), stopping once the cost change or the Gauss–Newton
+    /// predicted χ² gain (a warm start that close takes no step) is below [`SOLVE_CHI2_TOL`],
+    /// without a final linearisation: `(u, cost, iterations)`, never worse than the start (the
+    /// solver's best point and its cost: no extra passes for the start's and the end's cost).
     fn run(&self, u0: &[f64], max_iters: u64) -> (Vec<f64>, f64, u64) {
         let ftol = (SOLVE_CHI2_TOL / self.opt.dof.max(1) as f64).clamp(super::solve::FTOL, 1e-4);
         let solver = crate::lm::LevenbergMarquardt::new()
             .with_tolerances(ftol, crate::lm::DEFAULT_XTOL, 0.0)
+            .and_then(|lm| lm.with_statistical_tolerance(self.opt.dof.max(1), SOLVE_CHI2_TOL))
             .unwrap_or_default()
             .with_lazy_final_linearization();
         let run = run_lm(&self.ev, u0, solver, max_iters, &self.opt.cancel, None);
