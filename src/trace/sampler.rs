@@ -64,6 +64,17 @@ fn add_n(a: &mut Weights, b: &Weights, nc: usize) {
     }
 }
 
+/// `w · f` over the first `nc` channels, 0 in the rest. Not a copy of all of `w` scaled in
+/// place: that read 64 bytes just after scalar stores to them, which cannot be forwarded.
+#[inline(always)]
+fn scaled(w: &Weights, nc: usize, f: f64) -> Weights {
+    let mut out: Weights = [0.0; MAX_CHANNELS];
+    for (o, x) in out[..nc].iter_mut().zip(&w[..nc]) {
+        *o = x * f;
+    }
+    out
+}
+
 fn add_w(a: &mut Weights, b: &Weights) {
     for (x, y) in a.iter_mut().zip(b) {
         *x += y;
@@ -356,8 +367,7 @@ impl Sampler {
                 if f < 1.0 {
                     let out = [l.out[0][k], l.out[1][k], l.out[2][k]];
                     let out = keep_side(out, ng, true, balance);
-                    let mut we = l.w[k];
-                    we[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
+                    let we = scaled(&l.w[k], nc, 1.0 - f);
                     add_n(&mut balance.tallied[seg.min(ORDERS - 1)], &we, nc);
                     exit(seg, out, &we);
                     l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
@@ -447,8 +457,7 @@ impl Sampler {
             let cos_i = -dot(d, m);
             let (f, cos_t) = fresnel(cos_i, 1.0, eta);
             let r = keep_side(reflect(d, m), ng, true, balance);
-            let mut wr = l.w[k];
-            wr[..nc].iter_mut().for_each(|x| *x *= f);
+            let wr = scaled(&l.w[k], nc, f);
             add_n(&mut balance.tallied[0], &wr, nc);
             exit(0, r, &wr);
             // From outside the reflectance is below 1 (no total internal reflection there).

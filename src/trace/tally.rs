@@ -132,8 +132,9 @@ impl Detector {
         if !self.row_used[r] {
             return;
         }
-        let c =
-            ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as usize).min(self.n_cols - 1);
+        // The pseudo-angle is ≥ 0: through i64 as in `row`.
+        let c = ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as i64)
+            .min(self.n_cols as i64 - 1) as usize;
         let k = r * self.n_cols + c;
         let (a, b) = (self.starts[k] as usize, self.starts[k + 1] as usize);
         for (&m, &s) in self.member_dirs[a..b].iter().zip(&self.members[a..b]) {
@@ -194,8 +195,9 @@ fn reaches(theta: f64, phi: f64, cos_k: f64, r: usize, c: usize, nr: usize, nc: 
 
 #[inline]
 fn row(z: f64, n: usize) -> usize {
-    // `as` truncates toward zero and saturates below at 0: the floor here, without a libm call.
-    (((z + 1.0) * 0.5 * n as f64) as usize).min(n - 1)
+    // `as` truncates toward zero (and NaN to 0): the floor here, without a libm call; through
+    // i64, one conversion instruction where `as usize` takes two and their fix-up.
+    (((z + 1.0) * 0.5 * n as f64) as i64).clamp(0, n as i64 - 1) as usize
 }
 
 fn col(phi: f64, n: usize) -> usize {

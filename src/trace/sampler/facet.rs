@@ -93,8 +93,10 @@ impl Sampler {
             if y > -1.0 {
                 let lhs = x * x * (1.0 + s_l * s_l);
                 // Squeeze: e^{−y} ≥ 1 − y + y²/2 − y³/6 for every y, so most tries decide
-                // without the exponential.
-                let low = (1.0 + y) * (1.0 - y * (1.0 - y * (0.5 - y / 6.0)));
+                // without the exponential. y·(1/6), not y/6: no division on every try's path;
+                // it rounds differently, which can change a decision only where the squeeze
+                // and the exact test below disagree by rounding (|y| < 1e-3, within an ulp).
+                let low = (1.0 + y) * (1.0 - y * (1.0 - y * (0.5 - y * (1.0 / 6.0))));
                 if low > 0.0 && lhs < low * low {
                     return Some((s_l, 0.0));
                 }
