@@ -41,6 +41,7 @@ fn tables() -> &'static Tables {
 }
 
 /// One standard normal draw.
+#[inline]
 pub fn normal(rng: &mut impl RngCore) -> f64 {
     let t = tables();
     loop {
@@ -55,6 +56,7 @@ pub fn normal(rng: &mut impl RngCore) -> f64 {
 /// A standard normal draw and an independent uniform in [0, 1) (25 bits), from one `u64` but
 /// for the ziggurat's rare retries: bits 0–6 choose the layer, 32–63 the position in it (32
 /// bits), 7–31 the uniform; no bit serves two draws, so they are independent.
+#[inline(always)]
 pub fn normal_and_uniform(rng: &mut impl RngCore) -> (f64, f64) {
     let bits = rng.next_u64();
     let v = ((bits >> 7) & ((1 << 25) - 1)) as f64 * (1.0 / (1u64 << 25) as f64);

@@ -4,14 +4,17 @@
 /// 3-D vector in the fibre frame `(u, v, w)`: `u` along the axis toward the tip.
 pub type V3 = [f64; 3];
 
+#[inline]
 pub fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+#[inline]
 pub fn scale(a: V3, s: f64) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
 }
 
+#[inline]
 pub fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
@@ -23,6 +26,7 @@ pub fn normalize(a: V3) -> V3 {
 /// Unpolarised Fresnel reflectance for light arriving at cosine `cos_i` (> 0, against the
 /// normal) from a medium of index `n1` into `n2`, and the refracted cosine (0 under total
 /// internal reflection, where the reflectance is exactly 1).
+#[inline]
 pub fn fresnel(cos_i: f64, n1: f64, n2: f64) -> (f64, f64) {
     let e = n1 / n2;
     let sin2_t = e * e * (1.0 - cos_i * cos_i).max(0.0);
@@ -36,6 +40,7 @@ pub fn fresnel(cos_i: f64, n1: f64, n2: f64) -> (f64, f64) {
 }
 
 /// `d` mirrored at the plane with unit normal `n`.
+#[inline]
 pub fn reflect(d: V3, n: V3) -> V3 {
     add(d, scale(n, -2.0 * dot(d, n)))
 }
@@ -43,6 +48,7 @@ pub fn reflect(d: V3, n: V3) -> V3 {
 /// `d` refracted through the plane with unit normal `n` facing the incoming side
 /// (`dot(d, n) = −cos_i < 0`), index ratio `e = n1/n2`, refracted cosine `cos_t`; unit when
 /// `d` and `n` are (Snell's law in vector form).
+#[inline]
 pub fn refract(d: V3, n: V3, e: f64, cos_i: f64, cos_t: f64) -> V3 {
     add(scale(d, e), scale(n, e * cos_i - cos_t))
 }

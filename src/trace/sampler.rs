@@ -5,6 +5,9 @@
 use rand_chacha::rand_core::RngCore;
 
 mod facet;
+mod kernel;
+
+pub use self::kernel::Kernel;
 
 use super::fiber::Fiber;
 use super::optics::{dot, fresnel, reflect, refract, V3};
@@ -61,6 +64,17 @@ fn add_n(a: &mut Weights, b: &Weights, nc: usize) {
     }
 }
 
+/// `w · f` over the first `nc` channels, 0 in the rest. Not a copy of all of `w` scaled in
+/// place: that read 64 bytes just after scalar stores to them, which cannot be forwarded.
+#[inline(always)]
+fn scaled(w: &Weights, nc: usize, f: f64) -> Weights {
+    let mut out: Weights = [0.0; MAX_CHANNELS];
+    for (o, x) in out[..nc].iter_mut().zip(&w[..nc]) {
+        *o = x * f;
+    }
+    out
+}
+
 fn add_w(a: &mut Weights, b: &Weights) {
     for (x, y) in a.iter_mut().zip(b) {
         *x += y;
@@ -98,6 +112,7 @@ impl Sampler {
     }
 
     /// The section every ray meets, when the fibre has one rotation (or is round).
+    #[inline]
     fn fixed_section(&self) -> Option<Section> {
         match self.fiber.rotation {
             Some(psi) => Some(Section::new(self.fiber.eccentricity, psi)),
@@ -108,6 +123,7 @@ impl Sampler {
 
     /// Draw one ray of the beam from `omega_i`: the section it meets (its rotation, when the
     /// fibre has none, weighted by the width it presents) and its offset `h` ∈ [−1, 1].
+    #[inline]
     fn draw_ray(&self, omega_i: V3, rng: &mut impl RngCore) -> (Section, f64) {
         let section = match self.fixed_section() {
             Some(s) => s,
@@ -152,11 +168,39 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
+        self.trace_batch_on(Kernel::best(), omega_i, n, rng, balance, exit);
+    }
+
+    /// [`trace_batch`](Self::trace_batch) compiled for `kernel` (the best this CPU runs if it
+    /// runs not that one): every kernel gives the same bits.
+    pub fn trace_batch_on(
+        &self,
+        kernel: Kernel,
+        omega_i: V3,
+        n: u64,
+        rng: &mut impl RngCore,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
+        kernel::trace_batch(self, kernel, omega_i, n, rng, balance, exit);
+    }
+
+    /// [`trace_batch`](Self::trace_batch)'s body, inlined into each kernel of [`kernel`], for
+    /// `NC` channels (0: any number, read from the fibre).
+    #[inline(always)]
+    fn trace_batch_body<const NC: usize>(
+        &self,
+        omega_i: V3,
+        n: u64,
+        rng: &mut impl RngCore,
+        balance: &mut Balance,
+        exit: &mut impl FnMut(usize, V3, &Weights),
+    ) {
         let mut left = n;
         let dir = beam_dir(omega_i);
         // One section for every ray: its half-width once, not per ray.
         let fixed_hw = self.fixed_section().map(|s| s.half_width(dir));
-        self.trace_lanes(
+        self.trace_lanes::<NC, _>(
             omega_i,
             &mut |rng| {
                 (left > 0).then(|| {
@@ -186,7 +230,7 @@ impl Sampler {
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
         let mut one = Some((*section, h * section.half_width(beam_dir(omega_i))));
-        self.trace_lanes(omega_i, &mut |_| one.take(), rng, balance, exit);
+        self.trace_lanes::<0, _>(omega_i, &mut |_| one.take(), rng, balance, exit);
     }
 
     /// The rays `source` gives (their section and offset from the axis, drawn from the
@@ -196,7 +240,8 @@ impl Sampler {
     /// branches (independent rays: the divisions, square roots and the Fresnel terms of
     /// different lanes overlap, and the compiler vectorises them); the draws, the exits and
     /// the bookkeeping run lane by lane.
-    fn trace_lanes<R: RngCore>(
+    #[inline(always)]
+    fn trace_lanes<const NC: usize, R: RngCore>(
         &self,
         omega_i: V3,
         source: &mut impl FnMut(&mut R) -> Option<(Section, f64)>,
@@ -204,7 +249,7 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        let nc = self.nc;
+        let nc = self.channels::<NC>();
         let eta = self.fiber.eta;
         let sigma_a = &self.fiber.sigma_a[..nc];
         let max_seg = self.fiber.max_segments as usize;
@@ -222,7 +267,7 @@ impl Sampler {
                                 .enter(&mut lanes, k, &section, omega_i, dir, offset, rng, balance)
                             {
                                 // A grazing miss leaves after the R of the lanes entered before.
-                                self.enter_finish(&mut lanes, balance, exit);
+                                self.enter_finish::<NC>(&mut lanes, balance, exit);
                                 let w = self.unit_weights();
                                 balance.grazing += 1;
                                 add_n(&mut balance.tallied[0], &w, nc);
@@ -234,7 +279,7 @@ impl Sampler {
                 }
                 any |= lanes.active[k];
             }
-            self.enter_finish(&mut lanes, balance, exit);
+            self.enter_finish::<NC>(&mut lanes, balance, exit);
             if !any {
                 break;
             }
@@ -322,8 +367,7 @@ impl Sampler {
                 if f < 1.0 {
                     let out = [l.out[0][k], l.out[1][k], l.out[2][k]];
                     let out = keep_side(out, ng, true, balance);
-                    let mut we = l.w[k];
-                    we[..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
+                    let we = scaled(&l.w[k], nc, 1.0 - f);
                     add_n(&mut balance.tallied[seg.min(ORDERS - 1)], &we, nc);
                     exit(seg, out, &we);
                     l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
@@ -347,6 +391,7 @@ impl Sampler {
     /// wait). `false`: the ray
     /// missed by rounding at the very edge, lane `k` is untouched.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn enter(
         &self,
         l: &mut Lanes,
@@ -392,13 +437,14 @@ impl Sampler {
     /// The pending entries of [`enter`](Self::enter), lane by lane: the facet, Fresnel from
     /// outside, R leaves and the rest is refracted in. Only the lanes entered (about 2 of 8 a
     /// step): their chains are independent of the draws and overlap with each other.
-    fn enter_finish(
+    #[inline(always)]
+    fn enter_finish<const NC: usize>(
         &self,
         l: &mut Lanes,
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        let nc = self.nc;
+        let nc = self.channels::<NC>();
         let eta = self.fiber.eta;
         for k in 0..LANES {
             if !l.pending[k] {
@@ -411,8 +457,7 @@ impl Sampler {
             let cos_i = -dot(d, m);
             let (f, cos_t) = fresnel(cos_i, 1.0, eta);
             let r = keep_side(reflect(d, m), ng, true, balance);
-            let mut wr = l.w[k];
-            wr[..nc].iter_mut().for_each(|x| *x *= f);
+            let wr = scaled(&l.w[k], nc, f);
             add_n(&mut balance.tallied[0], &wr, nc);
             exit(0, r, &wr);
             // From outside the reflectance is below 1 (no total internal reflection there).
@@ -422,13 +467,28 @@ impl Sampler {
         }
     }
 
+    /// The fibre's channels, `NC` when that is not 0: a constant lets the compiler unroll the
+    /// loops over channels (with 1 channel, masked AVX-512 loads of a just stored weight cost
+    /// ~10% of the time, their stores cannot be forwarded).
+    #[inline(always)]
+    fn channels<const NC: usize>(&self) -> usize {
+        debug_assert!(NC == 0 || NC == self.nc);
+        if NC == 0 {
+            self.nc
+        } else {
+            NC
+        }
+    }
+
     /// Weight 1 in every channel the fibre has.
+    #[inline]
     fn unit_weights(&self) -> Weights {
         let mut w: Weights = [0.0; MAX_CHANNELS];
         w[..self.nc].fill(1.0);
         w
     }
 
+    #[inline]
     fn geometric_normal(&self, section: &Section, p: [f64; 2]) -> V3 {
         let n = section.normal(p);
         [0.0, n[0], n[1]]
@@ -533,6 +593,7 @@ fn fresnel_lane(cos_i: f64, eta: f64) -> (f64, f64) {
 
 /// The unit facet normal `ng + s_l·u + s_a·(u × ng)` normalised (`ng` unit with no axial part):
 /// tilted toward the tip by atan(s_l / √(1 + s_a²)) and turned about the axis by atan(s_a).
+#[inline]
 pub fn facet(ng: V3, s_l: f64, s_a: f64) -> V3 {
     let k = 1.0 / (1.0 + s_l * s_l + s_a * s_a).sqrt();
     [
@@ -544,6 +605,7 @@ pub fn facet(ng: V3, s_l: f64, s_a: f64) -> V3 {
 
 /// `d` on the side of the geometric surface it should leave toward (`out`: along `ng`),
 /// mirrored across the tangent plane when a tilted or rough normal turned it back.
+#[inline]
 fn keep_side(d: V3, ng: V3, out: bool, balance: &mut Balance) -> V3 {
     let c = dot(d, ng);
     if (c < 0.0) == out && c != 0.0 {

@@ -26,6 +26,7 @@ impl Section {
     }
 
     /// A 2-D vector in the ellipse's own axes.
+    #[inline]
     fn local(&self, x: [f64; 2]) -> [f64; 2] {
         [
             self.c * x[0] + self.s * x[1],
@@ -34,6 +35,7 @@ impl Section {
     }
 
     /// Half the width the section presents across the in-plane direction `dir` (unit).
+    #[inline]
     pub fn half_width(&self, dir: [f64; 2]) -> f64 {
         let perp = self.local([-dir[1], dir[0]]);
         (perp[0] * perp[0] + self.a * self.a * perp[1] * perp[1]).sqrt()
@@ -41,6 +43,7 @@ impl Section {
 
     /// Quadratic coefficients `(A, B, C)` of `|p + t d|_ellipse² = 1` for the in-plane
     /// components `p`, `d` (`d` need not be unit: its length is the 3-D direction's).
+    #[inline]
     fn quadratic(&self, p: [f64; 2], d: [f64; 2]) -> (f64, f64, f64) {
         let (p, d) = (self.local(p), self.local(d));
         let ia2 = self.ia2;
@@ -51,6 +54,7 @@ impl Section {
     }
 
     /// Distance along `d` from outside point `p` to the section's boundary, if the line hits it.
+    #[inline]
     pub fn entry(&self, p: [f64; 2], d: [f64; 2]) -> Option<f64> {
         let (qa, qb, qc) = self.quadratic(p, d);
         let disc = qb * qb - 4.0 * qa * qc;
@@ -72,6 +76,7 @@ impl Section {
     }
 
     /// Outward unit normal at boundary point `p`, in `(v, w)`.
+    #[inline]
     pub fn normal(&self, p: [f64; 2]) -> [f64; 2] {
         if self.a == 1.0 {
             // On the unit circle up to rounding; normalised so the rounding does not accumulate.

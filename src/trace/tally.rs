@@ -28,6 +28,7 @@ pub struct Detector {
 /// A monotone stand-in for φ ∈ [0, 2π) in [0, 4) from the in-plane components (the "diamond
 /// angle"): cells in it are at most twice as wide in φ as the mean. Written with selects, not
 /// branches: an exit's quadrant is random, so branches on it mispredict.
+#[inline]
 fn pseudo_angle(x: f64, y: f64) -> f64 {
     // y/(|x| + |y|) ∈ [−1, 1]; (0, 0) gives 0.
     let a = y / (x.abs() + y.abs()).max(f64::MIN_POSITIVE);
@@ -125,13 +126,15 @@ impl Detector {
     }
 
     /// Call `hit(s)` for every sampling point `s` whose cap holds the unit direction `d`.
+    #[inline]
     pub fn visit(&self, d: V3, mut hit: impl FnMut(usize)) {
         let r = row(d[0], self.n_rows);
         if !self.row_used[r] {
             return;
         }
-        let c =
-            ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as usize).min(self.n_cols - 1);
+        // The pseudo-angle is ≥ 0: through i64 as in `row`.
+        let c = ((pseudo_angle(d[1], d[2]) * 0.25 * self.n_cols as f64) as i64)
+            .min(self.n_cols as i64 - 1) as usize;
         let k = r * self.n_cols + c;
         let (a, b) = (self.starts[k] as usize, self.starts[k + 1] as usize);
         for (&m, &s) in self.member_dirs[a..b].iter().zip(&self.members[a..b]) {
@@ -190,9 +193,11 @@ fn reaches(theta: f64, phi: f64, cos_k: f64, r: usize, c: usize, nr: usize, nc: 
     best >= cos_k - 1e-9
 }
 
+#[inline]
 fn row(z: f64, n: usize) -> usize {
-    // `as` truncates toward zero and saturates below at 0: the floor here, without a libm call.
-    (((z + 1.0) * 0.5 * n as f64) as usize).min(n - 1)
+    // `as` truncates toward zero (and NaN to 0): the floor here, without a libm call; through
+    // i64, one conversion instruction where `as usize` takes two and their fix-up.
+    (((z + 1.0) * 0.5 * n as f64) as i64).clamp(0, n as i64 - 1) as usize
 }
 
 fn col(phi: f64, n: usize) -> usize {
@@ -215,6 +220,7 @@ impl Collected {
         }
     }
 
+    #[inline]
     pub fn add(&mut self, s: usize, order: usize, w: &Weights) {
         let base = (s * ORDERS + order.min(ORDERS - 1)) * self.nc;
         for (x, y) in self.sums[base..base + self.nc].iter_mut().zip(w) {
