@@ -9,6 +9,27 @@ mod kernel;
 
 pub use self::kernel::Kernel;
 
+/// One call of [`Sampler::trace_batch_on`], what a [`kernel`] compiles and runs.
+struct Batch<'a, R, E> {
+    sampler: &'a Sampler,
+    omega_i: V3,
+    n: u64,
+    rng: &'a mut R,
+    balance: &'a mut Balance,
+    exit: &'a mut E,
+}
+
+impl<R: RngCore, E: FnMut(usize, V3, &Weights)> kernel::Body for Batch<'_, R, E> {
+    fn channels(&self) -> usize {
+        self.sampler.nc
+    }
+    #[inline(always)]
+    fn run<const NC: usize>(self) {
+        self.sampler
+            .trace_batch_body::<NC>(self.omega_i, self.n, self.rng, self.balance, self.exit)
+    }
+}
+
 use super::fiber::Fiber;
 use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
@@ -182,7 +203,15 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        kernel::trace_batch(self, kernel, omega_i, n, rng, balance, exit);
+        let batch = Batch {
+            sampler: self,
+            omega_i,
+            n,
+            rng,
+            balance,
+            exit,
+        };
+        kernel::run(kernel, batch);
     }
 
     /// [`trace_batch`](Self::trace_batch)'s body, inlined into each kernel of [`kernel`], for

@@ -1,15 +1,10 @@
-//! The tracer's only `unsafe` code: [`Sampler::trace_batch`]'s body compiled again for AVX2 and
+//! The tracer's only `unsafe` code: `Sampler::trace_batch`'s body compiled again for AVX2 and
 //! for AVX-512 and chosen at run time (`is_x86_feature_detected!`), the baseline x86-64 build
 //! otherwise. The body and its helpers are `#[inline]`/`#[inline(always)]`, so each copy is
 //! compiled for its features: the lanes' loops get 4- or 8-wide registers and everything gets
 //! the VEX encoding's three-operand instructions. The IEEE operations and their order are the
 //! same in every copy (Rust never fuses a multiply and an add on its own, FMA or not), so every
 //! kernel gives the same bits; `tests` checks it on the CPU it runs on.
-
-use rand_chacha::rand_core::RngCore;
-
-use super::{Balance, Sampler, Weights};
-use crate::trace::optics::V3;
 
 /// Which compiled copy of the tracer's hot path runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,79 +51,58 @@ impl Kernel {
     }
 }
 
-/// [`Sampler::trace_batch`] on `kernel`, or on the best this CPU runs if it does not run that.
-pub(super) fn trace_batch<R: RngCore, E: FnMut(usize, V3, &Weights)>(
-    s: &Sampler,
-    kernel: Kernel,
-    omega_i: V3,
-    n: u64,
-    rng: &mut R,
-    balance: &mut Balance,
-    exit: &mut E,
-) {
+/// The work a kernel compiles: the tracer's batch body for `NC` channels (0: any number). Its
+/// `run` is `#[inline(always)]`, so each kernel below gets its own copy of it.
+pub(super) trait Body {
+    /// The number of channels (1 and 3 get copies of their own).
+    fn channels(&self) -> usize;
+    fn run<const NC: usize>(self);
+}
+
+/// `body` on `kernel`, or on the best this CPU runs if it does not run that.
+pub(super) fn run<B: Body>(kernel: Kernel, body: B) {
     let kernel = if kernel.available() {
         kernel
     } else {
         Kernel::best()
     };
     // One channel (grey) and three (RGB) get their own copies, any other number the general one.
-    match s.nc {
-        1 => on::<1, R, E>(s, kernel, omega_i, n, rng, balance, exit),
-        3 => on::<3, R, E>(s, kernel, omega_i, n, rng, balance, exit),
-        _ => on::<0, R, E>(s, kernel, omega_i, n, rng, balance, exit),
+    match body.channels() {
+        1 => on::<1, B>(kernel, body),
+        3 => on::<3, B>(kernel, body),
+        _ => on::<0, B>(kernel, body),
     }
 }
 
 /// `kernel`, which this CPU runs, for `NC` channels.
-fn on<const NC: usize, R: RngCore, E: FnMut(usize, V3, &Weights)>(
-    s: &Sampler,
-    kernel: Kernel,
-    omega_i: V3,
-    n: u64,
-    rng: &mut R,
-    balance: &mut Balance,
-    exit: &mut E,
-) {
+fn on<const NC: usize, B: Body>(kernel: Kernel, body: B) {
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the caller checked that the CPU has every feature `avx512` is compiled for.
-        Kernel::Avx512 => unsafe { avx512::<NC, R, E>(s, omega_i, n, rng, balance, exit) },
+        Kernel::Avx512 => unsafe { avx512::<NC, B>(body) },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the caller checked that the CPU has every feature `avx2` is compiled for.
-        Kernel::Avx2 => unsafe { avx2::<NC, R, E>(s, omega_i, n, rng, balance, exit) },
-        _ => s.trace_batch_body::<NC>(omega_i, n, rng, balance, exit),
+        Kernel::Avx2 => unsafe { avx2::<NC, B>(body) },
+        _ => body.run::<NC>(),
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2")]
-unsafe fn avx2<const NC: usize, R: RngCore, E: FnMut(usize, V3, &Weights)>(
-    s: &Sampler,
-    omega_i: V3,
-    n: u64,
-    rng: &mut R,
-    balance: &mut Balance,
-    exit: &mut E,
-) {
-    s.trace_batch_body::<NC>(omega_i, n, rng, balance, exit)
+unsafe fn avx2<const NC: usize, B: Body>(body: B) {
+    body.run::<NC>()
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,avx512f,avx512dq,avx512vl,avx512bw")]
-unsafe fn avx512<const NC: usize, R: RngCore, E: FnMut(usize, V3, &Weights)>(
-    s: &Sampler,
-    omega_i: V3,
-    n: u64,
-    rng: &mut R,
-    balance: &mut Balance,
-    exit: &mut E,
-) {
-    s.trace_batch_body::<NC>(omega_i, n, rng, balance, exit)
+unsafe fn avx512<const NC: usize, B: Body>(body: B) {
+    body.run::<NC>()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::sampler::{Balance, Sampler};
     use crate::trace::{batch_generator, optics::direction, Fiber};
 
     /// Every kernel this CPU runs gives the baseline's exits and balance, bit for bit, for a
