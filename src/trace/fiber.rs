@@ -66,6 +66,23 @@ pub struct Fiber {
     pub max_segments: u32,
 }
 
+#[cfg(test)]
+impl Fiber {
+    /// The brown fibre (η 1.55, σ_a 0.5, tilt −3°, roughness 6°), for unit tests.
+    pub(crate) fn brown() -> Fiber {
+        Fiber {
+            eta: 1.55,
+            sigma_a: vec![0.5],
+            tilt: (-3f64).to_radians(),
+            roughness: 6f64.to_radians(),
+            azimuthal_roughness: 0.0,
+            eccentricity: 1.0,
+            rotation: None,
+            max_segments: 16,
+        }
+    }
+}
+
 impl FiberFile {
     /// The absorption of every channel.
     pub fn sigma_a_values(&self) -> Vec<f64> {

@@ -136,16 +136,7 @@ mod tests {
     /// rays from near-normal to grazing and from behind the geometric surface.
     #[test]
     fn tangent_sampler_matches_plain_rejection() {
-        let fiber = Fiber {
-            eta: 1.55,
-            sigma_a: vec![0.5],
-            tilt: (-3f64).to_radians(),
-            roughness: 6f64.to_radians(),
-            azimuthal_roughness: 0.0,
-            eccentricity: 1.0,
-            rotation: None,
-            max_segments: 16,
-        };
+        let fiber = Fiber::brown();
         let s = Sampler::new(&fiber);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         for (theta, cg) in [

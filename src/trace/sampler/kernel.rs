@@ -109,16 +109,7 @@ mod tests {
     /// round rough fibre, a rough elliptical one averaged over rotations, and two channels.
     #[test]
     fn every_kernel_gives_the_same_bits() {
-        let brown = Fiber {
-            eta: 1.55,
-            sigma_a: vec![0.5],
-            tilt: (-3f64).to_radians(),
-            roughness: 6f64.to_radians(),
-            azimuthal_roughness: 0.0,
-            eccentricity: 1.0,
-            rotation: None,
-            max_segments: 16,
-        };
+        let brown = Fiber::brown();
         let ellipse = Fiber {
             sigma_a: vec![0.2, 1.5],
             azimuthal_roughness: 4f64.to_radians(),
