@@ -262,40 +262,14 @@ fn sync_file(path: &Path) -> Result<()> {
 }
 
 /// Stop deferring under `dir` and fsync every file written there since [`defer_sync_under`],
-/// concurrently (at most 16 threads); the first error names its file.
+/// one after another on this thread; the first error names its file. Not on threads of their
+/// own: under a memory cap a new thread of the Python module can abort the interpreter in the
+/// C library ("cannot allocate memory for thread-local data"), which no Rust code can catch.
 pub fn sync_deferred(dir: &Path) -> Result<()> {
     let mut files = forget_deferred(dir);
     files.sort();
     files.dedup();
-    if files.is_empty() {
-        return Ok(());
-    }
-    let per_thread = files.len().div_ceil(16);
-    let sync_all = |chunk: &[PathBuf]| chunk.iter().try_for_each(|f| sync_file(f));
-    std::thread::scope(|s| {
-        let mut results = Vec::new();
-        let mut threads = Vec::new();
-        for chunk in files.chunks(per_thread) {
-            // A thread the system refuses (a memory cap) is no error: its files are synced here.
-            match std::thread::Builder::new()
-                .stack_size(64 << 10)
-                .spawn_scoped(s, move || sync_all(chunk))
-            {
-                Ok(t) => threads.push(t),
-                Err(_) => results.push(sync_all(chunk)),
-            }
-        }
-        for t in threads {
-            results.push(t.join().unwrap_or_else(|_| {
-                Err(Error::Other(format!(
-                    "{}: a sync thread failed",
-                    dir.display()
-                )))
-            }));
-        }
-        results.into_iter().collect::<Result<Vec<()>>>()
-    })?;
-    Ok(())
+    files.iter().try_for_each(|f| sync_file(f))
 }
 
 /// Stop deferring under `dir` (a set dropped unpublished); the files written there since.
