@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use crate::error::Result;
-use crate::families::marschner::{ModelConfig, Params};
+use crate::families::effects::ModelConfig;
+use crate::families::marschner::Params;
 use crate::families::table::TableParamFile;
 use crate::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::LoadReport;

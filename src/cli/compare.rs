@@ -76,7 +76,7 @@ const FAMILY_OPTIONS: [FamilyOption; 6] = [
     FamilyOption {
         flag: "--lobes",
         given: |m| {
-            crate::families::marschner::Effects::parse_lobes(&m.lobes).ok()
+            crate::families::effects::Effects::parse_lobes(&m.lobes).ok()
                 != Some(Default::default())
         },
         reset: |m| m.lobes = "R,TT,TRT".into(),

@@ -115,7 +115,7 @@ impl FitArgs {
     pub fn options(&self, cancel: Option<Arc<AtomicBool>>) -> Result<FitOptions> {
         self.model.check_family_options()?;
         let cfg = self.model.config()?;
-        let default_lobes = crate::families::marschner::Lobes::default();
+        let default_lobes = crate::families::effects::Lobes::default();
         let explicit = cfg.effects.lobes != default_lobes
             || self.model.no_glints
             || self.model.no_eccentricity;

@@ -17,7 +17,7 @@ use clap::Args;
 
 use crate::error::{Error, Result};
 use crate::families::chiang::{ChiangEffects, ChiangModel, WidthNodes};
-use crate::families::marschner::{Effects, ModelConfig, RootMode};
+use crate::families::effects::{Effects, ModelConfig, RootMode};
 use crate::families::table::TermSet;
 use crate::families::{ModelFamily, ModelSetup};
 use crate::geometry::Measurement;
@@ -141,7 +141,7 @@ impl ModelArgs {
         if self.mode != RootMode::Cubic {
             Some("--mode")
         } else if Effects::parse_lobes(&self.lobes).ok()
-            != Some(crate::families::marschner::Lobes::default())
+            != Some(crate::families::effects::Lobes::default())
         {
             Some("--lobes")
         } else if self.no_glints {

@@ -9,7 +9,7 @@ use super::{time_per_call, CostRow, COST_SEED};
 use crate::families::chiang::{
     scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams,
 };
-use crate::families::marschner::ModelConfig;
+use crate::families::effects::ModelConfig;
 use crate::geometry::Angles;
 
 /// Node counts of the ledger (the reference uses [`REFERENCE_NODES`]).

@@ -7,10 +7,10 @@ use std::time::Instant;
 use super::{CostRow, COST_SEED};
 use crate::demo::{demo_geometry, demo_truth, synthesize, DEMO_NOISE, DEMO_SCALE};
 use crate::error::Result;
+use crate::families::effects::{Effects, ModelConfig};
 use crate::families::marschner::fit::fit;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::parameters::typical_range;
-use crate::families::marschner::{Effects, ModelConfig};
 use crate::fit::{EffectsChoice, FitData, FitOptions, Global};
 
 /// The seeded synthetic data of the fit section (the demo's geometry, truth, scale and noise).

@@ -4,9 +4,9 @@
 use super::{time_per_call, CostRow};
 use crate::demo::demo_truth;
 use crate::error::Result;
+use crate::families::effects::{Effects, ModelConfig};
 use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::fitted_parameters;
-use crate::families::marschner::{Effects, ModelConfig};
 use crate::fit::{Evaluator, FitData, Loss, Space};
 use crate::geometry::Measurement;
 

@@ -3,7 +3,8 @@
 
 use super::{time_per_call, CostRow, COST_SEED};
 use crate::demo::demo_truth;
-use crate::families::marschner::{scattering, Effects, Lobes, ModelConfig, Params, RootMode};
+use crate::families::effects::{Effects, Lobes, ModelConfig, RootMode};
+use crate::families::marschner::{scattering, Params};
 use crate::geometry::Angles;
 use crate::rng::SplitMix64;
 

@@ -10,8 +10,9 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
+use crate::families::effects::ModelConfig;
 use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::{ModelConfig, Params};
+use crate::families::marschner::Params;
 use crate::families::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::{Curves, ParameterFile};
 use crate::geometry::Angles;

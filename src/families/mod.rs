@@ -21,12 +21,14 @@ use crate::json_file::ParameterFile;
 
 pub mod chiang;
 pub mod deon;
+pub mod effects;
 pub mod frostbite;
 pub mod kajiya_kay;
 pub mod karis;
 pub mod marschner;
 mod registry;
 mod setup;
+pub mod shared;
 pub mod table;
 pub use crate::geometry::FamilyFacts;
 pub(crate) use registry::registry;

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::ModelFamily;
 use crate::error::Result;
 use crate::families::chiang::{ChiangEffects, ChiangModel, WidthNodes};
-use crate::families::marschner::ModelConfig;
+use crate::families::effects::ModelConfig;
 use crate::families::table::{self, DynTable, TermSet};
 
 /// What the command line configures of each family's model (`--mode`, `--lobes`, … for

@@ -12,7 +12,7 @@ use super::load_report::LoadReport;
 use super::nan_if_missing_vec;
 use super::settings::{Global, Loss, Space};
 use crate::error::Result;
-use crate::families::marschner::{ModelConfig, RootMode};
+use crate::families::effects::{ModelConfig, RootMode};
 use crate::families::{ChiangRecord, FamilyParams};
 use crate::geometry::Measurement;
 

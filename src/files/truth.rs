@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::fit_json::ScaleEntry;
 use crate::error::Result;
-use crate::families::marschner::ModelConfig;
+use crate::families::effects::ModelConfig;
 use crate::families::{ChiangRecord, FamilyParams};
 use crate::geometry::Measurement;
 

@@ -96,3 +96,15 @@ impl SigmaA {
         Ok(())
     }
 }
+
+/// A parameter set's absorption coefficients give at least one colour channel (one σ_a).
+pub fn require_channels(sigma_a: &[f64]) -> Result<()> {
+    if sigma_a.is_empty() {
+        return Err(Error::Parameter {
+            name: "sigma_a".into(),
+            value: f64::NAN,
+            message: "give at least one colour channel".into(),
+        });
+    }
+    Ok(())
+}

@@ -17,8 +17,9 @@ use rayon::prelude::*;
 
 use crate::data::{round_trip_degrees, Dataset};
 use crate::error::{Error, Result};
+use crate::families::effects::ModelConfig;
 use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::{ModelConfig, Params};
+use crate::families::marschner::Params;
 use crate::families::{FamilyModel, FamilyParams, ModelRecords};
 pub use crate::files::{ScaleEntry, Truth};
 use crate::geometry::{Angles, Measurement};

@@ -328,7 +328,7 @@ fn symmetries_where_documented(family: &Subject) {
 /// Gauss–Legendre nodes on (−π/2, π/2); φ: `4n` equally spaced points (the midpoint rule,
 /// spectrally accurate for a smooth periodic integrand).
 fn albedo(m: &FamilyModel, theta_r: f64, n: usize) -> [f64; 3] {
-    let gl = hairfit::families::chiang::quadrature::GaussLegendre::new(n);
+    let gl = hairfit::families::shared::quadrature::GaussLegendre::new(n);
     let n_phi = 4 * n;
     let mut angles = Vec::with_capacity(n * n_phi);
     let mut weights = Vec::with_capacity(n * n_phi);

@@ -4,11 +4,11 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use crate::support::chiang::{model, params, s, set_a, set_b};
-use hairfit::families::chiang::azimuthal::{
-    azimuthal_lobe, exit_azimuth, logistic_scale, trimmed_logistic_norm,
-};
-use hairfit::families::chiang::quadrature::GaussLegendre;
+use hairfit::families::chiang::azimuthal::azimuthal_lobe;
 use hairfit::families::chiang::{scattering_batch, ChiangEffects, ChiangModel, ChiangParams};
+use hairfit::families::shared::cylinder::exit_azimuth;
+use hairfit::families::shared::logistic::{logistic_scale, trimmed_logistic_norm};
+use hairfit::families::shared::quadrature::GaussLegendre;
 use hairfit::geometry::Angles;
 
 /// `E(θ_r) = ∫ S cosθ_i dω_i = ∫∫ S cos²θ_i dθ_i dφ`.

@@ -7,8 +7,8 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use crate::support::deon::{reference, table_params, Set};
-use hairfit::families::chiang::quadrature::{GaussLegendre, WidthRule};
 use hairfit::families::deon::{add_azimuthal, longitudinal, variance_r, DEon, Integration};
+use hairfit::families::shared::quadrature::{GaussLegendre, WidthRule};
 use hairfit::families::table::{zero_terms, TableFamily, TermSet};
 use hairfit::geometry::Angles;
 

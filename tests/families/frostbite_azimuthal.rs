@@ -6,10 +6,10 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use hairfit::families::chiang::quadrature::GaussLegendre;
 use hairfit::families::frostbite::azimuthal::{
     exit_azimuth_at, integrate_directly, inverse_modified_index, lobe, Logistic,
 };
+use hairfit::families::shared::quadrature::GaussLegendre;
 
 /// Plain Gauss–Legendre nodes in γ for the HDRP comparison: the narrowest logistic there
 /// (β_N = 0.3) spans dozens of them.
@@ -164,15 +164,14 @@ fn lobes_integrate_to_one() {
 /// HDRP's generator: at its texel centres, `½ Σ D_s(φ − Φ_p(h)) · 0.1` over the 20 offsets
 /// h = −1, −0.9, …, 0.9 (its loop `for (h = −1; h < 1; h += 0.1)`), with exact arcsines.
 fn hdrp_texel(p: usize, phi: f64, c: f64, beta_n: f64) -> f64 {
-    let s = hairfit::families::chiang::azimuthal::logistic_scale(&beta_n);
-    let norm = hairfit::families::chiang::azimuthal::trimmed_logistic_norm(&s);
+    let s = hairfit::families::shared::logistic::logistic_scale(&beta_n);
+    let norm = hairfit::families::shared::logistic::trimmed_logistic_norm(&s);
     let x = inverse_modified_index(c);
     (0..20)
         .map(|k| {
             let h = -1.0 + 0.1 * k as f64;
             let d = wrap(phi - exit_azimuth_at(p, h, x));
-            0.5 * 0.1
-                * hairfit::families::chiang::azimuthal::trimmed_logistic(&d, &(1.0 / s), &norm)
+            0.5 * 0.1 * hairfit::families::shared::logistic::trimmed_logistic(&d, &(1.0 / s), &norm)
         })
         .sum()
 }

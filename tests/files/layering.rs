@@ -377,3 +377,38 @@ fn long_files_say_why_they_are_one_file() {
          split them along their seams or say why not: {bad:?}"
     );
 }
+
+/// The modules under `src/families/` that are no family: what families share, and the lists and
+/// switches every command reads.
+const FAMILY_NEUTRAL: &[&str] = &["shared", "table", "effects", "registry", "setup"];
+
+/// `families::<x>::…` → `Some(x)` when x is a family's own folder.
+fn family_folder(m: &Module) -> Option<&str> {
+    match m.as_slice() {
+        [f, x, ..] if f == "families" && !FAMILY_NEUTRAL.contains(&x.as_str()) => Some(x),
+        _ => None,
+    }
+}
+
+#[test]
+fn no_family_folder_imports_another_family() {
+    // A family is one folder plus one registry line: what two families share lives in
+    // `families::shared` (or `table`), so removing or moving one folder touches no other.
+    let tree = tree();
+    let bad: Vec<String> = tree
+        .edges
+        .iter()
+        .filter_map(|(from, targets)| Some((from, family_folder(from)?, targets)))
+        .flat_map(|(from, own, targets)| {
+            targets
+                .iter()
+                .filter(move |t| family_folder(t).is_some_and(|x| x != own))
+                .map(move |t| format!("{} -> {}", name(from), name(t)))
+        })
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "a family's folder imports another family's: move what they share to \
+         `families::shared`: {bad:?}"
+    );
+}

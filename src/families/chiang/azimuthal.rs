@@ -1,5 +1,6 @@
-//! Azimuthal scattering: Fresnel, absorption, the attenuations `A_p`, the exit angle `Φ_p`, the
-//! trimmed logistic `N_p`, and the width integral `Ñ_p = ⟨A_p N_p⟩_h`, `Ā₃ = ⟨A₃⟩_h`.
+//! Azimuthal scattering: the lobe `N_p`, where its logistic wraps, and the width integral
+//! `Ñ_p = ⟨A_p N_p⟩_h`, `Ā₃ = ⟨A₃⟩_h` (the cylinder's optics and the logistic are
+//! [`crate::families::shared`]'s).
 //!
 //! Everything here depends on θ_r and φ only, never on θ_i: one [`AzimuthalTable`] serves every
 //! incidence that shares an exit direction (see [`super::evaluator`]).
@@ -8,40 +9,13 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use num_dual::DualNum;
 
-use super::quadrature::WidthNode;
 use super::{ChiangEffects, ChiangParams};
+use crate::families::shared::cylinder::{
+    attenuations, exit_azimuth, fresnel, transmittance, ExitRefraction,
+};
+use crate::families::shared::logistic::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
+use crate::families::shared::quadrature::WidthNode;
 use crate::geometry::angles::wrap_t;
-
-/// `s = √(π/8)(0.265β_n + 1.194β_n² + 5.372β_n²²)`.
-#[inline]
-pub fn logistic_scale<T: DualNum<f64>>(beta_n: &T) -> T {
-    const SQRT_PI_OVER_8: f64 = 0.626_657_068_657_750_1;
-    let b = beta_n.clone();
-    (b.clone() * 0.265 + b.powi(2) * 1.194 + b.powi(22) * 5.372) * SQRT_PI_OVER_8
-}
-
-/// `1/(s·tanh(π/(2s)))`: the logistic's normalisation trimmed to [−π, π].
-#[inline]
-pub fn trimmed_logistic_norm<T: DualNum<f64>>(s: &T) -> T {
-    (s.clone() * (s.recip() * FRAC_PI_2).tanh()).recip()
-}
-
-/// `ℓ(x) = e^{−|x|/s} / (s(1 + e^{−|x|/s})² tanh(π/2s))`, x already wrapped to [−π, π];
-/// `norm` from [`trimmed_logistic_norm`].
-#[inline]
-pub fn trimmed_logistic<T: DualNum<f64>>(x: &T, inv_s: &T, norm: &T) -> T {
-    let a = if x.re() < 0.0 { -x.clone() } else { x.clone() };
-    let e = (-(a * inv_s.clone())).exp();
-    let d = e.clone() + 1.0;
-    e * norm.clone() / (d.clone() * d)
-}
-
-/// `Φ_p = 2pγ_t − 2γ_o + pπ`.
-#[inline]
-pub fn exit_azimuth<T: DualNum<f64>>(p: usize, gamma_o: f64, gamma_t: &T) -> T {
-    let pf = p as f64;
-    gamma_t.clone() * (2.0 * pf) + (pf * PI - 2.0 * gamma_o)
-}
 
 /// `N_p = ℓ(wrap(−φ − Φ_p))` (pbrt's azimuth difference is `φ_i − φ_o = −φ`).
 #[inline]
@@ -113,60 +87,6 @@ fn monotone_root(f: impl Fn(f64) -> f64, slope: impl Fn(f64) -> f64, a: f64, b: 
         x = next;
     }
     x
-}
-
-/// Unpolarised dielectric Fresnel reflectance from 1 into `eta` at incidence cosine `cos_i`.
-#[inline]
-pub fn fresnel<T: DualNum<f64>>(eta: &T, cos_i: f64) -> T {
-    let sin2_t = eta.powi(2).recip() * (1.0 - cos_i * cos_i);
-    let cos_t = (-sin2_t + 1.0).sqrt();
-    let e_cos_i = eta.clone() * cos_i;
-    let e_cos_t = eta.clone() * cos_t.clone();
-    let r_parallel = (e_cos_i.clone() - cos_t.clone()) / (e_cos_i + cos_t.clone());
-    let r_perpendicular = (-e_cos_t.clone() + cos_i) / (e_cos_t + cos_i);
-    (r_parallel.powi(2) + r_perpendicular.powi(2)) * 0.5
-}
-
-/// Quantities fixed by θ_r and η: `η' = √(η² − sin²θ_r)/cosθ_r` and `cos θ_t = √(1 − sin²θ_r/η²)`.
-#[derive(Debug, Clone)]
-pub struct ExitRefraction<T> {
-    pub eta_prime: T,
-    pub cos_theta_t: T,
-    pub cos_theta_r: f64,
-}
-
-impl<T: DualNum<f64>> ExitRefraction<T> {
-    pub fn new(eta: &T, theta_r: f64) -> Self {
-        let (s, c) = theta_r.sin_cos();
-        let eta2 = eta.powi(2);
-        ExitRefraction {
-            eta_prime: (eta2.clone() - s * s).sqrt() / c,
-            cos_theta_t: (-(eta2.recip() * (s * s)) + 1.0).sqrt(),
-            cos_theta_r: c,
-        }
-    }
-}
-
-/// Internal transmittance of one segment, `T = exp(−σ_a·2cosγ_t/cosθ_t)`; `chord = 2cosγ_t/cosθ_t`.
-#[inline]
-pub fn transmittance<T: DualNum<f64>>(sigma_a: &T, chord: &T) -> T {
-    (-(sigma_a.clone() * chord.clone())).exp()
-}
-
-/// `A₀ = F, A₁ = (1−F)²T, A₂ = A₁TF, A₃ = A₂TF/(1 − TF)` (A₃ = 0 if TF = 1).
-#[inline]
-pub fn attenuations<T: DualNum<f64>>(f: &T, t: &T) -> [T; 4] {
-    let a0 = f.clone();
-    let a1 = (-f.clone() + 1.0).powi(2) * t.clone();
-    let tf = t.clone() * f.clone();
-    let a2 = a1.clone() * tf.clone();
-    let one_minus = -tf.clone() + 1.0;
-    let a3 = if one_minus.re() == 0.0 {
-        T::from(0.0)
-    } else {
-        a2.clone() * tf / one_minus
-    };
-    [a0, a1, a2, a3]
 }
 
 /// The nodes of one exit direction's width integral: the lobes' and the residual's (the same

@@ -13,13 +13,13 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use num_dual::DualSVec64;
 
-use super::azimuthal::trimmed_logistic_norm;
-use super::azimuthal::{attenuations, exit_azimuth, fresnel, logistic_scale, ExitRefraction};
 use super::longitudinal::{base_variance, longitudinal};
-use super::quadrature::WidthNode;
 use super::{
     combine, ChiangEffects, ChiangModel, ChiangParamName, ChiangParams, WidthScratch, WidthSet,
 };
+use crate::families::shared::cylinder::{attenuations, exit_azimuth, fresnel, ExitRefraction};
+use crate::families::shared::logistic::{logistic_scale, trimmed_logistic_norm};
+use crate::families::shared::quadrature::WidthNode;
 use crate::geometry::angles::wrap;
 use crate::geometry::Angles;
 

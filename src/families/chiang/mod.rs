@@ -2,10 +2,8 @@
 //! project's conventions (CHIANG.md): parameters, effect switches, the width-quadrature knob, and
 //! `S = [Σ_{p<3} M_p Ñ_p + M₃ Ā₃/(2π)] / cosθ_i`, generic over the number type for exact
 //! AD Jacobians. One pure function per equation lives in the submodules:
-//! - [`bessel`]: exact exponentially scaled `I₀`;
-//! - [`longitudinal`]: `v_p`, the tilt on θ_r, `M_p`;
-//! - [`azimuthal`]: `s`, Fresnel, `T`, `A_p`, `Φ_p`, trimmed logistic `N_p`, the width integral;
-//! - [`quadrature`]: cached Gauss–Legendre rules in γ = asin h, plain and composite;
+//! - [`longitudinal`]: `v₀`, the tilt on θ_r, `M_p`;
+//! - [`azimuthal`]: `N_p`, the logistics' kinks, the width integral;
 //! - [`width`]: which rule a model uses (`auto` or N) and its nodes for one exit direction;
 //! - [`evaluator`]: batches grouped by exit direction so the width integral is paid once each;
 //! - [`fixed_eta`]: the fit's f64 values and Jacobian with η fixed (hand-written chain rule);
@@ -14,6 +12,10 @@
 //!
 //! The fit's side of the family (its `Forward`, free parameters, `--fix` names) is
 //! `crate::families::chiang::fit`.
+//!
+//! What d'Eon and Frostbite share with it (the lobe `M` and its `I₀`, the cylinder's Fresnel, `T`,
+//! `A_p`, `Φ_p`, the trimmed logistic, the Gauss–Legendre width rules) is
+//! [`crate::families::shared`]'s.
 //!
 //! Angles reuse [`crate::geometry::Angles`]: the frame and sign conventions are MODEL.md's.
 
@@ -24,28 +26,26 @@ use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::families::marschner::{Effects, Lobes, ModelConfig};
+use crate::families::effects::{Effects, Lobes, ModelConfig};
 use crate::geometry::Angles;
 pub use crate::geometry::ParamFact;
 use crate::geometry::{Fitted, Interval, Unit};
 
 pub mod azimuthal;
-pub mod bessel;
 pub mod evaluator;
 pub mod file;
 pub mod fit;
 pub mod fixed_eta;
 pub mod jacobian;
 pub mod longitudinal;
-pub mod quadrature;
 pub mod variant;
 pub mod width;
 
+pub use crate::families::shared::quadrature::{WidthNode, WidthRule, DEFAULT_WIDTH_NODES};
 pub use azimuthal::{AzimuthalTable, WidthSet};
 pub use evaluator::{scattering, scattering_batch, scattering_from_table};
 pub use file::ChiangParamFile;
 pub use jacobian::{batch_jacobian, batch_jacobian_static, seeded};
-pub use quadrature::{WidthNode, WidthRule, DEFAULT_WIDTH_NODES};
 pub use width::WidthNodes;
 
 /// Which terms of `S` are on; what is off is not computed.
@@ -334,7 +334,7 @@ impl<T: Clone> ChiangParams<T> {
 impl ChiangParams<f64> {
     /// Check CHIANG.md's domains; the error names the parameter (file name and units) and range.
     pub fn validate(&self) -> Result<()> {
-        crate::families::marschner::require_channels(&self.sigma_a)?;
+        crate::geometry::sigma_a::require_channels(&self.sigma_a)?;
         let mut checks = vec![
             (ChiangParamName::Eta, self.eta),
             (ChiangParamName::BetaM, self.beta_m),

@@ -15,8 +15,9 @@ use num_dual::{DualDVec64, DualNum, DualSVec64};
 
 use super::evaluator::for_each_with_table;
 use super::jacobian::split_duals;
-use super::longitudinal::{base_variance, lobe_variance, longitudinal, longitudinal_lobe};
+use super::longitudinal::{base_variance, longitudinal};
 use super::{combine, ChiangModel, ChiangParams};
+use crate::families::shared::longitudinal::{lobe_variance, longitudinal_lobe};
 use crate::geometry::Angles;
 
 /// Tilt of the incidence per lobe in units of α for the θ_i-tilt renderers:

@@ -11,10 +11,11 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use super::azimuthal::{wrap_kinks, ExitRefraction};
-use super::quadrature::{auto_density, composite, WidthNode, WidthRule};
+use super::azimuthal::wrap_kinks;
 use super::ChiangEffects;
 use crate::error::{Error, Result};
+use crate::families::shared::cylinder::ExitRefraction;
+use crate::families::shared::quadrature::{auto_density, composite, WidthNode, WidthRule};
 
 /// Plain nodes of the residual `Ā₃ = ⟨A₃⟩_h` under the automatic rule: its integrand has no
 /// logistic, only a near-pole of `1/(1 − TF)` just past h = ±1 for small σ_a; 64 nodes keep it
@@ -139,7 +140,7 @@ pub fn split_nodes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::families::chiang::azimuthal::exit_azimuth;
+    use crate::families::shared::cylinder::exit_azimuth;
     use std::f64::consts::{PI, TAU};
 
     #[test]

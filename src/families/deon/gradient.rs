@@ -12,8 +12,9 @@ use num_dual::DualNum;
 use super::{
     Integration, WrappedGaussian, BETA_N, ETA, IMAGES, NEGLIGIBLE_EXPONENT, RESIDUAL, SIGMA_A,
 };
-use crate::families::chiang::azimuthal::ExitRefraction;
-use crate::families::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
+use crate::families::shared::cylinder::{
+    attenuations, exit_azimuth, fresnel, transmittance, ExitRefraction,
+};
 use crate::families::table::{DualPass, TableParams, TermSet, Terms};
 use crate::geometry::angles::{wrap, wrap_t};
 use crate::geometry::Angles;

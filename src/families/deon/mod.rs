@@ -3,7 +3,7 @@
 //! paper's Eq. 7, the same function Chiang 2016 uses) times an azimuthal lobe
 //! `N_p(φ) = ½∫₋₁¹ A_p(h) D(φ − Φ_p(h)) dh` whose detector `D` is a Gaussian wrapped around the
 //! circle (Eqs. 10–11). This module owns the family's table, the wrapped Gaussian and the
-//! h-integral; `M_p`, Fresnel, `A_p`, `Φ_p` and the Gauss–Legendre rule are `crate::families::chiang`'s.
+//! h-integral; `M_p`, Fresnel, `A_p`, `Φ_p` and the Gauss–Legendre rule are `crate::families::shared`'s.
 //!
 //! The lobe sum is what a renderer multiplies by the light's irradiance (the paper's `f`, no
 //! `1/cos²θ_d`), so `S = Σ_p M_p N_p / cos θ_i`.
@@ -15,10 +15,11 @@ use num_dual::DualNum;
 
 mod gradient;
 
-use crate::families::chiang::azimuthal::ExitRefraction;
-use crate::families::chiang::azimuthal::{attenuations, exit_azimuth, fresnel, transmittance};
-use crate::families::chiang::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
-use crate::families::chiang::quadrature::WidthRule;
+use crate::families::shared::cylinder::{
+    attenuations, exit_azimuth, fresnel, transmittance, ExitRefraction,
+};
+use crate::families::shared::longitudinal::{lobe_variance, longitudinal_lobe, rotated_exit};
+use crate::families::shared::quadrature::WidthRule;
 use crate::families::table::{
     clear_terms, zero_terms, DualPass, LobeColumn, ParamFact, TableFamily, TableParams, Term,
     TermSet, Terms,

@@ -30,8 +30,8 @@ use std::sync::OnceLock;
 
 use num_dual::DualNum;
 
-use crate::families::chiang::azimuthal::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
-use crate::families::chiang::quadrature::{GaussLegendre, WidthRule};
+use crate::families::shared::logistic::{logistic_scale, trimmed_logistic, trimmed_logistic_norm};
+use crate::families::shared::quadrature::{GaussLegendre, WidthRule};
 use crate::geometry::angles::wrap;
 
 /// Smallest azimuthal roughness β_N the family accepts (radial smoothness 0.95): the accuracy

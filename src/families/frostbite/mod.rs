@@ -86,11 +86,11 @@ pub fn schlick<T: DualNum<f64>>(f0: &T, cos: f64) -> T {
 /// where R's Fresnel is taken (d'Eon 2011's half angle, as HDRP writes it). Computed as
 /// `√(sin²θ_h + cos θ_i cos θ_r cos²(φ/2))`, which does not cancel as L → −V.
 pub fn half_angle_cosine(a: &Angles) -> f64 {
-    use crate::families::karis;
-    karis::half_angle_cosine(
+    use crate::families::shared::half_angle;
+    half_angle::half_angle_cosine(
         a.theta_i,
         a.theta_r,
-        karis::half_phi_cosine(a.phi_r - a.phi_i),
+        half_angle::half_phi_cosine(a.phi_r - a.phi_i),
     )
 }
 

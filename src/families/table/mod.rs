@@ -17,7 +17,7 @@ use std::marker::PhantomData;
 use num_dual::DualNum;
 
 use crate::error::{Error, Result};
-use crate::families::marschner::{Effects, Lobes, ModelConfig};
+use crate::families::effects::{Effects, Lobes, ModelConfig};
 use crate::geometry::Angles;
 use crate::geometry::Fitted;
 pub use crate::geometry::ParamFact;
