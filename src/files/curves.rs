@@ -312,7 +312,7 @@ impl Curves {
                     .map(|from| {
                         let to = (from + ROWS_PER_CHUNK).min(end);
                         let mut out = Vec::with_capacity((to - from) * 200);
-                        let mut buf = ryu::Buffer::new();
+                        let mut buf = super::decimal::DigitBuffer::new();
                         for k in from..to {
                             self.format_row(row_at(k), &channels, &mut out, &mut buf);
                         }
@@ -328,7 +328,13 @@ impl Curves {
     }
 
     /// Append row `r` as one line of text (`channels`: the names as csv fields).
-    fn format_row(&self, r: usize, channels: &[Vec<u8>], out: &mut Vec<u8>, buf: &mut ryu::Buffer) {
+    fn format_row(
+        &self,
+        r: usize,
+        channels: &[Vec<u8>],
+        out: &mut Vec<u8>,
+        buf: &mut super::decimal::DigitBuffer,
+    ) {
         use super::decimal::{push_display, push_exponent, push_u64};
         let s = self.sample_of(r);
         push_u64(out, self.sample_id[s]);

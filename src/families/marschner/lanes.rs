@@ -1,12 +1,12 @@
-//! `S` four or eight samples at a time, for plain f64 in cubic mode (what `hairfit eval` runs):
-//! each step of the scalar [`super::evaluate`] done on vectors ([`vector::Lane`]). The vector is
-//! chosen at run time: eight lanes in one 512-bit register on CPUs with AVX-512 ([`avx512`]),
-//! eight in two 256-bit registers on CPUs with AVX2 ([`avx2`], [`vector::Pair`]), elsewhere four
-//! in `wide::f64x4`, which the default x86-64 target builds as two SSE2 halves. All run the
-//! lanes' own exp, sin/cos, asin and acos ([`functions`]) and the same IEEE operations, so they
-//! give the same bits. Per sample with every effect on (random directions, callgrind): the scalar
-//! model takes 2,520 instructions, the four-lane AVX2 kernel about 670 (the README has the
-//! times).
+//! `S` four or eight samples at a time, for plain f64 in cubic mode (what `hairfit eval` and the
+//! fit's value passes run): each step of the scalar [`super::evaluate`] done on vectors
+//! ([`vector::Lane`]). The vector is chosen at run time: eight lanes in one 512-bit register on
+//! CPUs with AVX-512 ([`avx512`]), eight in two 256-bit registers on CPUs with AVX2 ([`avx2`],
+//! [`vector::Pair`]), elsewhere four in `wide::f64x4`, which the default x86-64 target builds as
+//! two SSE2 halves. All run the lanes' own exp, sin/cos, asin and acos ([`functions`]) and the
+//! same IEEE operations, so they give the same bits. Per sample with every effect on (random
+//! directions, callgrind): the scalar model takes 2,520 instructions, the four-lane AVX2 kernel
+//! about 670 (the README has the times).
 //!
 //! The lanes take the common path only: at most one root per monotone piece of each map, a Newton
 //! step from the closed-form cubic root that settles at once, and no TT fold. A lane off that
