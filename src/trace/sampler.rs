@@ -50,16 +50,17 @@ const NORMAL_TRIES: u32 = 64;
 /// Per-channel weights.
 pub type Weights = [f64; MAX_CHANNELS];
 
-/// What receives a path's escaping parts: `exit(order, direction, weights)`. Any closure of
-/// that shape is one; `trace::run`'s tally implements it with an `#[inline(always)]` method, so
-/// the detector is compiled into each [`kernel`] instead of being called from it.
+/// What receives a path's escaping parts: `exit(order, direction, weights)`, from a kernel for
+/// `NC` channels (0: any number). Any closure of that shape is one; `trace::run`'s tally
+/// implements it with an `#[inline(always)]` method, so the detector is compiled into each
+/// [`kernel`] instead of being called from it.
 pub trait Exits {
-    fn exit(&mut self, order: usize, d: V3, w: &Weights);
+    fn exit<const NC: usize>(&mut self, order: usize, d: V3, w: &Weights);
 }
 
 impl<F: FnMut(usize, V3, &Weights)> Exits for F {
     #[inline(always)]
-    fn exit(&mut self, order: usize, d: V3, w: &Weights) {
+    fn exit<const NC: usize>(&mut self, order: usize, d: V3, w: &Weights) {
         self(order, d, w)
     }
 }
@@ -158,11 +159,17 @@ impl Sampler {
         }
     }
 
-    /// Draw one ray of the beam from `omega_i`: the section it meets (its rotation, when the
-    /// fibre has none, weighted by the width it presents) and its offset `h` ∈ [−1, 1].
-    #[inline]
-    fn draw_ray(&self, omega_i: V3, rng: &mut impl RngCore) -> (Section, f64) {
-        let section = match self.fixed_section() {
+    /// Draw one ray of the beam from `omega_i`: the section it meets (`fixed`, the
+    /// [`fixed_section`](Self::fixed_section) computed once per run, or else a rotation weighted
+    /// by the width it presents) and its offset `h` ∈ [−1, 1].
+    #[inline(always)]
+    fn draw_ray(
+        &self,
+        fixed: Option<Section>,
+        omega_i: V3,
+        rng: &mut impl RngCore,
+    ) -> (Section, f64) {
+        let section = match fixed {
             Some(s) => s,
             // Orientations weighted by the width they present: a uniform beam on a random
             // fibre meets a wide one more often (the major half-width, 1, bounds it).
@@ -190,7 +197,7 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        let (section, h) = self.draw_ray(omega_i, rng);
+        let (section, h) = self.draw_ray(self.fixed_section(), omega_i, rng);
         self.trace_at(&section, omega_i, h, rng, balance, exit);
     }
 
@@ -244,14 +251,15 @@ impl Sampler {
     ) {
         let mut left = n;
         let dir = beam_dir(omega_i);
-        // One section for every ray: its half-width once, not per ray.
-        let fixed_hw = self.fixed_section().map(|s| s.half_width(dir));
+        // One section for every ray: it and its half-width once, not per ray.
+        let fixed = self.fixed_section();
+        let fixed_hw = fixed.map(|s| s.half_width(dir));
         self.trace_lanes::<NC, _>(
             omega_i,
             &mut |rng| {
                 (left > 0).then(|| {
                     left -= 1;
-                    let (section, h) = self.draw_ray(omega_i, rng);
+                    let (section, h) = self.draw_ray(fixed, omega_i, rng);
                     let hw = fixed_hw.unwrap_or_else(|| section.half_width(dir));
                     (section, h * hw)
                 })
@@ -309,15 +317,15 @@ impl Sampler {
                 while !lanes.active[k] && !exhausted {
                     match source(rng) {
                         Some((section, offset)) => {
-                            if !self
-                                .enter(&mut lanes, k, &section, omega_i, dir, offset, rng, balance)
-                            {
+                            if !self.enter::<NC>(
+                                &mut lanes, k, &section, omega_i, dir, offset, rng, balance,
+                            ) {
                                 // A grazing miss leaves after the R of the lanes entered before.
                                 self.enter_finish::<NC>(&mut lanes, balance, exit);
-                                let w = self.unit_weights();
+                                let w = self.unit_weights::<NC>();
                                 balance.grazing += 1;
                                 add_n(&mut balance.tallied[0], &w, nc);
-                                exit.exit(0, [-omega_i[0], -omega_i[1], -omega_i[2]], &w);
+                                exit.exit::<NC>(0, [-omega_i[0], -omega_i[1], -omega_i[2]], &w);
                             }
                         }
                         None => exhausted = true,
@@ -358,7 +366,16 @@ impl Sampler {
                 let dn = l.dv[k] * nv + l.dw[k] * nw;
                 l.dn[k] = dn;
                 l.dt[k] = l.dw[k] * nv - l.dv[k] * nw;
-                (l.a[k], l.lambda[k]) = self.tangent(l.du[k], dn);
+                let (a, b, root) = self.tangent_terms(l.du[k], dn);
+                l.a[k] = a;
+                l.lambda[k] = Self::tangent_lambda_nonneg(a, b, root);
+            }
+            // A lane with A < 0 (a ray that sees few facets; rare inside a fibre) takes the
+            // tangent's other formula, a second division the other steps do without.
+            if l.a.iter().any(|&a| !(a >= 0.0)) {
+                for k in 0..LANES {
+                    (l.a[k], l.lambda[k]) = self.tangent(l.du[k], l.dn[k]);
+                }
             }
             // The attenuation along the chord, every channel and lane (vectorised exp).
             for (att, &sigma_a) in l.att.iter_mut().zip(sigma_a) {
@@ -415,7 +432,7 @@ impl Sampler {
                     let out = keep_side(out, ng, true, balance);
                     let we = scaled(&l.w[k], nc, 1.0 - f);
                     add_n(&mut balance.tallied[seg.min(ORDERS - 1)], &we, nc);
-                    exit.exit(seg, out, &we);
+                    exit.exit::<NC>(seg, out, &we);
                     l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
                 }
                 let r = [l.refl[0][k], l.refl[1][k], l.refl[2][k]];
@@ -438,7 +455,7 @@ impl Sampler {
     /// missed by rounding at the very edge, lane `k` is untouched.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn enter(
+    fn enter<const NC: usize>(
         &self,
         l: &mut Lanes,
         k: usize,
@@ -475,7 +492,7 @@ impl Sampler {
         [l.pv[k], l.pw[k]] = p;
         [l.du[k], l.dv[k], l.dw[k]] = d;
         [l.nv[k], l.nw[k]] = [ng[1], ng[2]];
-        l.w[k] = self.unit_weights();
+        l.w[k] = self.unit_weights::<NC>();
         l.seg[k] = 1;
         true
     }
@@ -505,7 +522,7 @@ impl Sampler {
             let r = keep_side(reflect(d, m), ng, true, balance);
             let wr = scaled(&l.w[k], nc, f);
             add_n(&mut balance.tallied[0], &wr, nc);
-            exit.exit(0, r, &wr);
+            exit.exit::<NC>(0, r, &wr);
             // From outside the reflectance is below 1 (no total internal reflection there).
             l.w[k][..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
             let t = refract(d, m, 1.0 / eta, cos_i, cos_t);
@@ -526,12 +543,12 @@ impl Sampler {
         }
     }
 
-    /// Weight 1 in every channel the fibre has.
-    #[inline]
-    fn unit_weights(&self) -> Weights {
-        let mut w: Weights = [0.0; MAX_CHANNELS];
-        w[..self.nc].fill(1.0);
-        w
+    /// Weight 1 in every channel the fibre has. Built by selects, not a fill of the first
+    /// channels: the lane copies it whole at once, which a few scalar stores could not forward.
+    #[inline(always)]
+    fn unit_weights<const NC: usize>(&self) -> Weights {
+        let nc = self.channels::<NC>();
+        std::array::from_fn(|c| if c < nc { 1.0 } else { 0.0 })
     }
 
     #[inline]

@@ -220,10 +220,13 @@ impl Collected {
         }
     }
 
+    /// Add `w`'s first channels (`NC`, or all `nc` when `NC` is 0: a constant unrolls it).
     #[inline(always)]
-    pub fn add(&mut self, s: usize, order: usize, w: &Weights) {
-        let base = (s * ORDERS + order.min(ORDERS - 1)) * self.nc;
-        for (x, y) in self.sums[base..base + self.nc].iter_mut().zip(w) {
+    pub fn add<const NC: usize>(&mut self, s: usize, order: usize, w: &Weights) {
+        debug_assert!(NC == 0 || NC == self.nc);
+        let nc = if NC == 0 { self.nc } else { NC };
+        let base = (s * ORDERS + order.min(ORDERS - 1)) * nc;
+        for (x, y) in self.sums[base..base + nc].iter_mut().zip(w) {
             *x += y;
         }
     }
@@ -243,9 +246,9 @@ pub struct Tally<'a> {
 
 impl Exits for Tally<'_> {
     #[inline(always)]
-    fn exit(&mut self, order: usize, d: V3, w: &Weights) {
+    fn exit<const NC: usize>(&mut self, order: usize, d: V3, w: &Weights) {
         let collected = &mut *self.collected;
-        self.detector.visit(d, |s| collected.add(s, order, w));
+        self.detector.visit(d, |s| collected.add::<NC>(s, order, w));
     }
 }
 
