@@ -370,9 +370,10 @@ impl Sampler {
                 l.a[k] = a;
                 l.lambda[k] = Self::tangent_lambda_nonneg(a, b, root);
             }
-            // A lane with A < 0 (a ray that sees few facets; rare inside a fibre) takes the
-            // tangent's other formula, a second division the other steps do without.
-            if l.a.iter().any(|&a| !(a >= 0.0)) {
+            // A lane with A < 0 (a ray that sees few facets; rare inside a fibre) or A NaN (where
+            // `tangent` takes its other branch too) takes the tangent's other formula, a second
+            // division the other steps do without.
+            if l.a.iter().any(|&a| a < 0.0 || a.is_nan()) {
                 for k in 0..LANES {
                     (l.a[k], l.lambda[k]) = self.tangent(l.du[k], l.dn[k]);
                 }
