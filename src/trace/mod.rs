@@ -28,7 +28,7 @@ use rayon::prelude::*;
 pub use self::fiber::{Fiber, FiberFile};
 use self::optics::direction;
 pub use self::sampler::{Balance, Sampler, MAX_CHANNELS, ORDERS};
-use self::tally::{Collected, Detector};
+use self::tally::{Collected, Detector, Tally};
 
 /// Batches per incidence: the `sigma` column is their spread.
 pub const BATCHES: usize = 32;
@@ -131,9 +131,11 @@ pub fn run(
             let mut left = n;
             while left > 0 {
                 let m = left.min(TICK);
-                sampler.trace_batch(omega_i, m, &mut rng, &mut bal, &mut |order, d, w| {
-                    det.visit(d, |s| col.add(s, order, w));
-                });
+                let mut tally = Tally {
+                    detector: det,
+                    collected: &mut col,
+                };
+                sampler.trace_batch(omega_i, m, &mut rng, &mut bal, &mut tally);
                 left -= m;
                 progress(done.fetch_add(m, Ordering::Relaxed) + m);
             }

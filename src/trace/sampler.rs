@@ -6,6 +6,7 @@ use rand_chacha::rand_core::RngCore;
 
 mod facet;
 mod kernel;
+mod lane_math;
 
 pub use self::kernel::Kernel;
 
@@ -19,7 +20,7 @@ struct Batch<'a, R, E> {
     exit: &'a mut E,
 }
 
-impl<R: RngCore, E: FnMut(usize, V3, &Weights)> kernel::Body for Batch<'_, R, E> {
+impl<R: RngCore, E: Exits> kernel::Body for Batch<'_, R, E> {
     fn channels(&self) -> usize {
         self.sampler.nc
     }
@@ -30,6 +31,7 @@ impl<R: RngCore, E: FnMut(usize, V3, &Weights)> kernel::Body for Batch<'_, R, E>
     }
 }
 
+use self::lane_math::{exp_lane, fresnel_lane};
 use super::fiber::Fiber;
 use super::optics::{dot, fresnel, reflect, refract, V3};
 use super::section::Section;
@@ -47,6 +49,21 @@ const NORMAL_TRIES: u32 = 64;
 
 /// Per-channel weights.
 pub type Weights = [f64; MAX_CHANNELS];
+
+/// What receives a path's escaping parts: `exit(order, direction, weights)`, from a kernel for
+/// `NC` channels (0: any number). Any closure of that shape is one; `trace::run`'s tally
+/// implements it with an `#[inline(always)]` method, so the detector is compiled into each
+/// [`kernel`] instead of being called from it.
+pub trait Exits {
+    fn exit<const NC: usize>(&mut self, order: usize, d: V3, w: &Weights);
+}
+
+impl<F: FnMut(usize, V3, &Weights)> Exits for F {
+    #[inline(always)]
+    fn exit<const NC: usize>(&mut self, order: usize, d: V3, w: &Weights) {
+        self(order, d, w)
+    }
+}
 
 /// Where the incident power went (per channel, in units of rays), and the approximations taken.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -142,11 +159,17 @@ impl Sampler {
         }
     }
 
-    /// Draw one ray of the beam from `omega_i`: the section it meets (its rotation, when the
-    /// fibre has none, weighted by the width it presents) and its offset `h` ∈ [−1, 1].
-    #[inline]
-    fn draw_ray(&self, omega_i: V3, rng: &mut impl RngCore) -> (Section, f64) {
-        let section = match self.fixed_section() {
+    /// Draw one ray of the beam from `omega_i`: the section it meets (`fixed`, the
+    /// [`fixed_section`](Self::fixed_section) computed once per run, or else a rotation weighted
+    /// by the width it presents) and its offset `h` ∈ [−1, 1].
+    #[inline(always)]
+    fn draw_ray(
+        &self,
+        fixed: Option<Section>,
+        omega_i: V3,
+        rng: &mut impl RngCore,
+    ) -> (Section, f64) {
+        let section = match fixed {
             Some(s) => s,
             // Orientations weighted by the width they present: a uniform beam on a random
             // fibre meets a wide one more often (the major half-width, 1, bounds it).
@@ -174,20 +197,21 @@ impl Sampler {
         balance: &mut Balance,
         exit: &mut impl FnMut(usize, V3, &Weights),
     ) {
-        let (section, h) = self.draw_ray(omega_i, rng);
+        let (section, h) = self.draw_ray(self.fixed_section(), omega_i, rng);
         self.trace_at(&section, omega_i, h, rng, balance, exit);
     }
 
     /// Trace `n` rays from `omega_i` as [`trace`](Self::trace) draws them, [`LANES`] at a
     /// time: the same paths and estimator, but the draws of different rays interleave in
-    /// `rng`'s stream (deterministically: the lanes advance in a fixed order).
+    /// `rng`'s stream (deterministically: the lanes advance in a fixed order). `exit` is any
+    /// [`Exits`]: a closure (its arguments' types written out) or `trace::run`'s tally.
     pub fn trace_batch(
         &self,
         omega_i: V3,
         n: u64,
         rng: &mut impl RngCore,
         balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
+        exit: &mut impl Exits,
     ) {
         self.trace_batch_on(Kernel::best(), omega_i, n, rng, balance, exit);
     }
@@ -201,7 +225,7 @@ impl Sampler {
         n: u64,
         rng: &mut impl RngCore,
         balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
+        exit: &mut impl Exits,
     ) {
         let batch = Batch {
             sampler: self,
@@ -223,18 +247,19 @@ impl Sampler {
         n: u64,
         rng: &mut impl RngCore,
         balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
+        exit: &mut impl Exits,
     ) {
         let mut left = n;
         let dir = beam_dir(omega_i);
-        // One section for every ray: its half-width once, not per ray.
-        let fixed_hw = self.fixed_section().map(|s| s.half_width(dir));
+        // One section for every ray: it and its half-width once, not per ray.
+        let fixed = self.fixed_section();
+        let fixed_hw = fixed.map(|s| s.half_width(dir));
         self.trace_lanes::<NC, _>(
             omega_i,
             &mut |rng| {
                 (left > 0).then(|| {
                     left -= 1;
-                    let (section, h) = self.draw_ray(omega_i, rng);
+                    let (section, h) = self.draw_ray(fixed, omega_i, rng);
                     let hw = fixed_hw.unwrap_or_else(|| section.half_width(dir));
                     (section, h * hw)
                 })
@@ -276,7 +301,7 @@ impl Sampler {
         source: &mut impl FnMut(&mut R) -> Option<(Section, f64)>,
         rng: &mut R,
         balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
+        exit: &mut impl Exits,
     ) {
         let nc = self.channels::<NC>();
         let eta = self.fiber.eta;
@@ -292,15 +317,15 @@ impl Sampler {
                 while !lanes.active[k] && !exhausted {
                     match source(rng) {
                         Some((section, offset)) => {
-                            if !self
-                                .enter(&mut lanes, k, &section, omega_i, dir, offset, rng, balance)
-                            {
+                            if !self.enter::<NC>(
+                                &mut lanes, k, &section, omega_i, dir, offset, rng, balance,
+                            ) {
                                 // A grazing miss leaves after the R of the lanes entered before.
                                 self.enter_finish::<NC>(&mut lanes, balance, exit);
-                                let w = self.unit_weights();
+                                let w = self.unit_weights::<NC>();
                                 balance.grazing += 1;
                                 add_n(&mut balance.tallied[0], &w, nc);
-                                exit(0, [-omega_i[0], -omega_i[1], -omega_i[2]], &w);
+                                exit.exit::<NC>(0, [-omega_i[0], -omega_i[1], -omega_i[2]], &w);
                             }
                         }
                         None => exhausted = true,
@@ -341,7 +366,17 @@ impl Sampler {
                 let dn = l.dv[k] * nv + l.dw[k] * nw;
                 l.dn[k] = dn;
                 l.dt[k] = l.dw[k] * nv - l.dv[k] * nw;
-                (l.a[k], l.lambda[k]) = self.tangent(l.du[k], dn);
+                let (a, b, root) = self.tangent_terms(l.du[k], dn);
+                l.a[k] = a;
+                l.lambda[k] = Self::tangent_lambda_nonneg(a, b, root);
+            }
+            // A lane with A < 0 (a ray that sees few facets; rare inside a fibre) or A NaN (where
+            // `tangent` takes its other branch too) takes the tangent's other formula, a second
+            // division the other steps do without.
+            if l.a.iter().any(|&a| a < 0.0 || a.is_nan()) {
+                for k in 0..LANES {
+                    (l.a[k], l.lambda[k]) = self.tangent(l.du[k], l.dn[k]);
+                }
             }
             // The attenuation along the chord, every channel and lane (vectorised exp).
             for (att, &sigma_a) in l.att.iter_mut().zip(sigma_a) {
@@ -398,7 +433,7 @@ impl Sampler {
                     let out = keep_side(out, ng, true, balance);
                     let we = scaled(&l.w[k], nc, 1.0 - f);
                     add_n(&mut balance.tallied[seg.min(ORDERS - 1)], &we, nc);
-                    exit(seg, out, &we);
+                    exit.exit::<NC>(seg, out, &we);
                     l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
                 }
                 let r = [l.refl[0][k], l.refl[1][k], l.refl[2][k]];
@@ -421,7 +456,7 @@ impl Sampler {
     /// missed by rounding at the very edge, lane `k` is untouched.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn enter(
+    fn enter<const NC: usize>(
         &self,
         l: &mut Lanes,
         k: usize,
@@ -458,7 +493,7 @@ impl Sampler {
         [l.pv[k], l.pw[k]] = p;
         [l.du[k], l.dv[k], l.dw[k]] = d;
         [l.nv[k], l.nw[k]] = [ng[1], ng[2]];
-        l.w[k] = self.unit_weights();
+        l.w[k] = self.unit_weights::<NC>();
         l.seg[k] = 1;
         true
     }
@@ -471,7 +506,7 @@ impl Sampler {
         &self,
         l: &mut Lanes,
         balance: &mut Balance,
-        exit: &mut impl FnMut(usize, V3, &Weights),
+        exit: &mut impl Exits,
     ) {
         let nc = self.channels::<NC>();
         let eta = self.fiber.eta;
@@ -488,7 +523,7 @@ impl Sampler {
             let r = keep_side(reflect(d, m), ng, true, balance);
             let wr = scaled(&l.w[k], nc, f);
             add_n(&mut balance.tallied[0], &wr, nc);
-            exit(0, r, &wr);
+            exit.exit::<NC>(0, r, &wr);
             // From outside the reflectance is below 1 (no total internal reflection there).
             l.w[k][..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
             let t = refract(d, m, 1.0 / eta, cos_i, cos_t);
@@ -509,12 +544,12 @@ impl Sampler {
         }
     }
 
-    /// Weight 1 in every channel the fibre has.
-    #[inline]
-    fn unit_weights(&self) -> Weights {
-        let mut w: Weights = [0.0; MAX_CHANNELS];
-        w[..self.nc].fill(1.0);
-        w
+    /// Weight 1 in every channel the fibre has. Built by selects, not a fill of the first
+    /// channels: the lane copies it whole at once, which a few scalar stores could not forward.
+    #[inline(always)]
+    fn unit_weights<const NC: usize>(&self) -> Weights {
+        let nc = self.channels::<NC>();
+        std::array::from_fn(|c| if c < nc { 1.0 } else { 0.0 })
     }
 
     #[inline]
@@ -570,54 +605,6 @@ struct Lanes {
     f: [f64; LANES],
     out: [[f64; LANES]; 3],
     refl: [[f64; LANES]; 3],
-}
-
-/// `e^x` for x ≤ 0 without branches or libm, so a loop of it vectorises: x = n·ln 2 + r,
-/// |r| ≤ ln 2/2, `e^r` by its Taylor series to r¹³ (truncation 4e-18 relative), 2ⁿ built in
-/// the exponent bits (as `families::marschner::lanes`' exp); below −708 it gives e^−708.
-#[inline(always)]
-fn exp_lane(x: f64) -> f64 {
-    // 2⁵² + 2⁵¹: adding it rounds to an integer and leaves it in the low bits.
-    const INTEGER_BITS: f64 = 6_755_399_441_055_744.0;
-    // ln 2 in two parts, the first of 32 bits, so n·LN2_HI is exact.
-    const LN2_HI: f64 = 0.693_147_180_369_123_8;
-    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
-    let x = if x < -708.0 { -708.0 } else { x };
-    let t = x * std::f64::consts::LOG2_E + INTEGER_BITS;
-    let n = t - INTEGER_BITS;
-    let r = (x - n * LN2_HI) - n * LN2_LO;
-    // 1/k!, k = 13 down to 0.
-    const TAYLOR: [f64; 14] = {
-        let (mut c, mut k, mut f) = ([0.0; 14], 0, 1.0);
-        while k < 14 {
-            c[13 - k] = 1.0 / f;
-            k += 1;
-            f *= k as f64;
-        }
-        c
-    };
-    let mut p = TAYLOR[0];
-    for &c in &TAYLOR[1..] {
-        p = p * r + c;
-    }
-    p * f64::from_bits((n + (INTEGER_BITS + 1023.0)).to_bits() << 52)
-}
-
-/// [`fresnel`] from inside a medium of index `eta` into air, without branches: the same
-/// reflectance and refracted cosine (1 and 0 under total internal reflection).
-#[inline]
-fn fresnel_lane(cos_i: f64, eta: f64) -> (f64, f64) {
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
-    let tir = sin2_t >= 1.0;
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let f = (rs * rs + rp * rp) / 2.0;
-    if tir {
-        (1.0, 0.0)
-    } else {
-        (f, cos_t)
-    }
 }
 
 /// The unit facet normal `ng + s_l·u + s_a·(u × ng)` normalised (`ng` unit with no axial part):

@@ -5,7 +5,7 @@
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use super::optics::{angles_of, dot, V3};
-use super::sampler::{Weights, ORDERS};
+use super::sampler::{Exits, Weights, ORDERS};
 
 /// The sampling points of one incidence and the grid that finds them: rows uniform in
 /// sin θ, columns uniform in a pseudo-angle of φ (no trigonometry per exit).
@@ -28,7 +28,7 @@ pub struct Detector {
 /// A monotone stand-in for φ ∈ [0, 2π) in [0, 4) from the in-plane components (the "diamond
 /// angle"): cells in it are at most twice as wide in φ as the mean. Written with selects, not
 /// branches: an exit's quadrant is random, so branches on it mispredict.
-#[inline]
+#[inline(always)]
 fn pseudo_angle(x: f64, y: f64) -> f64 {
     // y/(|x| + |y|) ∈ [−1, 1]; (0, 0) gives 0.
     let a = y / (x.abs() + y.abs()).max(f64::MIN_POSITIVE);
@@ -126,7 +126,7 @@ impl Detector {
     }
 
     /// Call `hit(s)` for every sampling point `s` whose cap holds the unit direction `d`.
-    #[inline]
+    #[inline(always)]
     pub fn visit(&self, d: V3, mut hit: impl FnMut(usize)) {
         let r = row(d[0], self.n_rows);
         if !self.row_used[r] {
@@ -193,7 +193,7 @@ fn reaches(theta: f64, phi: f64, cos_k: f64, r: usize, c: usize, nr: usize, nc: 
     best >= cos_k - 1e-9
 }
 
-#[inline]
+#[inline(always)]
 fn row(z: f64, n: usize) -> usize {
     // `as` truncates toward zero (and NaN to 0): the floor here, without a libm call; through
     // i64, one conversion instruction where `as usize` takes two and their fix-up.
@@ -220,16 +220,35 @@ impl Collected {
         }
     }
 
-    #[inline]
-    pub fn add(&mut self, s: usize, order: usize, w: &Weights) {
-        let base = (s * ORDERS + order.min(ORDERS - 1)) * self.nc;
-        for (x, y) in self.sums[base..base + self.nc].iter_mut().zip(w) {
+    /// Add `w`'s first channels (`NC`, or all `nc` when `NC` is 0: a constant unrolls it).
+    #[inline(always)]
+    pub fn add<const NC: usize>(&mut self, s: usize, order: usize, w: &Weights) {
+        debug_assert!(NC == 0 || NC == self.nc);
+        let nc = if NC == 0 { self.nc } else { NC };
+        let base = (s * ORDERS + order.min(ORDERS - 1)) * nc;
+        for (x, y) in self.sums[base..base + nc].iter_mut().zip(w) {
             *x += y;
         }
     }
 
     pub fn get(&self, s: usize, order: usize, c: usize) -> f64 {
         self.sums[(s * ORDERS + order) * self.nc + c]
+    }
+}
+
+/// One incidence's detector and its tallies, the sampler's [`Exits`]: an exit adds its weights
+/// to every sampling point whose cap holds it. Its method is `#[inline(always)]`, so the
+/// detector runs inside the sampler's kernel (AVX2, AVX-512), not as a baseline call from it.
+pub struct Tally<'a> {
+    pub detector: &'a Detector,
+    pub collected: &'a mut Collected,
+}
+
+impl Exits for Tally<'_> {
+    #[inline(always)]
+    fn exit<const NC: usize>(&mut self, order: usize, d: V3, w: &Weights) {
+        let collected = &mut *self.collected;
+        self.detector.visit(d, |s| collected.add::<NC>(s, order, w));
     }
 }
 

@@ -113,8 +113,7 @@ impl Sampler {
     /// components `du`, `dn` (λ not finite when no facet is visible), without branches.
     #[inline(always)]
     pub(super) fn tangent(&self, du: f64, dn: f64) -> (f64, f64) {
-        let (a, b) = (dn + du * self.slope, du * self.slope_sd);
-        let root = (a * a + 4.0 * b * b).sqrt();
+        let (a, b, root) = self.tangent_terms(du, dn);
         // The same h without cancellation when A < 0 (the ray sees few facets).
         let h = if a >= 0.0 {
             0.5 * (a + root)
@@ -122,6 +121,19 @@ impl Sampler {
             2.0 * b * b / (root - a)
         };
         (a, b / h)
+    }
+
+    /// [`tangent`](Self::tangent)'s `A`, `B` and `√(A² + 4B²)`.
+    #[inline(always)]
+    pub(super) fn tangent_terms(&self, du: f64, dn: f64) -> (f64, f64, f64) {
+        let (a, b) = (dn + du * self.slope, du * self.slope_sd);
+        (a, b, (a * a + 4.0 * b * b).sqrt())
+    }
+
+    /// [`tangent`](Self::tangent)'s λ when `A ≥ 0`, from its terms: h = (A + root)/2.
+    #[inline(always)]
+    pub(super) fn tangent_lambda_nonneg(a: f64, b: f64, root: f64) -> f64 {
+        b / (0.5 * (a + root))
     }
 }
 

@@ -102,7 +102,8 @@ unsafe fn avx512<const NC: usize, B: Body>(body: B) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trace::sampler::{Balance, Sampler};
+    use crate::trace::optics::V3;
+    use crate::trace::sampler::{Balance, Sampler, Weights};
     use crate::trace::{batch_generator, optics::direction, Fiber};
 
     /// Every kernel this CPU runs gives the baseline's exits and balance, bit for bit, for a
@@ -123,9 +124,16 @@ mod tests {
                 let mut rng = batch_generator(3, 1, 2);
                 let mut bal = Balance::default();
                 let mut exits: Vec<(usize, [u64; 3], Vec<u64>)> = Vec::new();
-                s.trace_batch_on(k, omega_i, 20_000, &mut rng, &mut bal, &mut |p, d, w| {
-                    exits.push((p, d.map(f64::to_bits), w.map(f64::to_bits).to_vec()))
-                });
+                s.trace_batch_on(
+                    k,
+                    omega_i,
+                    20_000,
+                    &mut rng,
+                    &mut bal,
+                    &mut |p: usize, d: V3, w: &Weights| {
+                        exits.push((p, d.map(f64::to_bits), w.map(f64::to_bits).to_vec()))
+                    },
+                );
                 (exits, bal)
             };
             let base = run(Kernel::Baseline);
