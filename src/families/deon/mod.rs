@@ -474,14 +474,26 @@ fn scatter_shared<T: DualNum<f64>>(
     order.sort_unstable();
     let mut shared = zero_terms::<T>(p.n_channels);
     let mut terms = zero_terms::<T>(p.n_channels);
+    // With η held a gradient pass takes the integral by hand, its θ_d part (`gradient::Held`)
+    // built once per θ_d: the sort puts each θ_d's groups together.
+    let by_hand = pass.filter(|pass| T::NDERIV > 0 && !pass.seeds(ETA));
+    let sigma_a: Vec<f64> = (0..p.n_channels).map(|c| p.get(SIGMA_A, c).re()).collect();
+    let mut held: Option<(u64, gradient::Held)> = None;
     for group in order.chunk_by(|x, y| x.0 == y.0) {
         clear_terms(&mut shared);
         let a = &angles[group[0].1];
-        match pass {
-            Some(pass) if T::NDERIV > 0 => {
-                gradient::add_azimuthal(p, a, on, how, pass, &mut shared)
+        match by_hand {
+            Some(pass) => {
+                let (theta_d, phi) = azimuthal_angles(a);
+                let key = group[0].0 .0;
+                if held.as_ref().is_none_or(|h| h.0 != key) {
+                    let eta = p.get(ETA, 0).re();
+                    held = Some((key, gradient::Held::new(eta, &sigma_a, theta_d, how)));
+                }
+                let (_, h) = held.as_ref().expect("just built");
+                gradient::add_azimuthal(p, h, phi, on, how, pass, &mut shared)
             }
-            _ => add_azimuthal(p, a, on, how, &mut shared),
+            None => add_azimuthal(p, a, on, how, &mut shared),
         }
         for &(_, i) in group {
             terms.clone_from_slice(&shared);
@@ -495,7 +507,11 @@ fn scatter_shared<T: DualNum<f64>>(
 type AzimuthalKey = (u64, u64);
 
 fn azimuthal_key(a: &Angles) -> AzimuthalKey {
-    let theta_d = 0.5 * (a.theta_r - a.theta_i);
-    let phi = wrap(a.phi_r - a.phi_i);
+    let (theta_d, phi) = azimuthal_angles(a);
     (theta_d.to_bits(), phi.to_bits())
+}
+
+/// θ_d and the wrapped φ of a sample, as [`add_azimuthal`] computes them.
+fn azimuthal_angles(a: &Angles) -> (f64, f64) {
+    (0.5 * (a.theta_r - a.theta_i), wrap(a.phi_r - a.phi_i))
 }
