@@ -8,8 +8,8 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use hairfit::demo::synthesize;
 use hairfit::families::marschner::fit::fit;
+use hairfit::families::marschner::fit::synthetic::synthesize;
 use hairfit::families::marschner::{ModelConfig, Params};
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::{EffectsChoice, FitOptions};

@@ -9,8 +9,8 @@
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use hairfit::demo::synthesize;
 use hairfit::families::marschner::fit::forward::MarschnerForward;
+use hairfit::families::marschner::fit::synthetic::synthesize;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::parameters::reference_params;
 use hairfit::families::marschner::{Effects, ModelConfig};
@@ -39,7 +39,7 @@ fn bench(c: &mut Criterion) {
         .sample_size(10)
         .measurement_time(Duration::from_secs(10));
     for (samples, nc) in [(100_000, 3), (2000, 100)] {
-        let mut truth = hairfit::demo::demo_truth();
+        let mut truth = hairfit::families::marschner::demo::demo_truth();
         truth.sigma_a = (0..nc).map(|c| 0.2 + 0.6 * c as f64 / nc as f64).collect();
         let data = synthesize(
             &truth,

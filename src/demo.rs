@@ -1,13 +1,12 @@
 //! `hairfit demo`: a realistic 3-channel dataset from the project's synthesizer (2% relative
-//! noise over a camera's noise floor, a goniometer-style scan), fitted from the default start design, written to `--out`.
-//! [`synthesize`] gives the fit's tests and benchmark the same synthesizer in memory.
+//! noise over a camera's noise floor, a goniometer-style scan), fitted from the default start
+//! design, written to `--out`. Each family's true parameters are its own
+//! ([`ModelFamily::demo_truth`]).
 
 use std::path::Path;
 
 use crate::error::Result;
 use crate::families::effects::ModelConfig;
-use crate::families::marschner::Params;
-use crate::families::table::TableParamFile;
 use crate::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::LoadReport;
 use crate::fit::problem::FitData;
@@ -16,23 +15,8 @@ use crate::fit::{FitOptions, FitOutcome};
 use crate::geometry::Angles;
 use crate::report::publish::PublishedFit;
 
-/// The demo's true parameters (mid-range MODEL.md values, brown-ish hair).
-pub fn demo_truth() -> Params<f64> {
-    Params {
-        eta: 1.55,
-        sigma_a: vec![0.25, 0.45, 0.8],
-        alpha_r: (-7f64).to_radians(),
-        beta_r: 7.5f64.to_radians(),
-        k_g: 2.0,
-        w_c: 15f64.to_radians(),
-        eccentricity: 0.9,
-        delta_eta_prime: 0.3,
-        delta_h_m: 0.5,
-    }
-}
-
 /// Per-channel exposure of the demo camera.
-pub const DEMO_SCALE: [f64; 3] = [2.0, 1.5, 1.0];
+pub const DEMO_SCALE: [f64; crate::families::DEMO_CHANNELS] = [2.0, 1.5, 1.0];
 
 /// Relative noise of the demo data.
 pub const DEMO_NOISE: f64 = 0.02;
@@ -52,41 +36,6 @@ pub fn demo_geometry() -> Vec<Angles> {
     v
 }
 
-/// In-memory data for the fit's tests and benchmark: the project's synthesizer at `angles` with
-/// relative Gaussian noise (`noise = 0`: none, unweighted), as the fit sees a loaded file.
-/// Panics on inputs the synthesizer rejects (invalid parameters or |θ| ≥ 90°): a caller's bug.
-pub fn synthesize(
-    truth: &Params<f64>,
-    config: &ModelConfig,
-    angles: &[Angles],
-    scale: &[f64],
-    noise: f64,
-    seed: u64,
-) -> FitData {
-    let directions: Vec<[f64; 4]> = angles
-        .iter()
-        .map(|a| [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(f64::to_degrees))
-        .collect();
-    let noise = if noise > 0.0 {
-        crate::synth::Noise::parse(&format!("relative:{noise}"))
-    } else {
-        crate::synth::Noise::parse("none")
-    }
-    .expect("a relative noise level parses");
-    let (dataset, _) = crate::synth::synthesize_directions(
-        truth,
-        config,
-        &directions,
-        "in-memory test data",
-        &noise,
-        scale,
-        crate::geometry::Measurement::S,
-        seed,
-    )
-    .expect("valid synthetic inputs");
-    crate::fit::fit_data(&dataset)
-}
-
 /// The demo geometry as `[θ_i, φ_i, θ_r, φ_r]` in degrees (for the synthesizer).
 pub fn demo_directions() -> Vec<[f64; 4]> {
     demo_geometry()
@@ -95,18 +44,6 @@ pub fn demo_directions() -> Vec<[f64; 4]> {
             [a.theta_i, a.phi_i, a.theta_r, a.phi_r].map(|x| (x.to_degrees() * 1e9).round() / 1e9)
         })
         .collect()
-}
-
-/// The Chiang demo's true parameters (CHIANG.md's ranges, the same brown-ish absorption; R
-/// toward the root, so `alpha_deg` < 0).
-pub fn chiang_demo_truth() -> crate::families::chiang::ChiangParams<f64> {
-    crate::families::chiang::ChiangParams {
-        eta: 1.55,
-        sigma_a: vec![0.25, 0.45, 0.8],
-        beta_m: 0.25,
-        beta_n: 0.35,
-        alpha: (-2.5f64).to_radians(),
-    }
 }
 
 /// `hairfit demo --out DIR`: synthesize with the project's synthesizer (`crate::synth`) and the
@@ -121,24 +58,6 @@ pub fn demo_command(opts: &FitOptions, out: &Path, force: bool) -> Result<Publis
     })
 }
 
-/// The demo's true parameters of `family` as its parameter file: [`demo_truth`],
-/// [`chiang_demo_truth`], or a table family's [`crate::families::table::demo_params`].
-pub fn demo_truth_file(family: ModelFamily) -> FamilyParams {
-    match family {
-        ModelFamily::Marschner => {
-            crate::families::marschner::params::ParamFile::from_params(&demo_truth()).into()
-        }
-        ModelFamily::Chiang => {
-            crate::families::chiang::ChiangParamFile::from_params(&chiang_demo_truth()).into()
-        }
-        other => {
-            let table = other.table().expect("every other family is a table");
-            let truth = crate::families::table::demo_params(table.parameters(), DEMO_SCALE.len());
-            TableParamFile::from_params(table, &truth).into()
-        }
-    }
-}
-
 /// The demo's dataset and its truth for `opts` (family, terms, measurement, seed), in memory.
 pub fn demo_synthesis(opts: &FitOptions) -> Result<(crate::data::Dataset, crate::files::Truth)> {
     let setup = ModelSetup {
@@ -148,7 +67,7 @@ pub fn demo_synthesis(opts: &FitOptions) -> Result<(crate::data::Dataset, crate:
         },
         ..opts.model.clone()
     };
-    let file = demo_truth_file(opts.family);
+    let file = ModelFamily::demo_truth(opts.family);
     let model = FamilyModel::new(&file, &setup);
     let source = crate::synth::Source {
         model: &model,
@@ -206,7 +125,7 @@ fn demo_into(opts: &FitOptions, out: &Path, staging: &Path) -> Result<FitOutcome
 
 /// The demo's truth (of `family`), for the end of its summary.
 pub fn truth_line(out: &Path, family: ModelFamily) -> String {
-    let params = serde_json::to_value(demo_truth_file(family)).unwrap_or_default();
+    let params = serde_json::to_value(ModelFamily::demo_truth(family)).unwrap_or_default();
     let mut items = Vec::new();
     if let Some(map) = params.as_object() {
         for (key, value) in map.iter().filter(|(k, _)| *k != "model") {

@@ -71,7 +71,7 @@ pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
     let rig = rig_angles();
     let mut rows = Vec::new();
     // The yardstick: Marschner, every effect, on the same random directions.
-    let marschner = crate::demo::demo_truth();
+    let marschner = crate::families::marschner::demo::demo_truth();
     let config = ModelConfig::default();
     let nc = marschner.sigma_a.len();
     let t = time_per_call(min_s, || {

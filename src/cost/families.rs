@@ -22,7 +22,7 @@ pub(super) fn eval_rows(random: &[Angles], quick: bool) -> Vec<CostRow> {
     ModelFamily::ALL
         .into_iter()
         .map(|family| {
-            let file = crate::demo::demo_truth_file(family);
+            let file = family.demo_truth();
             let model = FamilyModel::new(&file, &setup);
             let mut out = vec![0.0; random.len() * model.n_channels()];
             let t =

@@ -5,10 +5,12 @@
 use std::time::Instant;
 
 use super::{CostRow, COST_SEED};
-use crate::demo::{demo_geometry, demo_truth, synthesize, DEMO_NOISE, DEMO_SCALE};
+use crate::demo::{demo_geometry, DEMO_NOISE, DEMO_SCALE};
 use crate::error::Result;
 use crate::families::effects::{Effects, ModelConfig};
+use crate::families::marschner::demo::demo_truth;
 use crate::families::marschner::fit::fit;
+use crate::families::marschner::fit::synthetic::synthesize;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::families::marschner::parameters::typical_range;
 use crate::fit::{EffectsChoice, FitData, FitOptions, Global};

@@ -2,9 +2,9 @@
 //! the solver's parameters, time per full Jacobian and the error of each column.
 
 use super::{time_per_call, CostRow};
-use crate::demo::demo_truth;
 use crate::error::Result;
 use crate::families::effects::{Effects, ModelConfig};
+use crate::families::marschner::demo::demo_truth;
 use crate::families::marschner::fit::forward::MarschnerForward;
 use crate::families::marschner::parameters::fitted_parameters;
 use crate::fit::{Evaluator, FitData, Loss, Space};

@@ -2,8 +2,8 @@
 //! time per evaluation against the relative error of S to exact roots with every effect.
 
 use super::{time_per_call, CostRow, COST_SEED};
-use crate::demo::demo_truth;
 use crate::families::effects::{Effects, Lobes, ModelConfig, RootMode};
+use crate::families::marschner::demo::demo_truth;
 use crate::families::marschner::{scattering, Params};
 use crate::geometry::Angles;
 use crate::rng::SplitMix64;

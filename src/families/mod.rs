@@ -35,6 +35,16 @@ pub(crate) use registry::registry;
 pub use registry::ModelFamily;
 pub use setup::{ChiangRecord, ModelRecords, ModelSetup};
 
+/// Colour channels of the demo's data (`hairfit demo`, the cost ledger, the battery).
+pub const DEMO_CHANNELS: usize = 3;
+
+/// What a family with its own types (listed `Own` in the registry) provides beyond its facts;
+/// a table family has all of it from its table. Implemented in the family's folder.
+pub trait OwnFamily: FamilyFacts {
+    /// The demo's true parameters ([`DEMO_CHANNELS`] channels) as the family's parameter file.
+    fn demo_truth(&self) -> FamilyParams;
+}
+
 /// A parameter file of any family. Written untagged, so a Marschner file is byte for byte
 /// what it always was; every other family's file carries its `"model"` (Chiang's may leave it
 /// out). Read as the tag says; untagged: a Marschner file (whose keys differ from Chiang's;

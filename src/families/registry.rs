@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{table, FamilyFacts};
+use super::{table, FamilyFacts, FamilyParams, OwnFamily, DEMO_CHANNELS};
 use crate::error::{Error, Result};
 use crate::families::table::DynTable;
 
@@ -117,6 +117,19 @@ impl ModelFamily {
         }
     }
 
+    /// The demo's true parameters of the family ([`DEMO_CHANNELS`] channels) as its parameter
+    /// file: an `Own` family's [`OwnFamily::demo_truth`], a table family's
+    /// [`table::demo_params`].
+    pub fn demo_truth(self) -> FamilyParams {
+        match self.entry() {
+            Entry::Own(family) => family.demo_truth(),
+            Entry::Table(t) => {
+                let truth = table::demo_params(t.parameters(), DEMO_CHANNELS);
+                table::TableParamFile::from_params(t, &truth).into()
+            }
+        }
+    }
+
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
     pub fn title(self) -> &'static str {
         self.facts().title()
@@ -208,7 +221,7 @@ impl ModelFamily {
 /// How a family is implemented: its own types (parameter file, model, fit), or a table family
 /// whose file, model and fit [`table`] writes once.
 enum Entry {
-    Own(&'static dyn FamilyFacts),
+    Own(&'static dyn OwnFamily),
     Table(&'static dyn DynTable),
 }
 

@@ -9,7 +9,9 @@ use std::path::Path;
 use std::time::Duration;
 
 use crate::support::hard::*;
-use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
+use hairfit::demo::{demo_geometry, DEMO_SCALE};
+use hairfit::families::marschner::demo::demo_truth;
+use hairfit::families::marschner::fit::synthetic::synthesize;
 use hairfit::families::marschner::ModelConfig;
 
 fn mode(path: &Path) -> u32 {

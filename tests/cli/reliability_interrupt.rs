@@ -11,7 +11,9 @@ use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
 use crate::support::hard::*;
-use hairfit::demo::{demo_geometry, demo_truth, synthesize, DEMO_SCALE};
+use hairfit::demo::{demo_geometry, DEMO_SCALE};
+use hairfit::families::marschner::demo::demo_truth;
+use hairfit::families::marschner::fit::synthetic::synthesize;
 use hairfit::families::marschner::ModelConfig;
 use hairfit::fit::design::SplitMix64;
 use hairfit::geometry::Angles;

@@ -9,7 +9,7 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use hairfit::demo::{demo_directions, demo_truth_file, DEMO_SCALE};
+use hairfit::demo::{demo_directions, DEMO_SCALE};
 use hairfit::families::chiang::fit::ChiangForward;
 use hairfit::families::chiang::ChiangFamily;
 use hairfit::families::chiang::{ChiangEffects, ChiangModel};
@@ -157,7 +157,7 @@ impl Subject {
     pub fn registered(family: ModelFamily) -> Subject {
         Subject {
             name: family.as_str().to_string(),
-            truth: demo_truth_file(family),
+            truth: family.demo_truth(),
             table: family.table(),
             documented: documented(family),
             fit: family_fit(family),

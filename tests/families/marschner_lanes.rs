@@ -24,8 +24,8 @@
 
 use std::f64::consts::PI;
 
-use hairfit::demo::demo_truth;
 use hairfit::families::marschner::azimuthal::caustic_position;
+use hairfit::families::marschner::demo::demo_truth;
 use hairfit::families::marschner::eccentricity::eccentric_terms;
 use hairfit::families::marschner::{
     scattering_batch, scattering_lanes, scattering_lanes_on, Effects, LaneKernel, Lobes,

@@ -104,8 +104,8 @@ fn one_longitudinal_scan_names_the_azimuthal_parameters_and_the_assumed_away_ecc
 
 #[test]
 fn the_demo_design_gets_no_design_caveat() {
-    let data = hairfit::demo::synthesize(
-        &hairfit::demo::demo_truth(),
+    let data = hairfit::families::marschner::fit::synthetic::synthesize(
+        &hairfit::families::marschner::demo::demo_truth(),
         &ModelConfig::default(),
         &hairfit::demo::demo_geometry(),
         &hairfit::demo::DEMO_SCALE,

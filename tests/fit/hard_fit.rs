@@ -10,11 +10,11 @@ use std::path::Path;
 use std::time::Duration;
 
 use crate::support::hard::*;
-use hairfit::demo::synthesize;
 use hairfit::families::marschner::azimuthal::caustic_position;
 use hairfit::families::marschner::fit::fit;
 use hairfit::families::marschner::fit::forward::fit_bound;
 use hairfit::families::marschner::fit::forward::MarschnerForward;
+use hairfit::families::marschner::fit::synthetic::synthesize;
 use hairfit::families::marschner::parameters::fitted_parameters;
 use hairfit::families::marschner::parameters::reference_params;
 use hairfit::families::marschner::{Effects, ModelConfig, Params, RootMode};

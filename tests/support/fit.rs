@@ -3,7 +3,7 @@
 //! through `hairfit::synth` from rig and noise specs (as `hairfit synth` would).
 #![allow(dead_code)]
 
-use hairfit::demo::synthesize;
+use hairfit::families::marschner::fit::synthetic::synthesize;
 use hairfit::families::marschner::{ModelConfig, Params};
 use hairfit::fit::design::SplitMix64;
 use hairfit::fit::FitData;

@@ -6,6 +6,7 @@
 pub mod auto;
 pub mod diagnostics;
 pub mod forward;
+pub mod synthetic;
 
 use crate::error::Result;
 use crate::families::marschner::fit::forward::MarschnerForward;

@@ -292,7 +292,7 @@ mod tests {
     #[test]
     fn few_samples_leave_the_fast_path() {
         // The demo's parameters: mid-range values, three channels.
-        let params = crate::demo::demo_truth();
+        let params = crate::families::marschner::demo::demo_truth();
         let mut state = 0x9E37_79B9_7F4A_7C15;
         let mut u = |lo: f64, hi: f64| lo + (hi - lo) * uniform(&mut state);
         let angles: Vec<Angles> = (0..20_000)
