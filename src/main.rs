@@ -73,7 +73,7 @@ enum Command {
         out: PathBuf,
         /// `marschner`: its accuracy knobs; `chiang`: its width rule; another family: no knobs of
         /// its own. Every run ends with every family's cost (samples/s/core) side by side.
-        #[arg(long = "model", value_enum, default_value_t = hairfit::families::ModelFamily::Marschner)]
+        #[arg(long = "model", value_enum, default_value_t = hairfit::families::ModelFamily::default())]
         family: hairfit::families::ModelFamily,
     },
     /// Fit several model families to the same data and rank them (hairfit::cli::help).

@@ -8,8 +8,8 @@ use std::sync::Arc;
 
 use clap::Args;
 
+use super::family_options::{takes, FAMILY_OPTIONS};
 use super::fit::FitArgs;
-use super::ModelArgs;
 use crate::compare::CompareEnd;
 use crate::data::LoadOptions;
 use crate::error::{Error, Result};
@@ -56,55 +56,6 @@ pub struct CompareArgs {
     /// whole by the new result, as `hairfit fit` replaces its --out (see --force).
     #[arg(long)]
     pub out: PathBuf,
-}
-
-/// An option of [`ModelArgs`] that only some families take ([`ModelFamily::own_options`]):
-/// whether it was given, and how to put it back to its default for a family without it.
-struct FamilyOption {
-    flag: &'static str,
-    given: fn(&ModelArgs) -> bool,
-    reset: fn(&mut ModelArgs),
-}
-
-/// Every family-only option, by the flag [`ModelFamily::own_options`] names it with.
-const FAMILY_OPTIONS: [FamilyOption; 6] = [
-    FamilyOption {
-        flag: "--mode",
-        given: |m| m.mode != Default::default(),
-        reset: |m| m.mode = Default::default(),
-    },
-    FamilyOption {
-        flag: "--lobes",
-        given: |m| {
-            crate::families::effects::Effects::parse_lobes(&m.lobes).ok()
-                != Some(Default::default())
-        },
-        reset: |m| m.lobes = "R,TT,TRT".into(),
-    },
-    FamilyOption {
-        flag: "--no-glints",
-        given: |m| m.no_glints,
-        reset: |m| m.no_glints = false,
-    },
-    FamilyOption {
-        flag: "--no-eccentricity",
-        given: |m| m.no_eccentricity,
-        reset: |m| m.no_eccentricity = false,
-    },
-    FamilyOption {
-        flag: "--terms",
-        given: |m| m.terms.is_some(),
-        reset: |m| m.terms = None,
-    },
-    FamilyOption {
-        flag: "--width-nodes",
-        given: |m| m.width_nodes.is_some(),
-        reset: |m| m.width_nodes = None,
-    },
-];
-
-fn takes(family: ModelFamily, flag: &str) -> bool {
-    family.own_options().contains(&flag)
 }
 
 /// `args` as `family`'s fit takes them: the shared options as given, the family-only options

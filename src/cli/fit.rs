@@ -144,11 +144,7 @@ impl FitArgs {
                 other => {
                     return Err(Error::Other(format!(
                         "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on{})",
-                        if self.model.family == ModelFamily::Marschner {
-                            "; delta_eta_prime and delta_h_m stay fixed"
-                        } else {
-                            ""
-                        }
+                        never_fitted(self.model.family)
                     )))
                 }
             }
@@ -293,4 +289,21 @@ pub struct FitCommandArgs {
     /// whole; files and folders hairfit did not write are kept (see --force).
     #[arg(long)]
     pub out: std::path::PathBuf,
+}
+
+/// `; delta_eta_prime and delta_h_m stay fixed`: the parameters of `family` its fit never
+/// varies (its table's `Fitted::No` lines), or nothing.
+fn never_fitted(family: ModelFamily) -> String {
+    let names: Vec<&str> = family
+        .facts()
+        .parameters()
+        .iter()
+        .filter(|f| f.fitted == crate::geometry::Fitted::No)
+        .map(|f| f.name)
+        .collect();
+    match names.as_slice() {
+        [] => String::new(),
+        [one] => format!("; {one} stays fixed"),
+        [rest @ .., last] => format!("; {} and {last} stay fixed", rest.join(", ")),
+    }
 }

@@ -6,6 +6,7 @@
 pub mod compare;
 pub mod exit;
 pub mod export;
+mod family_options;
 pub mod fit;
 pub mod help;
 pub mod oom;
@@ -37,7 +38,7 @@ pub fn tell(line: std::fmt::Arguments<'_>) {
 pub struct ModelArgs {
     // help::with_registries appends the list of families.
     /// Model family; docs/families.md lists each one's parameters and terms
-    #[arg(long = "model", value_enum, default_value_t = ModelFamily::Marschner)]
+    #[arg(long = "model", value_enum, default_value_t = ModelFamily::default())]
     pub family: ModelFamily,
     /// Terms of S, comma-separated [default: all]: Chiang's R, TT, TRT, residual; a table
     /// family's own (kajiya-kay: diffuse, specular; deon: R, TT, TRT, residual; karis: R, TT,
@@ -80,38 +81,9 @@ fn parse_width_nodes(s: &str) -> std::result::Result<WidthNodes, String> {
 }
 
 impl ModelArgs {
-    /// The Chiang model these options ask for (`--terms`, `--width-nodes`); those options are
-    /// an error for a family that does not take them, since they would silently do nothing.
-    pub fn chiang(&self) -> Result<ChiangModel> {
-        let takes_terms = ModelFamily::ALL
-            .into_iter()
-            .filter(|f| f.takes_terms())
-            .map(ModelFamily::as_str)
-            .collect::<Vec<_>>()
-            .join(", ");
-        let refusals = [
-            (
-                self.terms.is_some() && !self.family.takes_terms(),
-                "--terms",
-                format!("the families {takes_terms}"),
-            ),
-            (
-                self.width_nodes.is_some() && self.family != ModelFamily::Chiang,
-                "--width-nodes",
-                "--model chiang".to_string(),
-            ),
-        ];
-        if let Some((_, flag, owners)) = refusals.iter().find(|r| r.0) {
-            return Err(Error::Other(format!(
-                "{flag} applies to {owners} only, not --model {}{}",
-                self.family,
-                if self.family == ModelFamily::Marschner {
-                    " (the Marschner model takes --lobes, --mode, --no-glints, --no-eccentricity)"
-                } else {
-                    ""
-                }
-            )));
-        }
+    /// The Chiang model these options ask for (`--terms`, `--width-nodes`; their defaults for
+    /// another family, which may not be given them: [`ModelArgs::setup`]).
+    fn chiang(&self) -> Result<ChiangModel> {
         let effects = match (&self.terms, self.family) {
             (Some(t), ModelFamily::Chiang) => ChiangEffects::parse(t)?,
             _ => ChiangEffects::default(),
@@ -123,6 +95,7 @@ impl ModelArgs {
     /// Every family's configuration these options ask for (what is not the chosen family's
     /// stays at its default; giving it is an error, [`ModelArgs::check_family_options`]).
     pub fn setup(&self) -> Result<ModelSetup> {
+        self.refuse_foreign_options()?;
         let terms = match (self.family.table(), &self.terms) {
             (Some(table), Some(list)) => {
                 Some(TermSet::parse(list, table.terms(), self.family.as_str())?)
@@ -136,41 +109,10 @@ impl ModelArgs {
         })
     }
 
-    /// True when a Marschner-only option was given a non-default value.
-    pub fn marschner_options_given(&self) -> Option<&'static str> {
-        if self.mode != RootMode::Cubic {
-            Some("--mode")
-        } else if Effects::parse_lobes(&self.lobes).ok()
-            != Some(crate::families::effects::Lobes::default())
-        {
-            Some("--lobes")
-        } else if self.no_glints {
-            Some("--no-glints")
-        } else if self.no_eccentricity {
-            Some("--no-eccentricity")
-        } else {
-            None
-        }
-    }
-
     /// Every option of another family than `--model`'s is an error naming whose it is, and the
     /// chosen family's are checked.
     pub fn check_family_options(&self) -> Result<()> {
-        self.setup()?;
-        if self.family != ModelFamily::Marschner {
-            if let Some(flag) = self.marschner_options_given() {
-                return Err(Error::Other(format!(
-                    "{flag} applies to --model marschner only; the {} model takes --terms{}",
-                    self.family.title(),
-                    if self.family == ModelFamily::Chiang {
-                        " and --width-nodes"
-                    } else {
-                        ""
-                    }
-                )));
-            }
-        }
-        Ok(())
+        self.setup().map(drop)
     }
 
     /// The model configuration these options ask for.

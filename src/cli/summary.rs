@@ -45,13 +45,6 @@ pub fn verdict_lines(j: &crate::files::FitJson) -> String {
 pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
     let j = &out.json;
     let mut s = String::new();
-    let l = j.model.effects.lobes;
-    let lobes: Vec<&str> = [(l.r, "R"), (l.tt, "TT"), (l.trt, "TRT")]
-        .iter()
-        .filter(|(on, _)| *on)
-        .map(|(_, n)| *n)
-        .collect();
-    let on_off = |b: bool| if b { "on" } else { "off" };
     s += &verdict_lines(j);
     s += &format!(
         "hairfit fit: {} — {} samples × {} channel(s) from {}\n",
@@ -60,32 +53,18 @@ pub fn summary<P>(out: &FitOutcome<P>, dir: Option<&Path>) -> String {
         j.data.channels.len(),
         j.data.file
     );
-    match &j.chiang {
-        None if j.terms.is_some() => {
-            s += &format!(
-                "model: {}, terms {}\n",
-                j.family(),
-                j.terms.as_deref().unwrap_or_default().join("+")
-            )
-        }
-        Some(c) => {
-            s += &format!(
-                "model: chiang, terms {}, {} width nodes\n",
-                c.effects_text(),
-                c.width_nodes
-            )
-        }
-        None => {
-            s += &format!(
-                "model: {} mode, lobes {}, glints {}, eccentricity {} ({})\n",
-                j.model.mode,
-                lobes.join("+"),
-                on_off(j.model.effects.glints),
-                on_off(j.model.effects.eccentricity),
-                j.options.effects_choice
-            )
-        }
-    }
+    // How the effects were chosen (`--effects auto`) means something only to a family whose
+    // switches are effects; another's terms are what `--terms` says.
+    let chosen = if j.family().own_options().contains(&"--lobes") {
+        format!(" ({})", j.options.effects_choice)
+    } else {
+        String::new()
+    };
+    s += &format!(
+        "model: {}, {}{chosen}\n",
+        j.family(),
+        j.records().describe().join(", "),
+    );
     if j.options.measurement == Measurement::Radiance {
         s += "measurement: radiance, the model times cos theta_i (--measurement radiance)\n";
     }

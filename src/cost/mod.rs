@@ -5,16 +5,15 @@
 //! cost.csv, cost.json and cost.svg/png (error against time, log axes, Pareto front marked).
 
 //!
-//! Files: [`model`], [`jacobian`] and [`fits`] measure one section each, [`ledger`] marks the
-//! Pareto front and writes the files, [`figure`] draws cost.svg/png with the plotting kit.
+//! A family's own section lives in its folder (`families/<name>/cost`, implementing
+//! [`FamilyCost`]) and is found through the registry; [`families`] measures every family side
+//! by side, [`accuracy`] is what every section measures error with, [`ledger`] marks the Pareto
+//! front and writes the files, [`figure`] draws cost.svg/png with the plotting kit.
 
-mod chiang;
+mod accuracy;
 mod families;
 mod figure;
-mod fits;
-mod jacobian;
 mod ledger;
-mod model;
 
 use std::path::Path;
 use std::time::Instant;
@@ -22,9 +21,10 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::Result;
+use crate::families::{FamilyModel, ModelFamily, ModelSetup};
 
+pub use accuracy::{accuracy_row, relative_error, representative_angles};
 pub use ledger::{mark_pareto, summary_text};
-pub use model::{effect_ladder, relative_error, representative_angles};
 
 /// Error values below this are drawn at it on the log axes (the reference itself has error 0).
 pub const ERROR_FLOOR: f64 = 1e-16;
@@ -39,9 +39,9 @@ pub struct CostOptions {
     pub quick: bool,
     /// Write into a directory hairfit did not mark that holds other files (they are kept).
     pub force: bool,
-    /// `chiang`: the Chiang section instead (width nodes × cache against accuracy, with the
-    /// Marschner model's time as the yardstick).
-    pub family: crate::families::ModelFamily,
+    /// `--model NAME`: whose own section the ledger measures ([`FamilyCost`], beside the
+    /// default family's time as the yardstick); a table family has none.
+    pub family: ModelFamily,
 }
 
 /// One measured setting of one knob.
@@ -78,9 +78,77 @@ pub struct CostLedger {
     pub wall_time_s: f64,
 }
 
+/// A family's own section of the ledger (`hairfit cost --model NAME`): what its accuracy knobs
+/// cost. Implemented in the family's folder by each `Own` family of the registry; a table
+/// family's one knob is its terms, so its cost is its row in the families section.
+pub trait FamilyCost: Sync {
+    /// The section's rows (`quick`: fewer directions, shorter timings, fewer variants).
+    fn rows(&self, quick: bool) -> Result<Vec<CostRow>>;
+
+    /// What each of the section's row sections measures (cost.json's `metrics`): (the row
+    /// sections it describes, the description).
+    fn metrics(&self) -> &'static [(&'static str, &'static str)];
+}
+
+/// [`family_section`] from the registry's list (`crate::families::registry`).
+macro_rules! family_section {
+    ($($variant:ident => $kind:ident($ty:path)),* $(,)?) => {
+        /// The own section of `family`; none for a table family.
+        fn family_section(family: ModelFamily) -> Option<&'static dyn FamilyCost> {
+            match family {
+                $(ModelFamily::$variant => family_section!(@section $kind($ty)),)*
+            }
+        }
+    };
+    (@section Own($ty:path)) => {
+        Some(&$ty)
+    };
+    (@section Table($ty:path)) => {
+        None
+    };
+}
+crate::families::registry!(family_section);
+
+/// How many random directions a family section times its evaluations on.
+pub fn section_directions(quick: bool) -> usize {
+    if quick {
+        64
+    } else {
+        256
+    }
+}
+
+/// The yardstick of a family's section: the default family's time per sample (its demo truth,
+/// default options, one thread) on the section's random directions, so "N times the default
+/// model" can be read off the ledger. Its error is not comparable (another model).
+fn yardstick_row(quick: bool) -> CostRow {
+    let family = ModelFamily::default();
+    let min_s = if quick { 0.05 } else { 0.5 };
+    let random = representative_angles(section_directions(quick), COST_SEED);
+    let model = FamilyModel::new(&family.demo_truth(), &ModelSetup::default());
+    let mut out = vec![0.0; random.len() * model.n_channels()];
+    let t = time_per_call(min_s, || model.eval_batch(&random, &mut out));
+    CostRow {
+        section: "baseline".into(),
+        knob: format!("{family} (yardstick)"),
+        setting: format!("{family}, default options, every term"),
+        time_s: t / random.len() as f64,
+        error_max: f64::NAN,
+        error_rms: f64::NAN,
+        worst_at: "not comparable (another model)".into(),
+        pareto: false,
+    }
+}
+
+/// cost.json's description of the yardstick row.
+const YARDSTICK_METRIC: &str = "the default family's time per sample on the section's random directions (its demo truth, default options, every term, one thread); its error is not comparable (another model)";
+
+/// cost.json's description of the families section.
+const FAMILIES_METRIC: &str = "every model family's S: time per direction pair (3 channels, its demo truth, every term, its default accuracy, one thread) and, in the full ledger, the wall time of fitting its own demo data (linearised intervals); the families are different models, so no error is comparable (hairfit compare ranks what each loses on the same data)";
+
 /// Seconds per call of `f`: the fastest of five batches, each repeating `f` until `min_s / 5`
 /// has elapsed. The minimum is the least disturbed by other work on a shared machine.
-fn time_per_call(min_s: f64, mut f: impl FnMut()) -> f64 {
+pub fn time_per_call(min_s: f64, mut f: impl FnMut()) -> f64 {
     let mut best = f64::INFINITY;
     for _ in 0..5 {
         let t0 = Instant::now();
@@ -105,17 +173,21 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
     let t0 = Instant::now();
     let quick = options.quick;
     let mut rows = Vec::new();
-    match options.family {
-        crate::families::ModelFamily::Marschner => {
-            rows.extend(model::model_rows(quick));
-            let data = fits::synthetic_data();
-            rows.extend(jacobian::jacobian_rows(&data, quick)?);
-            rows.extend(fits::fit_rows(&data, quick)?);
+    let mut metrics = serde_json::Map::new();
+    let mut describe = |sections: &str, what: &str| {
+        metrics.insert(sections.into(), what.into());
+    };
+    if let Some(section) = family_section(options.family) {
+        if options.family != ModelFamily::default() {
+            rows.push(yardstick_row(quick));
+            describe("baseline", YARDSTICK_METRIC);
         }
-        crate::families::ModelFamily::Chiang => rows.extend(chiang::chiang_rows(quick)?),
-        // A table family's one knob is its terms: each family's cost below is the ledger.
-        _ => {}
+        rows.extend(section.rows(quick)?);
+        for (sections, what) in section.metrics() {
+            describe(sections, what);
+        }
     }
+    describe("families", FAMILIES_METRIC);
     // Every family's cost beside the others' (what each approximation saves).
     let random = representative_angles(if quick { 256 } else { 1024 }, COST_SEED);
     rows.extend(families::eval_rows(&random, quick));
@@ -128,13 +200,7 @@ pub fn run_cost(out: &Path, options: &CostOptions) -> Result<CostLedger> {
         quick,
         seed: COST_SEED,
         threads: rayon::current_num_threads(),
-        metrics: serde_json::json!({
-            "model": "relative error of S per channel against exact roots with every effect, denominator floored at 1e-3 x the median reference S; time per evaluation (one direction pair, all channels, one thread)",
-            "jacobian": "per parameter column: ||J_fd - J_ad|| / ||J_ad|| (max and RMS over columns); time per full Jacobian of the synthetic data",
-            "fit": "|estimate - truth| / width of the parameter's typical range (docs/model.md), over the free shape parameters (max and RMS); wall time of the whole fit",
-            "families": "every model family's S: time per direction pair (3 channels, its demo truth, every term, its default accuracy, one thread) and, in the full ledger, the wall time of fitting its own demo data (linearised intervals); the families are different models, so no error is comparable (hairfit compare ranks what each loses on the same data)",
-            "chiang-b0.3, chiang-b0.05": "relative error of the Chiang S per channel against 4096 width nodes, denominator floored at 1e-3 x the median reference S; time per sample (all channels, one thread); evaluations per second per core = 1/time_s; section baseline: the Marschner model's time on the same random directions (its error is not comparable)",
-        }),
+        metrics: metrics.into(),
         rows,
         wall_time_s: t0.elapsed().as_secs_f64(),
     };

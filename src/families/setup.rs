@@ -97,6 +97,35 @@ pub struct ModelRecords {
     pub terms: Option<Vec<String>>,
 }
 
+impl ModelRecords {
+    /// The configuration in words, one item each, as the fit's summary and report show it:
+    /// a table family's terms; Chiang's terms and width rule; the root mode and effects.
+    pub fn describe(&self) -> Vec<String> {
+        let on_off = |b: bool| if b { "on" } else { "off" };
+        if let Some(c) = &self.chiang {
+            return vec![
+                format!("terms {}", c.effects_text()),
+                format!("{} width nodes", c.width_nodes),
+            ];
+        }
+        if let Some(terms) = &self.terms {
+            return vec![format!("terms {}", terms.join("+"))];
+        }
+        let e = &self.config.effects;
+        let lobes: Vec<&str> = [(e.lobes.r, "R"), (e.lobes.tt, "TT"), (e.lobes.trt, "TRT")]
+            .into_iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, n)| n)
+            .collect();
+        vec![
+            format!("{} roots", self.config.mode),
+            format!("lobes {}", lobes.join("+")),
+            format!("glints {}", on_off(e.glints)),
+            format!("eccentricity {}", on_off(e.eccentricity)),
+        ]
+    }
+}
+
 /// fit.json → `chiang`: a Chiang fit's model configuration (absent for Marschner fits, whose
 /// configuration is `model`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -477,6 +477,15 @@ impl FitJson {
         self.params.family()
     }
 
+    /// What fit.json records of the fit's model configuration (`model`, `chiang`, `terms`).
+    pub fn records(&self) -> crate::families::ModelRecords {
+        crate::families::ModelRecords {
+            config: self.model,
+            chiang: self.chiang,
+            terms: self.terms.clone(),
+        }
+    }
+
     /// The model configuration the fit used, as its records say.
     pub fn setup(&self) -> Result<crate::families::ModelSetup> {
         crate::families::ModelSetup::from_records(

@@ -113,12 +113,6 @@ fn summary_section(h: &mut String, fit: &FitJson) {
     } else {
         "bad"
     };
-    let e = &fit.model.effects;
-    let lobes: Vec<&str> = [(e.lobes.r, "R"), (e.lobes.tt, "TT"), (e.lobes.trt, "TRT")]
-        .iter()
-        .filter(|(on, _)| *on)
-        .map(|(_, n)| *n)
-        .collect();
     let r = &fit.residuals;
     h.push_str("<h2>Summary</h2>\n<table>\n");
     let mut row = |k: &str, v: String| {
@@ -134,28 +128,23 @@ fn summary_section(h: &mut String, fit: &FitJson) {
     row("data file", escape(&fit.data.file));
     row("samples", fit.data.n_samples.to_string());
     row("channels", escape(&fit.data.channels.join(", ")));
-    row(
-        "model",
-        match &fit.chiang {
-            None if fit.terms.is_some() => format!(
-                "{}; terms {}",
-                fit.family().title(),
-                fit.terms.as_deref().unwrap_or_default().join("+")
-            ),
-            Some(c) => format!(
-                "Chiang 2016; terms {}; {} width nodes (the TRT curve includes the p ≥ 3 residual)",
-                c.effects_text(),
-                c.width_nodes
-            ),
-            None => format!(
-                "{} roots; lobes {}; glints {}; eccentricity {}",
-                fit.model.mode,
-                lobes.join("+"),
-                if e.glints { "on" } else { "off" },
-                if e.eccentricity { "on" } else { "off" }
-            ),
-        },
-    );
+    row("model", {
+        let items = fit.records().describe();
+        // A residual term is drawn in the TRT column (`families::table` says why).
+        let residual = items
+            .iter()
+            .any(|i| i.starts_with("terms ") && i.contains("residual"));
+        format!(
+            "{}; {}{}",
+            fit.family().citation(),
+            items.join("; "),
+            if residual {
+                " (the TRT curve includes the p ≥ 3 residual)"
+            } else {
+                ""
+            }
+        )
+    });
     row(
         "residuals",
         format!("space {}, loss {}", escape(&r.space), escape(&r.loss)),

@@ -70,8 +70,9 @@ fn every_model_source_file_is_documented() {
     for entry in std::fs::read_dir(dir).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
         let module = name.trim_end_matches(".rs");
-        // The folder's parameter file and fit adaptor are the family's, not the model's.
-        if matches!(module, "mod" | "params" | "fit") {
+        // The folder's parameter file, fit adaptor, demo truth and cost-ledger section are the
+        // family's, not the model's.
+        if matches!(module, "mod" | "params" | "fit" | "demo" | "cost") {
             continue;
         }
         assert!(

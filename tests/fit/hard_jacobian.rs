@@ -189,7 +189,7 @@ fn sweep(
     for (pname, p) in params {
         let angles = hard_angles(p.eta);
         for mode in MODES {
-            for (ename, effects) in hairfit::cost::effect_ladder() {
+            for (ename, effects) in hairfit::families::marschner::cost::effect_ladder() {
                 let cfg = ModelConfig { mode, effects };
                 for (aname, a) in &angles {
                     n += 1;
@@ -279,7 +279,7 @@ fn jacobian_matches_finite_differences_at_bounds() {
     let mut unresolved = 0;
     for (pname, p) in hard_params() {
         for mode in MODES {
-            for (ename, effects) in hairfit::cost::effect_ladder() {
+            for (ename, effects) in hairfit::families::marschner::cost::effect_ladder() {
                 let cfg = ModelConfig { mode, effects };
                 for (aname, a) in &cases {
                     let (v0, jac) = scattering_jacobian(&p, &cfg, a, &all);

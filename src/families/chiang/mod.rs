@@ -32,6 +32,7 @@ pub use crate::geometry::ParamFact;
 use crate::geometry::{Fitted, Interval, Unit};
 
 pub mod azimuthal;
+pub mod cost;
 pub mod demo;
 pub mod evaluator;
 pub mod file;

@@ -15,6 +15,7 @@ use crate::geometry::sigma_a::require_channels;
 pub mod azimuthal;
 pub mod bravais;
 pub mod chain;
+pub mod cost;
 pub mod demo;
 pub mod eccentricity;
 pub mod exit_angle;

@@ -1,7 +1,7 @@
 //! The ledger's Jacobian section: exact forward-mode AD against central finite differences in
 //! the solver's parameters, time per full Jacobian and the error of each column.
 
-use super::{time_per_call, CostRow};
+use crate::cost::{time_per_call, CostRow};
 use crate::error::Result;
 use crate::families::effects::{Effects, ModelConfig};
 use crate::families::marschner::demo::demo_truth;

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use super::{CostRow, COST_SEED};
+use crate::cost::{CostRow, COST_SEED};
 use crate::demo::{demo_geometry, DEMO_NOISE, DEMO_SCALE};
 use crate::error::Result;
 use crate::families::effects::{Effects, ModelConfig};

@@ -1,15 +1,17 @@
 //! The ledger's Chiang section (`hairfit cost --model chiang`): time per evaluation of the Chiang
 //! `S` against its accuracy, per width rule (the plain node counts and the default automatic
 //! rule), with and without the cache per exit
-//! direction, on random directions and on a rig; and the Marschner model's time on the same
-//! directions as the yardstick ("evaluations per second per core" = 1 / time_s).
+//! direction, on random directions and on a rig ("evaluations per second per core" =
+//! 1 / time_s). The ledger adds the default family's time as the yardstick
+//! ([`crate::cost::yardstick_row`]).
 
-use super::model::{accuracy_row, representative_angles};
-use super::{time_per_call, CostRow, COST_SEED};
-use crate::families::chiang::{
-    scattering, scattering_batch, ChiangEffects, ChiangModel, ChiangParams,
+use crate::cost::{
+    accuracy_row, representative_angles, time_per_call, CostRow, FamilyCost, COST_SEED,
 };
-use crate::families::effects::ModelConfig;
+use crate::error::Result;
+use crate::families::chiang::{
+    scattering, scattering_batch, ChiangEffects, ChiangFamily, ChiangModel, ChiangParams,
+};
 use crate::geometry::Angles;
 
 /// Node counts of the ledger (the reference uses [`REFERENCE_NODES`]).
@@ -65,31 +67,21 @@ fn cached(p: &ChiangParams<f64>, model: &ChiangModel, angles: &[Angles]) -> Vec<
 }
 
 /// The Chiang section's rows (one thread; time per sample, all channels).
-pub(super) fn chiang_rows(quick: bool) -> crate::error::Result<Vec<CostRow>> {
+impl FamilyCost for ChiangFamily {
+    fn rows(&self, quick: bool) -> Result<Vec<CostRow>> {
+        chiang_rows(quick)
+    }
+
+    fn metrics(&self) -> &'static [(&'static str, &'static str)] {
+        &[("chiang-b0.3, chiang-b0.05", "relative error of the Chiang S per channel against 4096 width nodes, denominator floored at 1e-3 x the median reference S; time per sample (all channels, one thread); evaluations per second per core = 1/time_s")]
+    }
+}
+
+fn chiang_rows(quick: bool) -> Result<Vec<CostRow>> {
     let min_s = if quick { 0.05 } else { 0.5 };
-    let random = representative_angles(if quick { 64 } else { 256 }, COST_SEED);
+    let random = representative_angles(crate::cost::section_directions(quick), COST_SEED);
     let rig = rig_angles();
     let mut rows = Vec::new();
-    // The yardstick: Marschner, every effect, on the same random directions.
-    let marschner = crate::families::marschner::demo::demo_truth();
-    let config = ModelConfig::default();
-    let nc = marschner.sigma_a.len();
-    let t = time_per_call(min_s, || {
-        let mut o = vec![0.0; nc];
-        for a in &random {
-            crate::families::marschner::scattering(&marschner, &config, a, &mut o);
-        }
-    });
-    rows.push(CostRow {
-        section: "baseline".into(),
-        knob: "marschner (yardstick)".into(),
-        setting: "marschner cubic, every effect".into(),
-        time_s: t / random.len() as f64,
-        error_max: f64::NAN,
-        error_rms: f64::NAN,
-        worst_at: "not comparable (another model)".into(),
-        pareto: false,
-    });
     for (label, p) in parameter_sets() {
         let reference_model = ChiangModel::new(ChiangEffects::default(), REFERENCE_NODES)?;
         for (dirs_label, angles) in [("random", &random), ("rig", &rig)] {
