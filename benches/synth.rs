@@ -1,11 +1,12 @@
 //! Samples per second of `synthesize` (rig + model + noise, in memory) and of the noise alone.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use hairfit::families::marschner::fit::synthetic::synthesize_rig;
 use hairfit::families::marschner::params::ParamFile;
 use hairfit::families::marschner::params::ParameterFile as _;
 use hairfit::families::marschner::ModelConfig;
 use hairfit::geometry::Measurement;
-use hairfit::synth::{synthesize, Noise, Rig};
+use hairfit::synth::{Noise, Rig};
 
 const N: usize = 10_000;
 
@@ -24,7 +25,7 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(N as u64));
     g.bench_function("synthesize_sphere_rgb_all_noise", |b| {
         b.iter(|| {
-            synthesize(
+            synthesize_rig(
                 &params,
                 &config,
                 &rig,

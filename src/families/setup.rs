@@ -37,11 +37,7 @@ impl ModelSetup {
                 }),
                 terms: None,
             },
-            _ => ModelRecords {
-                config: self.config,
-                chiang: None,
-                terms: None,
-            },
+            _ => ModelRecords::of_config(self.config),
         }
     }
 
@@ -50,9 +46,8 @@ impl ModelSetup {
     pub fn table_records(&self, table: &dyn DynTable) -> ModelRecords {
         let on = self.table_terms(table);
         ModelRecords {
-            config: table::lobes_config(table.terms(), on),
-            chiang: None,
             terms: Some(on.names(table.terms())),
+            ..ModelRecords::of_config(table::lobes_config(table.terms(), on))
         }
     }
 
@@ -98,6 +93,15 @@ pub struct ModelRecords {
 }
 
 impl ModelRecords {
+    /// The records of a family whose configuration is `model` alone.
+    pub fn of_config(config: ModelConfig) -> ModelRecords {
+        ModelRecords {
+            config,
+            chiang: None,
+            terms: None,
+        }
+    }
+
     /// The configuration in words, one item each, as the fit's summary and report show it:
     /// a table family's terms; Chiang's terms and width rule; the root mode and effects.
     pub fn describe(&self) -> Vec<String> {

@@ -17,9 +17,6 @@ use rayon::prelude::*;
 
 use crate::data::{round_trip_degrees, Dataset};
 use crate::error::{Error, Result};
-use crate::families::effects::ModelConfig;
-use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::Params;
 use crate::families::{FamilyModel, FamilyParams, ModelRecords};
 pub use crate::files::{ScaleEntry, Truth};
 use crate::geometry::{Angles, Measurement};
@@ -44,75 +41,6 @@ pub fn channel_names(n: usize) -> Vec<String> {
     }
 }
 
-/// Synthesize a dataset: the rig's directions (degrees, converted to radians once with
-/// `to_radians`, as the loader does), value = `scale[c] · S_c` from [`scattering`] under
-/// `config` (times `cos θ_i` when `measurement` is radiance), then `noise` seeded by `seed`. One channel per `params.sigma_a` entry; `scale` has
-/// one positive entry per channel. With `Noise::default()` the values are exactly
-/// `scale[c] * S_c` at the stored radians, which are the radians the loader makes of the degrees
-/// [`write_csv`] writes, so a written and reloaded dataset reproduces the model bit for bit.
-/// `Truth::params` is `ParamFile::from_params(params)` and `command_line` is `None`.
-pub fn synthesize(
-    params: &Params<f64>,
-    config: &ModelConfig,
-    rig: &Rig,
-    noise: &Noise,
-    scale: &[f64],
-    measurement: Measurement,
-    seed: u64,
-) -> Result<(Dataset, Truth)> {
-    let directions = rig.angles(&mut random::generator(seed, random::Stream::Angles));
-    synthesize_directions(
-        params,
-        config,
-        &directions,
-        &rig.to_string(),
-        noise,
-        scale,
-        measurement,
-        seed,
-    )
-}
-
-/// [`synthesize`] at explicit directions `[θ_i, φ_i, θ_r, φ_r]` in degrees (for geometries no
-/// [`Rig`] describes, e.g. a demo's scan); `label` is recorded as the truth's `rig`. Each |θ|
-/// must be below 90° and every angle finite.
-#[allow(clippy::too_many_arguments)]
-pub fn synthesize_directions(
-    params: &Params<f64>,
-    config: &ModelConfig,
-    directions: &[[f64; 4]],
-    label: &str,
-    noise: &Noise,
-    scale: &[f64],
-    measurement: Measurement,
-    seed: u64,
-) -> Result<(Dataset, Truth)> {
-    params.validate()?;
-    let model = FamilyModel::Marschner {
-        params: params.clone(),
-        config: *config,
-    };
-    let file = FamilyParams::Marschner(ParamFile::from_params(params));
-    let source = Source {
-        model: &model,
-        file: &file,
-        records: ModelRecords {
-            config: *config,
-            chiang: None,
-            terms: None,
-        },
-    };
-    let how = Acquisition {
-        directions,
-        label,
-        noise,
-        scale,
-        measurement,
-        seed,
-    };
-    synthesize_model(&source, &how)
-}
-
 /// What a synthetic dataset is made from: a family's model, its parameter file and
 /// configuration (recorded in the truth).
 pub struct Source<'a> {
@@ -135,7 +63,8 @@ pub struct Acquisition<'a> {
     pub seed: u64,
 }
 
-/// [`synthesize_directions`] for either model family; `source.file` must be valid.
+/// A synthetic dataset of any family's model (`source`) taken as `how` says; `source.file`
+/// must be valid.
 pub fn synthesize_model(source: &Source<'_>, how: &Acquisition<'_>) -> Result<(Dataset, Truth)> {
     if let Some((i, a)) =
         how.directions.iter().enumerate().find(|(_, a)| {

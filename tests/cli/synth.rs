@@ -9,10 +9,11 @@ use std::path::Path;
 use std::process::Output;
 
 use hairfit::data::{load, write_csv, LoadOptions};
+use hairfit::families::marschner::fit::synthetic::{synthesize_directions, synthesize_rig};
 use hairfit::families::marschner::params::{ParamFile, SigmaA};
 use hairfit::families::marschner::{scattering, Effects, ModelConfig, RootMode};
 use hairfit::geometry::{Angles, Measurement};
-use hairfit::synth::{synthesize, synthesize_directions, truth_path, Noise, Rig, Truth};
+use hairfit::synth::{truth_path, Noise, Rig, Truth};
 
 const PARAMS_3: &str = r#"{"eta": 1.55, "sigma_a": [0.2, 0.4, 0.8], "alpha_r_deg": -7,
   "beta_r_deg": 8, "k_g": 2, "w_c_deg": 15, "eccentricity": 0.9}"#;
@@ -129,7 +130,7 @@ fn library_dataset_equals_its_reloaded_file() {
         .to_params();
     let rig = Rig::parse("azimuthal:incidences=20,40:steps=36").unwrap();
     let noise = Noise::parse("relative:0.03+outliers:0.1").unwrap();
-    let (ds, truth) = synthesize(
+    let (ds, truth) = synthesize_rig(
         &params,
         &ModelConfig::default(),
         &rig,
@@ -153,7 +154,7 @@ fn library_dataset_equals_its_reloaded_file() {
     // The sphere rig's angles are full-mantissa degrees (asin(z).to_degrees()), the hardest
     // case for a degree file: still exact.
     let rig = Rig::parse("sphere:n=500").unwrap();
-    let (mut ds, _) = synthesize(
+    let (mut ds, _) = synthesize_rig(
         &params,
         &ModelConfig::default(),
         &rig,

@@ -7,17 +7,18 @@ use crate::support;
 use crate::support::cli;
 
 use cli::{hairfit_ok, root, s, stderr, stdout};
+use hairfit::families::marschner::fit::synthetic::synthesize_rig;
 use hairfit::families::marschner::fit::{fit, MarschnerOutcome};
 use hairfit::families::marschner::ModelConfig;
 use hairfit::files::{FitJson, Verdict};
 use hairfit::fit::scan_design::{caveats, Design, SingleScan};
 use hairfit::fit::{fit_data, FitOptions, Intervals};
 use hairfit::geometry::Measurement;
-use hairfit::synth::{synthesize, Noise, Rig};
+use hairfit::synth::{Noise, Rig};
 
 /// A fit of `rig` at 10% relative noise with default options (linearised intervals: fast).
 fn fitted(rig: &str, seed: u64) -> (hairfit::fit::FitData, MarschnerOutcome) {
-    let (ds, _) = synthesize(
+    let (ds, _) = synthesize_rig(
         // MODEL.md's example hair, one channel (data/true_1ch.json).
         &support::model::table_params(),
         &ModelConfig::default(),

@@ -128,7 +128,7 @@ pub fn wide_params(seed: u64, nc: usize) -> Params<f64> {
 /// `--noise` spec) and one channel scale `scale`, loaded as fit data.
 pub fn synthesized(truth: &Params<f64>, rig: &str, noise: &str, scale: f64, seed: u64) -> FitData {
     use hairfit::synth::{Noise, Rig};
-    let (ds, _) = hairfit::synth::synthesize(
+    let (ds, _) = hairfit::families::marschner::fit::synthetic::synthesize_rig(
         truth,
         &ModelConfig::default(),
         &Rig::parse(rig).unwrap(),

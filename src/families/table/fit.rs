@@ -343,9 +343,8 @@ fn fit_table<F: TableFamily>(i: FitInput<'_>) -> Result<FitOutcome<TableParams<f
         &mut warnings,
     );
     let records = ModelRecords {
-        config: lobes_config(F::TERMS, on),
-        chiang: None,
         terms: Some(on.names(F::TERMS)),
+        ..ModelRecords::of_config(lobes_config(F::TERMS, on))
     };
     let choice = ModelChoice {
         effects_choice: EffectsSource::Explicit,

@@ -71,11 +71,7 @@ pub fn fit(
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
-            records: crate::families::ModelRecords {
-                config: auto.config,
-                chiang: None,
-                terms: None,
-            },
+            records: crate::families::ModelRecords::of_config(auto.config),
             all: all_parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Marschner(ParamFile::from_params(p)),
