@@ -241,8 +241,8 @@ pub fn trt_factors<T: DualNum<f64>>(p: &KarisShared<T>, g: &Geometry) -> (T, f64
 /// `K = 1 − |sin θ_i|` (UE's KajiyaKayDiffuseAttenuation; an unshadowed fibre has tint 1).
 pub fn scatter_shape(g: &Geometry) -> f64 {
     let wrap = ((g.cos_theta_i * g.cos_phi + 1.0) / 4.0).clamp(0.0, 1.0);
-    let kajiya = 1.0 - g.sin_theta_i.abs();
-    (0.67 * wrap + 0.33 * kajiya) / PI
+    let k = 1.0 - g.sin_theta_i.abs();
+    (0.67 * wrap + 0.33 * k) / PI
 }
 
 /// `f_MS = √C · Scatter · shape`.
