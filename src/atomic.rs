@@ -204,7 +204,9 @@ where
         fill(&mut out)?;
         out.flush().map_err(|e| Error::io(path, e))?;
         drop(out);
-        if !deferred {
+        if deferred {
+            start_writeback(&file);
+        } else {
             file.sync_all().map_err(|e| Error::io(path, e))?;
         }
     }
@@ -250,6 +252,24 @@ pub(crate) fn note_deferred(target: &Path) -> bool {
         }
         None => false,
     }
+}
+
+/// Start writing a file whose fsync is deferred to its set's publication back to disk now
+/// (`sync_file_range`, which does not wait for it), so that fsync finds most of it written:
+/// the 100k fit's curves.csv (24 MB) is written while the report is drawn, and its fsync at
+/// the publication took 13 ms of the command's wall time before. A hint only: errors are left
+/// to the fsync.
+fn start_writeback(file: &std::fs::File) {
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: a plain syscall on an open descriptor; it reads no memory of ours.
+        unsafe {
+            libc::sync_file_range(file.as_raw_fd(), 0, 0, libc::SYNC_FILE_RANGE_WRITE);
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = file;
 }
 
 /// fsync the file at `path` (a file no longer there is not part of the set: nothing to sync).

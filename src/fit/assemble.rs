@@ -19,6 +19,7 @@ use crate::files::{
     ResidualSummary, ScaleEntry, StageTiming, Timing, TraceStage, DOWN_WEIGHT,
 };
 use crate::files::{CurvesMode, Verdict};
+use crate::geometry::Angles;
 
 /// Why the data cannot determine a parameter: words for its warning, from the parameter, the
 /// fitted set and its strongly correlated partners (family-specific geometry).
@@ -302,6 +303,10 @@ fn down_weighted<F: Forward>(
     })
 }
 
+/// Samples per chunk of [`curves_of`]'s per-lobe pass: whole lane groups, and enough chunks
+/// for both cores on small fits.
+const CURVE_CHUNK: usize = 256;
+
 /// One row per channel of each sample in `samples` (indices into `data`, in order): the data,
 /// the fit and its lobes (with the evaluator's measurement factor and the fitted scale), the
 /// residual and the robust weight, computed in parallel straight into the table's columns (no
@@ -326,30 +331,31 @@ fn curves_of<F: Forward>(
         weight: f64::NAN,
     };
     let mut values = vec![nan; samples.len() * nc];
+    // Per-lobe values a chunk of samples at a time (a family may run them on its lanes).
     values
-        .par_chunks_mut(nc.max(1))
-        .zip(samples.par_iter())
-        .for_each_init(
-            || vec![[0.0; 3]; nc],
-            |lobes, (row, &i)| {
-                let ok = fwd.by_lobe(params, &data.angles[i], lobes);
-                for (c, v) in row.iter_mut().enumerate() {
-                    let k = i * nc + c;
-                    let s = e.scale[c];
-                    let l = if ok { lobes[c] } else { [f64::NAN; 3] };
-                    *v = CurveValues {
-                        data: data.values[k],
-                        sigma: data.sigma.as_ref().map_or(f64::NAN, |s| s[k]),
-                        fit: s * e.model[k],
-                        fit_r: s * l[0],
-                        fit_tt: s * l[1],
-                        fit_trt: s * l[2],
-                        residual: e.raw[k],
-                        weight: e.robust_weight[k],
-                    };
-                }
-            },
-        );
+        .par_chunks_mut(CURVE_CHUNK * nc.max(1))
+        .zip(samples.par_chunks(CURVE_CHUNK))
+        .for_each(|(rows, chunk)| {
+            let angles: Vec<Angles> = chunk.iter().map(|&i| data.angles[i]).collect();
+            let mut lobes = vec![[0.0; 3]; chunk.len() * nc];
+            let ok = fwd.by_lobe_batch(params, &angles, &mut lobes);
+            for (j, v) in rows.iter_mut().enumerate() {
+                let (i, c) = (chunk[j / nc.max(1)], j % nc.max(1));
+                let k = i * nc + c;
+                let s = e.scale[c];
+                let l = if ok { lobes[j] } else { [f64::NAN; 3] };
+                *v = CurveValues {
+                    data: data.values[k],
+                    sigma: data.sigma.as_ref().map_or(f64::NAN, |s| s[k]),
+                    fit: s * e.model[k],
+                    fit_r: s * l[0],
+                    fit_tt: s * l[1],
+                    fit_trt: s * l[2],
+                    residual: e.raw[k],
+                    weight: e.robust_weight[k],
+                };
+            }
+        });
     let n = samples.len();
     Curves {
         channels: data.channels.clone(),
@@ -526,26 +532,31 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<Param
         status
     };
     let worst_row = worst_row_misfit(data, &e);
-    let assessment = super::verdict::assess(&super::evidence::Evidence {
-        data,
-        ev,
-        e: &e,
-        worst_row_misfit: worst_row,
-        params: &params,
-        status,
-        parameters: &parameters,
-        scale: &scale,
-        trace: &trace,
-        warnings: &warnings,
-        dof: unc.dof,
-    });
-    lap("verdict");
-    let curves = curves_of(
-        ev,
-        data,
-        &params,
-        &e,
-        &written_samples(options.curves, data, &e),
+    // The assessment and the curves read the optimum alone, not each other: computed side by
+    // side (the assessment's serial parts no longer leave a core idle), each stage timed alone.
+    let ((assessment, verdict_s), (curves, curves_s)) = rayon::join(
+        || {
+            let t = Instant::now();
+            let assessment = super::verdict::assess(&super::evidence::Evidence {
+                data,
+                ev,
+                e: &e,
+                worst_row_misfit: worst_row,
+                params: &params,
+                status,
+                parameters: &parameters,
+                scale: &scale,
+                trace: &trace,
+                warnings: &warnings,
+                dof: unc.dof,
+            });
+            (assessment, t.elapsed())
+        },
+        || {
+            let t = Instant::now();
+            let samples = written_samples(options.curves, data, &e);
+            (curves_of(ev, data, &params, &e, &samples), t.elapsed())
+        },
     );
     if curves.values.iter().any(|r| {
         ![r.fit, r.fit_r, r.fit_tt, r.fit_trt, r.residual, r.weight]
@@ -555,7 +566,12 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<Param
         warnings
             .push("curves.csv: some fitted values are not finite; written as empty cells".into());
     }
-    lap("curves");
+    for (stage, took) in [("verdict", verdict_s), ("curves", curves_s)] {
+        stage_times.push(StageTiming {
+            stage: stage.into(),
+            wall_s: took.as_secs_f64(),
+        });
+    }
 
     let json = FitJson {
         hairfit_version: env!("CARGO_PKG_VERSION").into(),

@@ -196,6 +196,40 @@ pub fn render_curves_report(
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
     let mut summary = ReportSummary::default();
+    // The figures of fit.json alone are drawn while the data's are (neither reads the other's).
+    let mut parameters = ReportSummary::default();
+    let (data, params) = rayon::join(
+        || data_part(dir, fit, curves, model, n_model, options, &mut summary),
+        || parameter_figures(dir, fit, &mut parameters),
+    );
+    data?;
+    params?;
+    summary.figures.append(&mut parameters.figures);
+    for f in &summary.figures {
+        summary.files.push(format!("{}.svg", f.stem));
+        summary.files.push(format!("{}.png", f.stem));
+    }
+    let page = html::index_html(fit, &summary, options);
+    let path = dir.join("index.html");
+    write_atomically(&path, |w| {
+        w.write_all(page.as_bytes())
+            .map_err(|e| Error::io(&path, e))
+    })?;
+    summary.files.push("index.html".into());
+    Ok(summary)
+}
+
+/// The report's part from curves.csv: its figures of the data, or the note saying why there
+/// are none.
+fn data_part(
+    dir: &Path,
+    fit: &FitJson,
+    curves: Option<&Curves>,
+    model: Option<&LobeModel>,
+    n_model: usize,
+    options: &ReportOptions,
+    summary: &mut ReportSummary,
+) -> Result<()> {
     match curves {
         Some(curves) => {
             if fit.options.curves == CurvesMode::Summary {
@@ -211,26 +245,14 @@ pub fn render_curves_report(
                     curves.n_samples()
                 ));
             }
-            data_figures(dir, fit, curves, model, n_model, options, &mut summary)?;
+            data_figures(dir, fit, curves, model, n_model, options, summary)?;
         }
         None => summary.notes.push(match fit.options.curves {
             CurvesMode::None => "no curves.csv: the fit ran with `--curves none`, so only the parameters and the verdict are shown (rerun with `--curves summary` or `full` for figures of the data)".to_string(),
             _ => "no curves.csv in the fit's directory (removed?): only the parameters and the verdict are shown; rerun the fit for figures of the data".to_string(),
         }),
     }
-    parameter_figures(dir, fit, &mut summary)?;
-    for f in &summary.figures {
-        summary.files.push(format!("{}.svg", f.stem));
-        summary.files.push(format!("{}.png", f.stem));
-    }
-    let page = html::index_html(fit, &summary, options);
-    let path = dir.join("index.html");
-    write_atomically(&path, |w| {
-        w.write_all(page.as_bytes())
-            .map_err(|e| Error::io(&path, e))
-    })?;
-    summary.files.push("index.html".into());
-    Ok(summary)
+    Ok(())
 }
 
 /// The figures of the data: slice curves, the polar view, data against fit, residuals.
@@ -356,13 +378,14 @@ fn data_figures(
     }
 
     // Data against fit: every sample, the only view of scattered data.
-    let fig = ctx.data_vs_fit(scale, slices.is_empty(), scattered.len());
-    summary.drawn_points += fig.points.len();
-    summary.figures.push(render(dir, &fig)?);
-
-    let fig = ctx.residuals(summary);
-    summary.drawn_points += fig.points.len();
-    summary.figures.push(render(dir, &fig)?);
+    let versus = ctx.data_vs_fit(scale, slices.is_empty(), scattered.len());
+    summary.drawn_points += versus.points.len();
+    let residuals = ctx.residuals(summary);
+    summary.drawn_points += residuals.points.len();
+    // The two largest figures (every sample, or up to the scatter cap), drawn side by side.
+    let (versus, residuals) = rayon::join(|| render(dir, &versus), || render(dir, &residuals));
+    summary.figures.push(versus?);
+    summary.figures.push(residuals?);
 
     Ok(())
 }

@@ -35,8 +35,6 @@ pub fn collect_samples(rows: &[CurveRow]) -> Vec<Sample> {
 /// The samples of a curves table, regrouped by sample id in order of first appearance (as
 /// [`collect_samples`]; a fit's table has each sample's rows together, so this is one pass).
 pub fn samples_of(curves: &Curves) -> Vec<Sample> {
-    let mut index: std::collections::HashMap<u64, usize> =
-        std::collections::HashMap::with_capacity(curves.n_samples());
     let mut samples: Vec<Sample> = Vec::with_capacity(curves.n_samples());
     // A fit's table numbers its samples in increasing order: each is new, no lookup needed.
     let increasing = curves.sample_id.windows(2).all(|w| w[0] < w[1]);
@@ -57,6 +55,9 @@ pub fn samples_of(curves: &Curves) -> Vec<Sample> {
         }
         return samples;
     }
+    // Only here: allocated up front for a fit's table it cost a page fault per 4 kB unused.
+    let mut index: std::collections::HashMap<u64, usize> =
+        std::collections::HashMap::with_capacity(curves.n_samples());
     let mut last: Option<(usize, usize)> = None;
     for r in 0..curves.len() {
         let s = curves.sample_of(r);

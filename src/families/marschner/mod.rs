@@ -39,7 +39,7 @@ use longitudinal::{gaussian_inv, lobe_shape};
 
 pub use chain::ModelNum;
 pub use jacobian::{scattering_jacobian, StaticJacobian};
-pub use lanes::scattering_lanes;
+pub use lanes::{scattering_by_lobe_lanes, scattering_lanes};
 #[doc(hidden)]
 pub use lanes::{scattering_lanes_on, LaneKernel};
 

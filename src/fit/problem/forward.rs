@@ -95,6 +95,16 @@ pub trait Forward: Sync {
     fn by_lobe(&self, _p: &ParamSet<Self>, _angles: &Angles, _out: &mut [[f64; 3]]) -> bool {
         false
     }
+    /// [`Forward::by_lobe`] of every sample in `angles` (`out[k * nc + c]`); a family whose
+    /// per-lobe values are cheaper in batches overrides it (Marschner: on its lanes).
+    fn by_lobe_batch(&self, p: &ParamSet<Self>, angles: &[Angles], out: &mut [[f64; 3]]) -> bool {
+        let nc = out.len() / angles.len().max(1);
+        let mut ok = true;
+        for (a, o) in angles.iter().zip(out.chunks_mut(nc.max(1))) {
+            ok &= self.by_lobe(p, a, o);
+        }
+        ok
+    }
     /// What the data's values are (S, or radiance S·cos θ_i).
     fn measurement(&self) -> Measurement;
     /// Values (as [`Forward::values`]) of the family's exact form when this forward model is an

@@ -7,8 +7,8 @@ use num_dual::{Derivative, DualNum, DualVec64};
 
 use crate::families::marschner::jacobian::seeded;
 use crate::families::marschner::{
-    scattering_batch, scattering_by_lobe, scattering_lanes, ModelConfig, ModelNum, ParamName,
-    Params,
+    scattering_batch, scattering_by_lobe, scattering_by_lobe_lanes, scattering_lanes, ModelConfig,
+    ModelNum, ParamName, Params,
 };
 use crate::fit::bounds::Bound;
 use crate::fit::problem::{with_dual_dim, FitParam, Forward};
@@ -133,6 +133,12 @@ impl Forward for MarschnerForward {
         scattering_by_lobe(p, &self.config, angles, out);
         self.measurement
             .apply(std::slice::from_ref(angles), out.as_flattened_mut());
+        true
+    }
+    /// On the lanes, as the value passes ([`scattering_by_lobe_lanes`]).
+    fn by_lobe_batch(&self, p: &Params<f64>, angles: &[Angles], out: &mut [[f64; 3]]) -> bool {
+        scattering_by_lobe_lanes(p, &self.config, angles, out);
+        self.measurement.apply(angles, out.as_flattened_mut());
         true
     }
 }
