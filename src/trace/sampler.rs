@@ -289,9 +289,9 @@ impl Sampler {
     }
 
     /// The rays `source` gives (their section and offset from the axis, drawn from the
-    /// generator it is passed, or not), followed
-    /// [`LANES`] at a time in lock step: a lane that finishes takes the next ray, in lane
-    /// order. The arithmetic of one internal interface runs over all lanes in loops without
+    /// generator it is passed, or not), entered [`LANES`] at a time ([`entry`]) and followed
+    /// [`LANES`] at a time in lock step: a lane that finishes takes the next entered ray, in
+    /// lane order. The arithmetic of one internal interface runs over all lanes in loops without
     /// branches (independent rays: the divisions, square roots and the Fresnel terms of
     /// different lanes overlap, and the compiler vectorises them); the draws, the exits and
     /// the bookkeeping run lane by lane.
