@@ -4,6 +4,7 @@
 
 use rand_chacha::rand_core::RngCore;
 
+mod entry;
 mod facet;
 mod kernel;
 mod lane_math;
@@ -33,7 +34,7 @@ impl<R: RngCore, E: Exits> kernel::Body for Batch<'_, R, E> {
 
 use self::lane_math::{exp_lane, fresnel_lane};
 use super::fiber::Fiber;
-use super::optics::{dot, fresnel, reflect, refract, V3};
+use super::optics::{dot, reflect, V3};
 use super::section::Section;
 use crate::synth::random::uniform;
 
@@ -288,9 +289,9 @@ impl Sampler {
     }
 
     /// The rays `source` gives (their section and offset from the axis, drawn from the
-    /// generator it is passed, or not), followed
-    /// [`LANES`] at a time in lock step: a lane that finishes takes the next ray, in lane
-    /// order. The arithmetic of one internal interface runs over all lanes in loops without
+    /// generator it is passed, or not), entered [`LANES`] at a time ([`entry`]) and followed
+    /// [`LANES`] at a time in lock step: a lane that finishes takes the next entered ray, in
+    /// lane order. The arithmetic of one internal interface runs over all lanes in loops without
     /// branches (independent rays: the divisions, square roots and the Fresnel terms of
     /// different lanes overlap, and the compiler vectorises them); the draws, the exits and
     /// the bookkeeping run lane by lane.
@@ -308,32 +309,25 @@ impl Sampler {
         let sigma_a = &self.fiber.sigma_a[..nc];
         let max_seg = self.fiber.max_segments as usize;
         let mut lanes = Lanes::default();
+        let mut queue = entry::Entries::default();
         let mut exhausted = false;
         let dir = beam_dir(omega_i);
         loop {
-            // Refill, in lane order.
+            // Refill, in lane order, from rays entered LANES at a time.
             let mut any = false;
             for k in 0..LANES {
-                while !lanes.active[k] && !exhausted {
-                    match source(rng) {
-                        Some((section, offset)) => {
-                            if !self.enter::<NC>(
-                                &mut lanes, k, &section, omega_i, dir, offset, rng, balance,
-                            ) {
-                                // A grazing miss leaves after the R of the lanes entered before.
-                                self.enter_finish::<NC>(&mut lanes, balance, exit);
-                                let w = self.unit_weights::<NC>();
-                                balance.grazing += 1;
-                                add_n(&mut balance.tallied[0], &w, nc);
-                                exit.exit::<NC>(0, [-omega_i[0], -omega_i[1], -omega_i[2]], &w);
-                            }
-                        }
-                        None => exhausted = true,
+                if !lanes.active[k] {
+                    while queue.is_empty() && !exhausted {
+                        exhausted = self.enter_batch::<NC, R>(
+                            &mut queue, source, omega_i, dir, rng, balance, exit,
+                        );
+                    }
+                    if !queue.is_empty() {
+                        queue.pop_into(&mut lanes, k, nc);
                     }
                 }
                 any |= lanes.active[k];
             }
-            self.enter_finish::<NC>(&mut lanes, balance, exit);
             if !any {
                 break;
             }
@@ -368,15 +362,7 @@ impl Sampler {
                 l.dt[k] = l.dw[k] * nv - l.dv[k] * nw;
                 let (a, b, root) = self.tangent_terms(l.du[k], dn);
                 l.a[k] = a;
-                l.lambda[k] = Self::tangent_lambda_nonneg(a, b, root);
-            }
-            // A lane with A < 0 (a ray that sees few facets; rare inside a fibre) or A NaN (where
-            // `tangent` takes its other branch too) takes the tangent's other formula, a second
-            // division the other steps do without.
-            if l.a.iter().any(|&a| a < 0.0 || a.is_nan()) {
-                for k in 0..LANES {
-                    (l.a[k], l.lambda[k]) = self.tangent(l.du[k], l.dn[k]);
-                }
+                l.lambda[k] = Self::tangent_lambda(a, b, root);
             }
             // The attenuation along the chord, every channel and lane (vectorised exp).
             for (att, &sigma_a) in l.att.iter_mut().zip(sigma_a) {
@@ -448,89 +434,6 @@ impl Sampler {
         }
     }
 
-    /// The ray from `omega_i` at `offset` from the axis across the beam meets `section`'s
-    /// surface: lane `k` gets the point, the geometric normal, the facet drawn and weight 1,
-    /// and becomes active, its R and refraction pending for [`enter_finish`](Self::enter_finish)
-    /// (the draws of the next lanes depend on this one's, the rest does not, so it need not
-    /// wait). `false`: the ray
-    /// missed by rounding at the very edge, lane `k` is untouched.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn enter<const NC: usize>(
-        &self,
-        l: &mut Lanes,
-        k: usize,
-        section: &Section,
-        omega_i: V3,
-        dir: [f64; 2],
-        offset: f64,
-        rng: &mut impl RngCore,
-        balance: &mut Balance,
-    ) -> bool {
-        let d = [-omega_i[0], -omega_i[1], -omega_i[2]];
-        let p0 = [
-            -offset * dir[1] - 3.0 * dir[0],
-            offset * dir[0] - 3.0 * dir[1],
-        ];
-        let Some(t) = section.entry(p0, [d[1], d[2]]) else {
-            return false;
-        };
-        let p = [p0[0] + t * d[1], p0[1] + t * d[2]];
-        let ng = self.geometric_normal(section, p);
-        // shading_normal's slopes, for a ray from outside.
-        let (du, dn, dt) = (
-            -d[0],
-            -(d[1] * ng[1] + d[2] * ng[2]),
-            -(d[2] * ng[1] - d[1] * ng[2]),
-        );
-        let (a, lambda) = self.tangent(du, dn);
-        (l.sl[k], l.sa[k]) = self.slopes(a, lambda, du, dn, dt, rng, balance);
-        l.active[k] = true;
-        l.pending[k] = true;
-        l.c[k] = section.c;
-        l.s[k] = section.s;
-        l.ia2[k] = section.ia2;
-        [l.pv[k], l.pw[k]] = p;
-        [l.du[k], l.dv[k], l.dw[k]] = d;
-        [l.nv[k], l.nw[k]] = [ng[1], ng[2]];
-        l.w[k] = self.unit_weights::<NC>();
-        l.seg[k] = 1;
-        true
-    }
-
-    /// The pending entries of [`enter`](Self::enter), lane by lane: the facet, Fresnel from
-    /// outside, R leaves and the rest is refracted in. Only the lanes entered (about 2 of 8 a
-    /// step): their chains are independent of the draws and overlap with each other.
-    #[inline(always)]
-    fn enter_finish<const NC: usize>(
-        &self,
-        l: &mut Lanes,
-        balance: &mut Balance,
-        exit: &mut impl Exits,
-    ) {
-        let nc = self.channels::<NC>();
-        let eta = self.fiber.eta;
-        for k in 0..LANES {
-            if !l.pending[k] {
-                continue;
-            }
-            l.pending[k] = false;
-            let d = [l.du[k], l.dv[k], l.dw[k]];
-            let ng = [0.0, l.nv[k], l.nw[k]];
-            let m = facet(ng, l.sl[k], l.sa[k]);
-            let cos_i = -dot(d, m);
-            let (f, cos_t) = fresnel(cos_i, 1.0, eta);
-            let r = keep_side(reflect(d, m), ng, true, balance);
-            let wr = scaled(&l.w[k], nc, f);
-            add_n(&mut balance.tallied[0], &wr, nc);
-            exit.exit::<NC>(0, r, &wr);
-            // From outside the reflectance is below 1 (no total internal reflection there).
-            l.w[k][..nc].iter_mut().for_each(|x| *x *= 1.0 - f);
-            let t = refract(d, m, 1.0 / eta, cos_i, cos_t);
-            [l.du[k], l.dv[k], l.dw[k]] = keep_side(t, ng, false, balance);
-        }
-    }
-
     /// The fibre's channels, `NC` when that is not 0: a constant lets the compiler unroll the
     /// loops over channels (with 1 channel, masked AVX-512 loads of a just stored weight cost
     /// ~10% of the time, their stores cannot be forwarded).
@@ -551,12 +454,6 @@ impl Sampler {
         let nc = self.channels::<NC>();
         std::array::from_fn(|c| if c < nc { 1.0 } else { 0.0 })
     }
-
-    #[inline]
-    fn geometric_normal(&self, section: &Section, p: [f64; 2]) -> V3 {
-        let n = section.normal(p);
-        [0.0, n[0], n[1]]
-    }
 }
 
 /// The beam's unit in-plane direction of travel (−ω_i's (v, w) part, normalised); once per
@@ -574,8 +471,6 @@ pub const LANES: usize = 8;
 #[derive(Default)]
 struct Lanes {
     active: [bool; LANES],
-    /// Entered, the R and the refraction not yet done.
-    pending: [bool; LANES],
     /// The lane's section: cos ψ, sin ψ, 1/a².
     c: [f64; LANES],
     s: [f64; LANES],

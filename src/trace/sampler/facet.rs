@@ -114,13 +114,7 @@ impl Sampler {
     #[inline(always)]
     pub(super) fn tangent(&self, du: f64, dn: f64) -> (f64, f64) {
         let (a, b, root) = self.tangent_terms(du, dn);
-        // The same h without cancellation when A < 0 (the ray sees few facets).
-        let h = if a >= 0.0 {
-            0.5 * (a + root)
-        } else {
-            2.0 * b * b / (root - a)
-        };
-        (a, b / h)
+        (a, Self::tangent_lambda(a, b, root))
     }
 
     /// [`tangent`](Self::tangent)'s `A`, `B` and `√(A² + 4B²)`.
@@ -130,10 +124,17 @@ impl Sampler {
         (a, b, (a * a + 4.0 * b * b).sqrt())
     }
 
-    /// [`tangent`](Self::tangent)'s λ when `A ≥ 0`, from its terms: h = (A + root)/2.
+    /// [`tangent`](Self::tangent)'s λ = B/h from its terms: h = (A + root)/2 when A ≥ 0; when
+    /// A < 0 (a ray that sees few facets) the same h without cancellation, 2B²/(root − A), so
+    /// λ = (root − A)/(2B). One division either way, chosen by a select, so lanes vectorise.
     #[inline(always)]
-    pub(super) fn tangent_lambda_nonneg(a: f64, b: f64, root: f64) -> f64 {
-        b / (0.5 * (a + root))
+    pub(super) fn tangent_lambda(a: f64, b: f64, root: f64) -> f64 {
+        let (num, den) = if a >= 0.0 {
+            (b, 0.5 * (a + root))
+        } else {
+            (root - a, 2.0 * b)
+        };
+        num / den
     }
 }
 

@@ -1,5 +1,6 @@
-//! The lanes' branch-free arithmetic: `exp` without libm and Fresnel from inside without a
-//! branch on total internal reflection, so the sampler's loops over lanes vectorise.
+//! The lanes' branch-free arithmetic: `exp` without libm, Fresnel from inside without a branch
+//! on total internal reflection and from outside without one, so the sampler's loops over lanes
+//! vectorise.
 
 /// `e^x` for x ≤ 0 without branches or libm, so a loop of it vectorises: x = n·ln 2 + r,
 /// |r| ≤ ln 2/2, `e^r` by its Taylor series to r¹³ (truncation 4e-18 relative), 2ⁿ built in
@@ -47,4 +48,17 @@ pub(super) fn fresnel_lane(cos_i: f64, eta: f64) -> (f64, f64) {
     } else {
         (f, cos_t)
     }
+}
+
+/// [`fresnel`](crate::trace::optics::fresnel)`(cos_i, 1, eta)`, from air into a medium of index
+/// `eta` > 1, without a branch (there is no total internal reflection on this side): the same
+/// expressions, so the same bits.
+#[inline(always)]
+pub(super) fn fresnel_in_lane(cos_i: f64, eta: f64) -> (f64, f64) {
+    let e = 1.0 / eta;
+    let sin2_t = e * e * (1.0 - cos_i * cos_i).max(0.0);
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    ((rs * rs + rp * rp) / 2.0, cos_t)
 }
