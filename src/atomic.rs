@@ -452,9 +452,12 @@ impl StagedFiles {
         let mut backups: Vec<Option<PathBuf>> = Vec::new();
         for (_, target) in &self.pairs {
             let backup = temporary_beside(target, ".old");
+            // Listed before it exists, as every temporary is: the exit path removes what is
+            // listed and may not allocate to learn of more.
+            let listed = InFlight::new(&backup);
             let kept = std::fs::hard_link(target, &backup).is_ok();
             if kept {
-                self._in_flight.push(InFlight::new(&backup));
+                self._in_flight.push(listed);
             }
             backups.push(kept.then_some(backup));
         }

@@ -437,6 +437,30 @@ fn carry(from: &Path, to: &Path) -> std::io::Result<()> {
     Ok(())
 }
 
+/// Create a new staging directory `PARENT/.NAME.hairfit-stage-pPIDnN` (alphanumeric, as
+/// [`bookkeeping_owner`] reads a stage's suffix), listed in [`IN_FLIGHT`]
+/// before it exists: a memory limit's refusal after creating it (the exit path allocates
+/// nothing new and removes what is listed) then cannot leave it behind.
+fn create_staging(parent: &Path, name: &str) -> std::io::Result<PathBuf> {
+    for n in 0u32.. {
+        let path = parent.join(format!(".{name}.hairfit-stage-p{}n{n}", std::process::id()));
+        IN_FLIGHT
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(path.clone());
+        match std::fs::create_dir(&path) {
+            Ok(()) => return Ok(path),
+            Err(e) => {
+                forget(&IN_FLIGHT, &path);
+                if e.kind() != std::io::ErrorKind::AlreadyExists {
+                    return Err(e);
+                }
+            }
+        }
+    }
+    unreachable!("a free staging name among 2^32")
+}
+
 /// A held lock: `PARENT/.NAME.hairfit-lock`, removed when released (so a finished run leaves
 /// none). The OS releases the lock however the process ends, so a dead pid never holds it.
 #[derive(Debug)]
@@ -450,6 +474,12 @@ impl Lock {
     /// its holder removed after we opened it is no lock: then the one now at `path` is taken.
     fn try_take(path: &Path) -> std::io::Result<Option<Lock>> {
         loop {
+            // What registering the lock allocates is allocated before the file can exist, and
+            // the list is held meanwhile: a memory limit's refusal between creating the file
+            // and registering it would leave it behind (the exit path removes what is listed).
+            let held = path.to_path_buf();
+            let mut list = LOCKS_HELD.lock().unwrap_or_else(|e| e.into_inner());
+            list.reserve(1);
             let file = std::fs::OpenOptions::new()
                 .create(true)
                 .truncate(false)
@@ -462,14 +492,9 @@ impl Lock {
                 Err(std::fs::TryLockError::Error(e)) => return Err(e),
             }
             if same_file(&file, path) {
-                LOCKS_HELD
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .push(path.to_path_buf());
-                return Ok(Some(Lock {
-                    file,
-                    path: path.to_path_buf(),
-                }));
+                list.push(held.clone());
+                drop(list);
+                return Ok(Some(Lock { file, path: held }));
             }
         }
     }
@@ -572,18 +597,10 @@ impl OutputSet {
                 }
             }
         }
-        let staging = tempfile::Builder::new()
-            .prefix(&format!(".{name}.hairfit-stage-"))
-            .tempdir_in(parent)
-            .map_err(|e| {
-                let what = format!("a staging directory in {}", parent.display());
-                unwritable(dir, what, &e)
-            })?
-            .keep();
-        IN_FLIGHT
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(staging.clone());
+        let staging = create_staging(parent, &name).map_err(|e| {
+            let what = format!("a staging directory in {}", parent.display());
+            unwritable(dir, what, &e)
+        })?;
         // The staged files are synced together in `publish`, before the set becomes visible.
         crate::atomic::defer_sync_under(&staging);
         Ok(OutputSet {

@@ -226,3 +226,23 @@ fn keep_carries_files_into_the_new_set() {
     set.publish().unwrap();
     assert_eq!(names(&out), [MARKER, "curves.csv"]);
 }
+
+/// The out-of-memory exit may not allocate to learn of a staging directory, so each is listed
+/// before it exists; its name is one the next run's cleanup recognises as a stage of its owner;
+/// a name taken already is skipped, not reused.
+#[test]
+fn a_staging_directory_is_listed_before_it_exists_and_named_as_a_stage() {
+    let tmp = tempfile::tempdir().unwrap();
+    let taken = tmp
+        .path()
+        .join(format!(".fit.hairfit-stage-p{}n0", std::process::id()));
+    std::fs::create_dir(&taken).unwrap();
+    let staging = create_staging(tmp.path(), "fit").unwrap();
+    assert_ne!(staging, taken);
+    assert!(staging.is_dir());
+    assert!(IN_FLIGHT.lock().unwrap().contains(&staging));
+    assert!(!IN_FLIGHT.lock().unwrap().contains(&taken));
+    let name = staging.file_name().unwrap().to_str().unwrap();
+    assert_eq!(bookkeeping_owner(name), Some("fit"));
+    forget(&IN_FLIGHT, &staging);
+}
