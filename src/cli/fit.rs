@@ -138,16 +138,32 @@ impl FitArgs {
             }
         };
         let mut free_eta = false;
+        let family = self.model.family;
+        let on_request: Vec<&str> = family
+            .facts()
+            .parameters()
+            .iter()
+            .filter(|f| f.fitted == crate::geometry::Fitted::OnRequest)
+            .map(|f| f.name)
+            .collect();
         for f in &self.free {
-            match f.trim() {
-                "eta" => free_eta = true,
-                other => {
-                    return Err(Error::Other(format!(
-                        "--free `{other}`: only `eta` can be freed (the fit already varies every other parameter the effects in play depend on{})",
-                        never_fitted(self.model.family)
-                    )))
-                }
+            let name = f.trim();
+            if on_request.contains(&name) {
+                // Every family's one parameter freed on request is η (the fit's `free_eta`).
+                free_eta |= name == "eta";
+                continue;
             }
+            let why = never_fitted(family);
+            return Err(Error::Other(match on_request.as_slice() {
+                [] => format!(
+                    "--free `{name}`: the {} model holds no parameter that --free can free (its fit already varies every parameter the terms in play read{why}); drop --free",
+                    family.title()
+                ),
+                names => format!(
+                    "--free `{name}`: only {} can be freed (the fit already varies every other parameter the effects in play depend on{why})",
+                    names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+                ),
+            }));
         }
         if free_eta {
             if let Some(fix) = self

@@ -480,3 +480,38 @@ fn contradicting_or_repeated_fixes_are_refused() {
     assert_fails_with(&out, &["--fix `k_g=3`", "already fixed"]);
     assert!(!out_dir.exists(), "a refused fit writes nothing");
 }
+
+/// `--free` names what the family's table lets it free: a family with nothing to free on
+/// request (Kajiya–Kay has no η) refuses `--free eta` instead of ignoring it, and the refusal
+/// names the parameters the family holds fixed, read from its table.
+#[test]
+fn free_is_checked_against_the_familys_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("fit");
+    let fit = |extra: &[&str]| {
+        let mut args = vec!["fit", "data/sphere_1ch.csv", "--out", s(&out_dir)];
+        args.extend_from_slice(extra);
+        hairfit(&args)
+    };
+    let out = fit(&["--model", "kajiya-kay", "--free", "eta"]);
+    assert_fails_with(
+        &out,
+        &[
+            "--free `eta`",
+            "holds no parameter",
+            "k_s stays fixed",
+            "drop --free",
+        ],
+    );
+    let out = fit(&["--free", "beta_r"]);
+    assert_fails_with(
+        &out,
+        &[
+            "only `eta` can be freed",
+            "delta_eta_prime and delta_h_m stay fixed",
+        ],
+    );
+    let out = fit(&["--model", "karis", "--free", "roughness"]);
+    assert_fails_with(&out, &["only `eta`", "backlit and shift_deg stay fixed"]);
+    assert!(!out_dir.exists(), "a refused fit writes nothing");
+}
