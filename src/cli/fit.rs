@@ -17,6 +17,7 @@ use crate::fit::registry::fit_family;
 use crate::fit::{
     into_fit_data, EffectsChoice, FitOptions, Global, Intervals, Loss, LossScale, Space,
 };
+use crate::geometry::Fitted;
 use crate::report::publish::{publish_fit, PublishedFit};
 
 /// Fit options (`hairfit fit`, `hairfit demo`).
@@ -139,13 +140,7 @@ impl FitArgs {
         };
         let mut free_eta = false;
         let family = self.model.family;
-        let on_request: Vec<&str> = family
-            .facts()
-            .parameters()
-            .iter()
-            .filter(|f| f.fitted == crate::geometry::Fitted::OnRequest)
-            .map(|f| f.name)
-            .collect();
+        let on_request = parameters_fitted(family, Fitted::OnRequest);
         for f in &self.free {
             let name = f.trim();
             if on_request.contains(&name) {
@@ -310,16 +305,20 @@ pub struct FitCommandArgs {
 /// `; delta_eta_prime and delta_h_m stay fixed`: the parameters of `family` its fit never
 /// varies (its table's `Fitted::No` lines), or nothing.
 fn never_fitted(family: ModelFamily) -> String {
-    let names: Vec<&str> = family
-        .facts()
-        .parameters()
-        .iter()
-        .filter(|f| f.fitted == crate::geometry::Fitted::No)
-        .map(|f| f.name)
-        .collect();
-    match names.as_slice() {
+    match parameters_fitted(family, Fitted::No).as_slice() {
         [] => String::new(),
         [one] => format!("; {one} stays fixed"),
         [rest @ .., last] => format!("; {} and {last} stay fixed", rest.join(", ")),
     }
+}
+
+/// The names of `family`'s parameters whose table line says `fitted`.
+fn parameters_fitted(family: ModelFamily, fitted: Fitted) -> Vec<&'static str> {
+    family
+        .facts()
+        .parameters()
+        .iter()
+        .filter(|f| f.fitted == fitted)
+        .map(|f| f.name)
+        .collect()
 }

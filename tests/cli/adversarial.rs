@@ -465,15 +465,18 @@ fn zero_starts_subsample_or_polish_is_refused() {
     }
 }
 
+/// `hairfit fit data/sphere_1ch.csv --out OUT` with `extra` options.
+fn fit_sphere(out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["fit", "data/sphere_1ch.csv", "--out", s(out)];
+    args.extend_from_slice(extra);
+    hairfit(&args)
+}
+
 #[test]
 fn contradicting_or_repeated_fixes_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("fit");
-    let fit = |extra: &[&str]| {
-        let mut args = vec!["fit", "data/sphere_1ch.csv", "--out", s(&out_dir)];
-        args.extend_from_slice(extra);
-        hairfit(&args)
-    };
+    let fit = |extra: &[&str]| fit_sphere(&out_dir, extra);
     let out = fit(&["--fix", "eta=1.6", "--free", "eta"]);
     assert_fails_with(&out, &["--fix `eta=1.6`", "--free eta", "contradict"]);
     let out = fit(&["--fix", "k_g=2", "--fix", "k_g=3"]);
@@ -488,11 +491,7 @@ fn contradicting_or_repeated_fixes_are_refused() {
 fn free_is_checked_against_the_familys_table() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("fit");
-    let fit = |extra: &[&str]| {
-        let mut args = vec!["fit", "data/sphere_1ch.csv", "--out", s(&out_dir)];
-        args.extend_from_slice(extra);
-        hairfit(&args)
-    };
+    let fit = |extra: &[&str]| fit_sphere(&out_dir, extra);
     let out = fit(&["--model", "kajiya-kay", "--free", "eta"]);
     assert_fails_with(
         &out,
