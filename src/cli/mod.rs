@@ -16,9 +16,9 @@ pub mod trace;
 
 use clap::Args;
 
-use crate::error::{Error, Result};
-use crate::families::chiang::{ChiangEffects, ChiangModel, WidthNodes};
+use crate::error::Result;
 use crate::families::effects::{Effects, ModelConfig, RootMode};
+use crate::families::shared::quadrature::WidthNodes;
 use crate::families::table::TermSet;
 use crate::families::{ModelFamily, ModelSetup};
 use crate::geometry::Measurement;
@@ -81,31 +81,18 @@ fn parse_width_nodes(s: &str) -> std::result::Result<WidthNodes, String> {
 }
 
 impl ModelArgs {
-    /// The Chiang model these options ask for (`--terms`, `--width-nodes`; their defaults for
-    /// another family, which may not be given them: [`ModelArgs::setup`]).
-    fn chiang(&self) -> Result<ChiangModel> {
-        let effects = match (&self.terms, self.family) {
-            (Some(t), ModelFamily::Chiang) => ChiangEffects::parse(t)?,
-            _ => ChiangEffects::default(),
-        };
-        ChiangModel::with_width(effects, self.width_nodes.unwrap_or_default())
-            .map_err(|e| Error::Other(format!("--width-nodes: {e}")))
-    }
-
     /// Every family's configuration these options ask for (what is not the chosen family's
     /// stays at its default; giving it is an error, [`ModelArgs::check_family_options`]).
     pub fn setup(&self) -> Result<ModelSetup> {
         self.refuse_foreign_options()?;
-        let terms = match (self.family.table(), &self.terms) {
-            (Some(table), Some(list)) => {
-                Some(TermSet::parse(list, table.terms(), self.family.as_str())?)
-            }
+        let terms = match (self.family.terms(), &self.terms) {
+            (Some(names), Some(list)) => Some(TermSet::parse(list, names, self.family.as_str())?),
             _ => None,
         };
         Ok(ModelSetup {
             config: self.config()?,
-            chiang: self.chiang()?,
             terms,
+            width_nodes: self.width_nodes.unwrap_or_default(),
         })
     }
 

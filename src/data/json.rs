@@ -13,6 +13,7 @@ use super::report::LoadReport;
 use super::rows::{Cell, Rows};
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
+use crate::families::ModelFamily;
 
 #[derive(Deserialize)]
 struct FileJson {
@@ -44,6 +45,20 @@ fn json_error(path: &Path, e: &serde_json::Error) -> Error {
         e,
         Some("expected a hairfit JSON dataset: {\"samples\": [...]}"),
     )
+}
+
+/// The key that marks `object` as a parameter file: `sigma_a`, or a `"model"` naming a family
+/// (a table family's file may have no σ_a).
+fn parameter_key(object: &Map<String, Value>) -> Option<&'static str> {
+    let tagged = (object.get("model").and_then(Value::as_str))
+        .is_some_and(|tag| ModelFamily::parse(tag).is_ok());
+    if object.contains_key("sigma_a") {
+        Some("sigma_a")
+    } else if tagged {
+        Some("model")
+    } else {
+        None
+    }
 }
 
 /// A hairfit file that is not a dataset, given where a dataset goes (`hairfit load`, `fit`,
@@ -86,13 +101,16 @@ fn not_a_dataset(bytes: &[u8], path: &Path) -> Option<Error> {
             "{shown}: this is a synth truth file (the parameters a dataset was made from), not \
              a dataset{samples}. {what}"
         )
-    } else if object.contains_key("sigma_a") {
-        let model = match object.get("model").and_then(Value::as_str) {
-            Some("chiang") => " --model chiang",
-            _ => "",
-        };
+    } else if let Some(key) = parameter_key(object) {
+        // The family its `"model"` names, when not the default `--model`.
+        let model = object
+            .get("model")
+            .and_then(Value::as_str)
+            .and_then(|tag| ModelFamily::parse(tag).ok())
+            .filter(|family| *family != ModelFamily::default())
+            .map_or(String::new(), |family| format!(" --model {family}"));
         format!(
-            "{shown}: this looks like a parameter file (it has \"sigma_a\"), not a dataset: a \
+            "{shown}: this looks like a parameter file (it has \"{key}\"), not a dataset: a \
              parameter file goes to --params, e.g. hairfit eval{model} --params {shown} --input \
              ANGLES.csv, or hairfit synth{model} --params {shown} --rig RIG --output DATA.csv to \
              make a dataset from it. {what}"

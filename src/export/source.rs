@@ -9,11 +9,12 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::error::{Error, Result};
+use crate::families::chiang::family::ChiangRecord;
 use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::families::effects::ModelConfig;
 use crate::families::marschner::params::ParamFile;
 use crate::families::marschner::Params;
-use crate::families::{ChiangRecord, FamilyModel, FamilyParams, ModelFamily, ModelSetup};
+use crate::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
 use crate::files::{Curves, ParameterFile};
 use crate::geometry::Angles;
 
@@ -44,7 +45,7 @@ impl SourceModel {
             SourceModel::Chiang { .. } => "Chiang",
             SourceModel::Marschner { .. } => "Marschner",
             SourceModel::Table(model) => match model {
-                FamilyModel::Table { table, .. } => table.title(),
+                FamilyModel::Table(m) => m.table.title(),
                 _ => "a model family",
             },
         }

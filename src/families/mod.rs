@@ -2,21 +2,18 @@
 //! ([`ModelFamily`]), a parameter file of any ([`FamilyParams`], what fit.json's `params`,
 //! params.json and truth.json hold), what the command line configures of each
 //! ([`ModelSetup`]) and a family's model ready to evaluate ([`FamilyModel`]). Commands load and
-//! evaluate through these, so each command's contract holds for every family. Marschner and
-//! Chiang have their own types; every other family is a [`crate::families::table`].
+//! evaluate through these, so each command's contract holds for every family. A family listed
+//! `Own` in the registry brings its own file and model types ([`OwnTypes`]); every other family
+//! is a [`crate::families::table`].
 
+use std::fmt::Debug;
 use std::path::Path;
 
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::families::chiang::{scattering_batch, ChiangModel, ChiangParamFile, ChiangParams};
-use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::{
-    scattering_batch as marschner_batch, scattering_by_lobe, scattering_lanes, ModelConfig, Params,
-};
-use crate::families::table::{DynTable, TableParamFile, TableParams, TermSet};
-use crate::geometry::Angles;
+use crate::geometry::{Angles, SigmaA};
 use crate::json_file::ParameterFile;
 
 pub mod chiang;
@@ -32,8 +29,9 @@ pub mod shared;
 pub mod table;
 pub use crate::geometry::FamilyFacts;
 pub(crate) use registry::registry;
-pub use registry::ModelFamily;
-pub use setup::{ChiangRecord, ModelRecords, ModelSetup};
+pub use registry::{FamilyModel, FamilyParams, FamilyRecord, ModelFamily};
+pub use setup::{ModelRecords, ModelSetup};
+pub use table::TableModel;
 
 /// Colour channels of the demo's data (`hairfit demo`, the cost ledger, the battery).
 pub const DEMO_CHANNELS: usize = 3;
@@ -43,82 +41,137 @@ pub const DEMO_CHANNELS: usize = 3;
 pub trait OwnFamily: FamilyFacts {
     /// The demo's true parameters ([`DEMO_CHANNELS`] channels) as the family's parameter file.
     fn demo_truth(&self) -> FamilyParams;
-}
 
-/// A parameter file of any family. Written untagged, so a Marschner file is byte for byte
-/// what it always was; every other family's file carries its `"model"` (Chiang's may leave it
-/// out). Read as the tag says; untagged: a Marschner file (whose keys differ from Chiang's;
-/// unknown keys are refused by both) else a Chiang file.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(untagged)]
-pub enum FamilyParams {
-    Marschner(ParamFile),
-    Chiang(ChiangParamFile),
-    Table(TableParamFile),
-}
+    /// What fit.json and truth.json record of the family's configuration in `setup` (by default
+    /// `model` alone).
+    fn records(&self, setup: &ModelSetup) -> ModelRecords {
+        ModelRecords::of_config(setup.config)
+    }
 
-/// Read by the `"model"` tag (no tag: Marschner, else an untagged Chiang file), so a table
-/// family whose keys happen to be another family's is still read as itself.
-impl<'de> Deserialize<'de> for FamilyParams {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        use serde::de::Error as _;
-        let value = serde_json::Value::deserialize(d)?;
-        let tag = value
-            .get("model")
-            .and_then(|t| t.as_str())
-            .map(str::to_owned);
-        let err = |e: serde_json::Error| D::Error::custom(e.to_string());
-        match tag.as_deref() {
-            // Untagged: a Marschner file, else a Chiang file written without its tag.
-            None => ParamFile::deserialize(&value)
-                .map(FamilyParams::Marschner)
-                .or_else(|e| {
-                    ChiangParamFile::deserialize(&value)
-                        .map(FamilyParams::Chiang)
-                        .map_err(|_| e)
-                })
-                .map_err(err),
-            Some(chiang::file::MODEL_TAG) => ChiangParamFile::deserialize(&value)
-                .map(FamilyParams::Chiang)
-                .map_err(err),
-            Some(t) => {
-                let family = ModelFamily::parse(t).map_err(|_| {
-                    D::Error::custom(format!(
-                        "\"model\": \"{t}\" is not a model family: use one of {}",
-                        ModelFamily::names()
-                    ))
-                })?;
-                let table = family.table().ok_or_else(|| {
-                    D::Error::custom(format!(
-                        "\"model\": \"{t}\": a {} parameter file is written without \"model\" \
-                         (remove the key)",
-                        family.title()
-                    ))
-                })?;
-                TableParamFile::from_value(table, &value)
-                    .map(FamilyParams::Table)
-                    .map_err(err)
-            }
-        }
+    /// Its terms, when `--terms` switches them (`None`: it takes no `--terms`).
+    fn terms(&self) -> Option<&'static [table::Term]> {
+        None
     }
 }
 
-impl From<ParamFile> for FamilyParams {
-    fn from(p: ParamFile) -> Self {
-        FamilyParams::Marschner(p)
+/// The types of a family listed `Own` in the registry, which make its variants of
+/// [`FamilyParams`] and [`FamilyModel`].
+pub trait OwnTypes {
+    /// Its parameter file.
+    type File: FamilyFile + ParameterFile + Clone + Debug + PartialEq + Serialize + DeserializeOwned;
+    /// Its model with parameters, ready to evaluate.
+    type Model: ScatteringModel + Clone + Debug;
+    /// What result files record of its configuration beside `model` ([`NoRecord`]: nothing).
+    type Record: OwnRecord + Clone + Debug + PartialEq + Serialize + DeserializeOwned;
+    /// A key only this family's parameter files have: a file given to another `--model` that
+    /// has it is named as this family's.
+    const SIGNATURE_KEY: &'static str;
+    /// True when its files may carry `"model": NAME`; false: they are written without, and a
+    /// tag is checked and dropped when read.
+    const TAGGED: bool;
+}
+
+/// What an `Own` family records of its configuration in result files ([`OwnTypes::Record`]).
+pub trait OwnRecord {
+    /// The configuration in words, one item each, as the fit's summary and report show it.
+    fn describe(&self) -> Vec<String>;
+    /// Set what the record holds in `setup` (an out-of-range value is an error).
+    fn configure(&self, setup: &mut ModelSetup) -> Result<()>;
+}
+
+/// The record of a family that records nothing beyond `model`: there is no value of it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum NoRecord {}
+
+impl OwnRecord for NoRecord {
+    fn describe(&self) -> Vec<String> {
+        match *self {}
+    }
+    fn configure(&self, _: &mut ModelSetup) -> Result<()> {
+        match *self {}
     }
 }
 
-impl From<TableParamFile> for FamilyParams {
-    fn from(p: TableParamFile) -> Self {
-        FamilyParams::Table(p)
+/// What every command asks of a parameter file, whatever its family.
+pub trait FamilyFile {
+    /// Number of colour channels.
+    fn n_channels(&self) -> usize;
+    /// True when the per-channel values are single numbers (eval then writes one column `s`).
+    fn is_scalar(&self) -> bool;
+    /// Write every per-channel value given once as `n` values (`hairfit synth --channels n`);
+    /// `Err((name, count))` names a per-channel value given for another number of channels.
+    /// `Some(note)` when a value was replicated.
+    fn replicate_channels(
+        &mut self,
+        n: usize,
+    ) -> std::result::Result<Option<String>, (&'static str, usize)>;
+    /// Check every value's domain (and a tag's).
+    fn check(&self) -> Result<()>;
+    /// Values that look like a mistake though they are in the domain (radians in a degrees
+    /// key), for the command to print as warnings.
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// The model of these parameters under the configuration `setup` holds of the family.
+    fn model(&self, setup: &ModelSetup) -> FamilyModel;
+}
+
+/// A parameter file whose only per-channel value is σ_a (Marschner's, Chiang's): what it
+/// provides for [`FamilyFile`], which it then has.
+pub trait SigmaAFile: ParameterFile {
+    fn sigma_a(&self) -> &SigmaA;
+    fn sigma_a_mut(&mut self) -> &mut SigmaA;
+    /// [`FamilyFile::warnings`].
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// [`FamilyFile::model`].
+    fn model(&self, setup: &ModelSetup) -> FamilyModel;
+}
+
+impl<T: SigmaAFile> FamilyFile for T {
+    fn n_channels(&self) -> usize {
+        self.sigma_a().n_channels()
+    }
+
+    fn is_scalar(&self) -> bool {
+        self.sigma_a().is_scalar()
+    }
+
+    fn replicate_channels(
+        &mut self,
+        n: usize,
+    ) -> std::result::Result<Option<String>, (&'static str, usize)> {
+        self.sigma_a_mut().replicate(n)
+    }
+
+    fn check(&self) -> Result<()> {
+        ParameterFile::validate(self)
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        SigmaAFile::warnings(self)
+    }
+
+    fn model(&self, setup: &ModelSetup) -> FamilyModel {
+        SigmaAFile::model(self, setup)
     }
 }
 
-impl From<ChiangParamFile> for FamilyParams {
-    fn from(p: ChiangParamFile) -> Self {
-        FamilyParams::Chiang(p)
+/// A family's model with its parameters: `S` per channel.
+pub trait ScatteringModel {
+    /// Number of colour channels.
+    fn n_channels(&self) -> usize;
+    /// `S` of a batch, `out[k·n + c]` for sample k, channel c, by the reference (scalar) model.
+    fn eval_batch(&self, angles: &[Angles], out: &mut [f64]);
+    /// [`Self::eval_batch`] the fastest way, for `hairfit eval` (a family's lanes, within
+    /// ~1e-13 relative of the reference).
+    fn eval_batch_fast(&self, angles: &[Angles], out: &mut [f64]) {
+        self.eval_batch(angles, out)
     }
+    /// Per-lobe values `[R, TT, TRT]` per channel; terms beyond TRT add to the TRT column, a
+    /// table family's terms each to its column, so the three add up to `S`.
+    fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]);
 }
 
 /// A fit.json or truth.json given where a parameter file goes: both hold the parameters under
@@ -153,104 +206,32 @@ fn refuse_result_file(value: &serde_json::Value, path: &Path) -> Result<()> {
 }
 
 impl FamilyParams {
-    /// Which family the file belongs to.
-    pub fn family(&self) -> ModelFamily {
-        match self {
-            FamilyParams::Marschner(_) => ModelFamily::Marschner,
-            FamilyParams::Chiang(_) => ModelFamily::Chiang,
-            FamilyParams::Table(p) => {
-                ModelFamily::parse(p.table.name()).expect("every table family is a ModelFamily")
-            }
-        }
-    }
-
-    /// The Marschner file, if this is one.
-    pub fn marschner(&self) -> Option<&ParamFile> {
-        match self {
-            FamilyParams::Marschner(p) => Some(p),
-            _ => None,
-        }
-    }
-
-    /// The Chiang file, if this is one.
-    pub fn chiang(&self) -> Option<&ChiangParamFile> {
-        match self {
-            FamilyParams::Chiang(p) => Some(p),
-            _ => None,
-        }
-    }
-
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
-        match self {
-            FamilyParams::Marschner(p) => p.n_channels(),
-            FamilyParams::Chiang(p) => p.n_channels(),
-            FamilyParams::Table(p) => p.n_channels(),
-        }
+        self.file().n_channels()
     }
 
     /// True when the per-channel values are single numbers (eval then writes one column `s`).
     pub fn sigma_a_is_scalar(&self) -> bool {
-        let s = match self {
-            FamilyParams::Marschner(p) => &p.sigma_a,
-            FamilyParams::Chiang(p) => &p.sigma_a,
-            FamilyParams::Table(p) => return p.is_scalar(),
-        };
-        matches!(s, crate::geometry::SigmaA::Scalar(_))
+        self.file().is_scalar()
     }
 
-    /// Write every per-channel value given once as `n` values (`hairfit synth --channels n`);
-    /// `Err((name, count))` names a per-channel value given for another number of channels.
-    /// `Some(note)` when a value was replicated.
+    /// [`FamilyFile::replicate_channels`].
     pub fn replicate_channels(
         &mut self,
         n: usize,
     ) -> std::result::Result<Option<String>, (&'static str, usize)> {
-        use crate::geometry::SigmaA;
-        let sigma_a = match self {
-            FamilyParams::Marschner(p) => &mut p.sigma_a,
-            FamilyParams::Chiang(p) => &mut p.sigma_a,
-            FamilyParams::Table(p) => {
-                let mut replicated = Vec::new();
-                for (f, v) in p.table.parameters().iter().zip(&mut p.values) {
-                    if !f.per_channel || v.len() == n {
-                        continue;
-                    }
-                    if v.len() != 1 {
-                        return Err((f.name, v.len()));
-                    }
-                    *v = vec![v[0]; n];
-                    replicated.push(format!("{} = {}", f.name, v[0]));
-                }
-                return Ok((!replicated.is_empty()).then(|| replicated.join(", ")));
-            }
-        };
-        match sigma_a.clone() {
-            SigmaA::Scalar(s) if n > 1 => {
-                *sigma_a = SigmaA::PerChannel(vec![s; n]);
-                Ok(Some(format!("sigma_a = {s}")))
-            }
-            SigmaA::PerChannel(v) if v.len() != n => Err(("sigma_a", v.len())),
-            _ => Ok(None),
-        }
+        self.file_mut().replicate_channels(n)
     }
 
-    /// Check every value's domain (and a Chiang file's tag).
+    /// Check every value's domain (and a tag's).
     pub fn validate(&self) -> Result<()> {
-        match self {
-            FamilyParams::Marschner(p) => p.validate(),
-            FamilyParams::Chiang(p) => p.validate(),
-            FamilyParams::Table(p) => p.validate(),
-        }
+        self.file().check()
     }
 
-    /// Values that look like a mistake though they are in the domain (radians in a degrees
-    /// key), for the command to print as warnings.
+    /// [`FamilyFile::warnings`].
     pub fn warnings(&self) -> Vec<String> {
-        match self {
-            FamilyParams::Marschner(p) => p.radians_in_degrees_keys(),
-            _ => Vec::new(),
-        }
+        self.file().warnings()
     }
 
     /// The parameters as one JSON line (for error messages).
@@ -259,8 +240,8 @@ impl FamilyParams {
     }
 
     /// Read the parameter file `path` as a `family` file. A `"model"` key, when present, must
-    /// name `family` (the error names the file and `--model`); a Marschner file may carry
-    /// `"model": "marschner"`, which is checked and dropped. A directory stands for the fit
+    /// name `family` (the error names the file and `--model`); a family whose files are written
+    /// without it may carry it, checked and dropped. A directory stands for the fit
     /// `hairfit fit --out` wrote there: its params.json (`eval --params fits/demo`, as
     /// `hairfit.eval("fits/demo", …)` in Python).
     pub fn load(path: &Path, family: ModelFamily) -> Result<FamilyParams> {
@@ -304,6 +285,8 @@ impl FamilyParams {
                     }
                 )));
             }
+        } else if let Some(value) = &value {
+            refuse_other_familys_file(value, path, family)?;
         }
         // `"KARIS"` read as `"karis"`, the spelling the family's own reader checks.
         let text = match (&value, &tag) {
@@ -314,161 +297,109 @@ impl FamilyParams {
             }
             _ => text,
         };
-        let located = |e: Error| match e {
-            Error::Parameter { .. } => Error::Other(format!("{}: {e}", path.display())),
-            other => other,
-        };
         if let Some(table) = family.table() {
-            if tag.is_none() {
-                // Another family's file read as this one: say whose it looks like.
-                let other = value.as_ref().and_then(|v| {
-                    [("alpha_r_deg", "marschner"), ("beta_m", "chiang")]
-                        .into_iter()
-                        .find(|(key, _)| v.get(*key).is_some())
-                });
-                if let Some((key, owner)) = other {
-                    return Err(Error::Other(format!(
-                        "{}: this looks like a {owner} parameter file (it has {key}) but --model \
-                         is {family}: pass --model {owner}",
-                        path.display()
-                    )));
-                }
-            }
-            return Ok(FamilyParams::Table(TableParamFile::from_json_str(
+            return Ok(FamilyParams::Table(table::TableParamFile::from_json_str(
                 &text, path, table,
             )?));
         }
-        match family {
-            ModelFamily::Chiang => {
-                if tag.is_none() && text.contains("\"alpha_r_deg\"") {
-                    return Err(Error::Other(format!(
-                        "{}: this is a Marschner parameter file (it has alpha_r_deg) but --model \
-                         is chiang: pass --model marschner, or write docs/chiang.md's keys eta, \
-                         sigma_a, beta_m, beta_n, alpha_deg",
-                        path.display()
-                    )));
-                }
-                Ok(FamilyParams::Chiang(
-                    ChiangParamFile::from_json_str(&text, path).map_err(located)?,
-                ))
-            }
-            ModelFamily::Marschner => {
-                if tag.is_none() && text.contains("\"beta_m\"") {
-                    return Err(Error::Other(format!(
-                        "{}: this looks like a Chiang parameter file (it has beta_m) but --model \
-                         is marschner (the default): pass --model chiang",
-                        path.display()
-                    )));
-                }
-                let text = if tag.is_some() {
-                    let mut v: serde_json::Map<String, serde_json::Value> =
-                        serde_json::from_str(&text).map_err(|e| Error::json(path, &e, None))?;
-                    v.remove("model");
-                    serde_json::to_string(&v).unwrap_or_default()
-                } else {
-                    text
-                };
-                Ok(FamilyParams::Marschner(
-                    ParamFile::from_json_str(&text, path).map_err(located)?,
-                ))
-            }
-            _ => unreachable!("table families returned above"),
-        }
+        FamilyParams::read_own(family, &text, path, tag.is_some())
+            .expect("a family without a table is an Own family")
     }
 }
 
-/// A family's model with its parameters, ready to evaluate `S` per channel.
-#[derive(Debug, Clone)]
-pub enum FamilyModel {
-    Marschner {
-        params: Params<f64>,
-        config: ModelConfig,
-    },
-    Chiang {
-        params: ChiangParams<f64>,
-        model: ChiangModel,
-    },
-    Table {
-        table: &'static dyn DynTable,
-        params: TableParams<f64>,
-        terms: TermSet,
-    },
+/// An untagged file with a key only another family's files have, given to `family`: an error
+/// naming whose it looks like.
+fn refuse_other_familys_file(
+    value: &serde_json::Value,
+    path: &Path,
+    family: ModelFamily,
+) -> Result<()> {
+    let other = FamilyParams::SIGNATURES
+        .iter()
+        .find(|(key, owner)| *owner != family && value.get(*key).is_some());
+    match other {
+        Some((key, owner)) => Err(Error::Other(format!(
+            "{}: this looks like a {owner} parameter file (it has {key}) but --model is \
+             {family}: pass --model {owner}",
+            path.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Read `text` as a parameter file of the `Own` family `F` (`tagged`: it has a `"model"` key,
+/// already checked to name `F`, which is dropped when `F`'s files are written without it).
+fn read_own_file<F: OwnTypes>(text: &str, path: &Path, tagged: bool) -> Result<F::File> {
+    let located = |e: Error| match e {
+        Error::Parameter { .. } => Error::Other(format!("{}: {e}", path.display())),
+        other => other,
+    };
+    if tagged && !F::TAGGED {
+        let mut v: serde_json::Map<String, serde_json::Value> =
+            serde_json::from_str(text).map_err(|e| Error::json(path, &e, None))?;
+        v.remove("model");
+        let text = serde_json::to_string(&v).unwrap_or_default();
+        return F::File::from_json_str(&text, path).map_err(located);
+    }
+    F::File::from_json_str(text, path).map_err(located)
+}
+
+/// Read by the `"model"` tag (no tag: the first `Own` family, in registry order, whose file it
+/// reads as), so a table family whose keys happen to be another family's is still read as
+/// itself.
+impl<'de> Deserialize<'de> for FamilyParams {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let value = serde_json::Value::deserialize(d)?;
+        let err = |e: serde_json::Error| D::Error::custom(e.to_string());
+        let Some(tag) = value.get("model").and_then(|t| t.as_str()) else {
+            return FamilyParams::deserialize_untagged(&value).map_err(err);
+        };
+        let family = ModelFamily::parse(tag).map_err(|_| {
+            D::Error::custom(format!(
+                "\"model\": \"{tag}\" is not a model family: use one of {}",
+                ModelFamily::names()
+            ))
+        })?;
+        match family.table() {
+            Some(table) => table::TableParamFile::from_value(table, &value)
+                .map(FamilyParams::Table)
+                .map_err(err),
+            None => match FamilyParams::deserialize_tagged(family, &value) {
+                Some(read) => read.map_err(err),
+                None => Err(D::Error::custom(format!(
+                    "\"model\": \"{tag}\": a {} parameter file is written without \"model\" \
+                     (remove the key)",
+                    family.title()
+                ))),
+            },
+        }
+    }
 }
 
 impl FamilyModel {
     /// The model of `file` under the configuration of its family.
     pub fn new(file: &FamilyParams, setup: &ModelSetup) -> FamilyModel {
-        match file {
-            FamilyParams::Marschner(p) => FamilyModel::Marschner {
-                params: p.to_params(),
-                config: setup.config,
-            },
-            FamilyParams::Chiang(p) => FamilyModel::Chiang {
-                params: p.to_params(),
-                model: setup.chiang.clone(),
-            },
-            FamilyParams::Table(p) => FamilyModel::Table {
-                table: p.table,
-                params: p.to_params(),
-                terms: setup.table_terms(p.table),
-            },
-        }
+        file.file().model(setup)
     }
 
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
-        match self {
-            FamilyModel::Marschner { params, .. } => params.sigma_a.len(),
-            FamilyModel::Chiang { params, .. } => params.sigma_a.len(),
-            FamilyModel::Table { params, .. } => params.n_channels,
-        }
+        self.scattering().n_channels()
     }
 
-    /// `S` of a batch, `out[k·n + c]` for sample k, channel c, by the reference (scalar) model.
-    /// Chiang batches share the width integral per exit direction.
+    /// [`ScatteringModel::eval_batch`].
     pub fn eval_batch(&self, angles: &[Angles], out: &mut [f64]) {
-        match self {
-            // One batch: the parameter-only factors are prepared once, not per row.
-            FamilyModel::Marschner { params, config } => {
-                marschner_batch(params, config, angles, out)
-            }
-            FamilyModel::Chiang { params, model } => scattering_batch(params, model, angles, out),
-            FamilyModel::Table {
-                table,
-                params,
-                terms,
-            } => table.eval_batch(params, *terms, angles, out),
-        }
+        self.scattering().eval_batch(angles, out)
     }
 
-    /// [`Self::eval_batch`] the fastest way, for `hairfit eval`: Marschner's cubic mode four
-    /// samples per vector ([`crate::families::marschner::scattering_lanes`], ~1e-13 relative from the
-    /// reference).
+    /// [`ScatteringModel::eval_batch_fast`].
     pub fn eval_batch_fast(&self, angles: &[Angles], out: &mut [f64]) {
-        match self {
-            FamilyModel::Marschner { params, config } => {
-                scattering_lanes(params, config, angles, out)
-            }
-            _ => self.eval_batch(angles, out),
-        }
+        self.scattering().eval_batch_fast(angles, out)
     }
 
-    /// Per-lobe values `[R, TT, TRT]` per channel; for Chiang the TRT entry also holds the
-    /// p ≥ 3 residual term, for a table family each term adds to its column, so the three add
-    /// up to `S`.
+    /// [`ScatteringModel::by_lobe`].
     pub fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]) {
-        match self {
-            FamilyModel::Marschner { params, config } => {
-                scattering_by_lobe(params, config, angles, out)
-            }
-            FamilyModel::Chiang { params, model } => {
-                chiang::evaluator::scattering_by_lobe(params, model, angles, out);
-            }
-            FamilyModel::Table {
-                table,
-                params,
-                terms,
-            } => table.by_lobe(params, *terms, angles, out),
-        }
+        self.scattering().by_lobe(angles, out)
     }
 }

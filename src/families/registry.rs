@@ -3,14 +3,16 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{table, FamilyFacts, FamilyParams, OwnFamily, DEMO_CHANNELS};
+use super::{
+    table, FamilyFacts, FamilyFile, OwnFamily, OwnRecord, OwnTypes, ScatteringModel, DEMO_CHANNELS,
+};
 use crate::error::{Error, Result};
-use crate::families::table::DynTable;
+use crate::families::table::{DynTable, TableModel, TableParamFile};
 
 /// The registry: every family hairfit knows, one line each, in the order `compare --models all`
 /// reports them (the first is the default `--model`). `Own(TYPE)`: a family with its own
-/// parameter file and options, whose TYPE implements [`FamilyFacts`] in its folder and
-/// `crate::fit::family::Family` in its `fit` folder; `Table(TYPE)`: a [`table`] family, whose
+/// parameter file, model and options, whose TYPE implements [`OwnFamily`] and [`OwnTypes`] in
+/// its folder and `crate::fit::family::Family` in its `fit` folder; `Table(TYPE)`: a [`table`] family, whose
 /// TYPE implements [`table::TableFamily`]. [`ModelFamily`], its `ALL`, its facts and the fit's
 /// `crate::fit::registry::family_fit` are all made from this list, so a new family is its folder
 /// plus one line here.
@@ -61,6 +63,159 @@ macro_rules! model_family {
     };
 }
 registry!(model_family);
+
+/// [`FamilyParams`] and [`FamilyModel`] from the [`registry`] list: one variant per `Own`
+/// family (its [`OwnTypes`]) and one for every table family, with the lookups that need each
+/// family's types.
+macro_rules! family_types {
+    (@own [$($variant:ident($ty:path))*]) => {
+        /// A parameter file of any family. Written untagged, each as its family writes it
+        /// (every table family's file carries its `"model"`); read as its `"model"` tag says.
+        #[derive(Debug, Clone, PartialEq, Serialize)]
+        #[serde(untagged)]
+        pub enum FamilyParams {
+            $($variant(<$ty as OwnTypes>::File),)*
+            Table(TableParamFile),
+        }
+
+        /// A family's model with its parameters, ready to evaluate `S` per channel.
+        #[derive(Debug, Clone)]
+        pub enum FamilyModel {
+            $($variant(<$ty as OwnTypes>::Model),)*
+            Table(TableModel),
+        }
+
+        $(impl From<<$ty as OwnTypes>::File> for FamilyParams {
+            fn from(p: <$ty as OwnTypes>::File) -> Self {
+                FamilyParams::$variant(p)
+            }
+        })*
+
+        impl From<TableParamFile> for FamilyParams {
+            fn from(p: TableParamFile) -> Self {
+                FamilyParams::Table(p)
+            }
+        }
+
+        impl FamilyParams {
+            /// Every `Own` family's [`OwnTypes::SIGNATURE_KEY`].
+            pub(super) const SIGNATURES: &[(&str, ModelFamily)] =
+                &[$((<$ty as OwnTypes>::SIGNATURE_KEY, ModelFamily::$variant)),*];
+
+            /// Which family the file belongs to.
+            pub fn family(&self) -> ModelFamily {
+                match self {
+                    $(FamilyParams::$variant(_) => ModelFamily::$variant,)*
+                    FamilyParams::Table(p) => ModelFamily::parse(p.table.name())
+                        .expect("every table family is a ModelFamily"),
+                }
+            }
+
+            /// The file, as every command asks of it.
+            pub fn file(&self) -> &dyn FamilyFile {
+                match self {
+                    $(FamilyParams::$variant(p) => p,)*
+                    FamilyParams::Table(p) => p,
+                }
+            }
+
+            pub(super) fn file_mut(&mut self) -> &mut dyn FamilyFile {
+                match self {
+                    $(FamilyParams::$variant(p) => p,)*
+                    FamilyParams::Table(p) => p,
+                }
+            }
+
+            /// `text` read as the `Own` family `family`'s file (`None`: a table family).
+            pub(super) fn read_own(
+                family: ModelFamily,
+                text: &str,
+                path: &std::path::Path,
+                tagged: bool,
+            ) -> Option<Result<FamilyParams>> {
+                match family {
+                    $(ModelFamily::$variant => Some(
+                        super::read_own_file::<$ty>(text, path, tagged).map(FamilyParams::$variant),
+                    ),)*
+                    _ => None,
+                }
+            }
+
+            /// An untagged file: the first `Own` family's (registry order) it reads as, else the
+            /// first one's error.
+            pub(super) fn deserialize_untagged(
+                value: &serde_json::Value,
+            ) -> std::result::Result<FamilyParams, serde_json::Error> {
+                let mut first = None;
+                $(match <<$ty as OwnTypes>::File as Deserialize>::deserialize(value) {
+                    Ok(p) => return Ok(FamilyParams::$variant(p)),
+                    Err(e) => {
+                        first.get_or_insert(e);
+                    }
+                })*
+                Err(first.expect("the registry lists an Own family"))
+            }
+
+            /// A file tagged as the `Own` family `family`, if its files carry a tag.
+            pub(super) fn deserialize_tagged(
+                family: ModelFamily,
+                value: &serde_json::Value,
+            ) -> Option<std::result::Result<FamilyParams, serde_json::Error>> {
+                match family {
+                    $(ModelFamily::$variant if <$ty as OwnTypes>::TAGGED => Some(
+                        <<$ty as OwnTypes>::File as Deserialize>::deserialize(value)
+                            .map(FamilyParams::$variant),
+                    ),)*
+                    _ => None,
+                }
+            }
+        }
+
+        /// What an `Own` family records of its configuration beside `model` (fit.json's and
+        /// truth.json's `chiang`), written as the family writes it.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        #[serde(untagged)]
+        pub enum FamilyRecord {
+            $($variant(<$ty as OwnTypes>::Record),)*
+        }
+
+        impl FamilyRecord {
+            /// [`OwnRecord::describe`].
+            pub fn describe(&self) -> Vec<String> {
+                match self {
+                    $(FamilyRecord::$variant(r) => r.describe(),)*
+                }
+            }
+
+            /// [`OwnRecord::configure`].
+            pub fn configure(&self, setup: &mut super::ModelSetup) -> Result<()> {
+                match self {
+                    $(FamilyRecord::$variant(r) => r.configure(setup),)*
+                }
+            }
+        }
+
+        impl FamilyModel {
+            /// The model, as every command evaluates it.
+            pub fn scattering(&self) -> &dyn ScatteringModel {
+                match self {
+                    $(FamilyModel::$variant(m) => m,)*
+                    FamilyModel::Table(m) => m,
+                }
+            }
+        }
+    };
+    (@own [$($own:tt)*] $variant:ident => Own($ty:path), $($rest:tt)*) => {
+        family_types!(@own [$($own)* $variant($ty)] $($rest)*);
+    };
+    (@own [$($own:tt)*] $variant:ident => Table($ty:path), $($rest:tt)*) => {
+        family_types!(@own [$($own)*] $($rest)*);
+    };
+    ($($line:tt)*) => {
+        family_types!(@own [] $($line)*);
+    };
+}
+registry!(family_types);
 
 impl Default for ModelFamily {
     /// The registry's first family.
@@ -130,6 +285,15 @@ impl ModelFamily {
         }
     }
 
+    /// What fit.json and truth.json record of the family's configuration in `setup`: an `Own`
+    /// family's [`OwnFamily::records`], a table family's terms and the lobes they draw.
+    pub fn records(self, setup: &super::ModelSetup) -> super::ModelRecords {
+        match self.entry() {
+            Entry::Own(family) => family.records(setup),
+            Entry::Table(table) => setup.table_records(table),
+        }
+    }
+
     /// The family's name in sentences and figure legends ("Marschner", "Chiang").
     pub fn title(self) -> &'static str {
         self.facts().title()
@@ -158,6 +322,14 @@ impl ModelFamily {
             .iter()
             .find(|f| f.name == base)
             .map_or("", |f| f.unit.label())
+    }
+
+    /// The family's terms, when `--terms` switches them.
+    pub fn terms(self) -> Option<&'static [table::Term]> {
+        match self.entry() {
+            Entry::Own(family) => family.terms(),
+            Entry::Table(table) => Some(table.terms()),
+        }
     }
 
     /// True when the family takes `--terms` (Chiang and every table family).

@@ -13,7 +13,7 @@ use super::nan_if_missing_vec;
 use super::settings::{Global, Loss, Space};
 use crate::error::Result;
 use crate::families::effects::{ModelConfig, RootMode};
-use crate::families::{ChiangRecord, FamilyParams};
+use crate::families::{FamilyParams, FamilyRecord};
 use crate::geometry::Measurement;
 
 /// How a fit (or one solver run) ended.
@@ -463,9 +463,10 @@ pub struct FitJson {
     /// What to try, each with the evidence from this fit that suggests it.
     #[serde(default)]
     pub suggestions: Vec<Suggestion>,
-    /// A Chiang fit's model configuration; absent for a Marschner fit.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub chiang: Option<ChiangRecord>,
+    /// What the fit's family records of its configuration beside `model`, when it records
+    /// anything ([`crate::families::OwnTypes::Record`]; Chiang's is the file's key).
+    #[serde(rename = "chiang", default, skip_serializing_if = "Option::is_none")]
+    pub family_record: Option<FamilyRecord>,
     /// A table family's terms that were on (`--terms`); absent for Marschner and Chiang.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub terms: Option<Vec<String>>,
@@ -481,7 +482,7 @@ impl FitJson {
     pub fn records(&self) -> crate::families::ModelRecords {
         crate::families::ModelRecords {
             config: self.model,
-            chiang: self.chiang,
+            family_record: self.family_record.clone(),
             terms: self.terms.clone(),
         }
     }
@@ -491,7 +492,7 @@ impl FitJson {
         crate::families::ModelSetup::from_records(
             self.family(),
             self.model,
-            self.chiang.as_ref(),
+            self.family_record.as_ref(),
             self.terms.as_deref(),
         )
     }

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::fit_json::ScaleEntry;
 use crate::error::Result;
 use crate::families::effects::ModelConfig;
-use crate::families::{ChiangRecord, FamilyParams};
+use crate::families::{FamilyParams, FamilyRecord};
 use crate::geometry::Measurement;
 
 /// The sidecar `FILE.truth.json`: the exact inputs of a synthetic dataset.
@@ -41,9 +41,10 @@ pub struct Truth {
     pub notes: Vec<String>,
     /// The command that made the files (absent when made through the library).
     pub command_line: Option<String>,
-    /// Data made by the Chiang model: its configuration; absent for Marschner data.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub chiang: Option<ChiangRecord>,
+    /// What the family that made the data records of its configuration beside `model`, when it
+    /// records anything ([`crate::families::OwnTypes::Record`]; Chiang's is the file's key).
+    #[serde(rename = "chiang", default, skip_serializing_if = "Option::is_none")]
+    pub family_record: Option<FamilyRecord>,
     /// Data made by a table family: the terms that were on.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub terms: Option<Vec<String>>,

@@ -596,7 +596,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<Param
         reasons: Vec::new(),
         goodness_of_fit: Default::default(),
         suggestions: Vec::new(),
-        chiang: records.chiang,
+        family_record: records.family_record,
         terms: records.terms,
     };
     Ok(FitDraft {

@@ -84,6 +84,27 @@ impl SigmaA {
         }
     }
 
+    /// Given once, written as `n` values (`hairfit synth --channels n`): `Some(note)` when it
+    /// was replicated; `Err(("sigma_a", count))` when it gives another number of channels.
+    pub fn replicate(
+        &mut self,
+        n: usize,
+    ) -> std::result::Result<Option<String>, (&'static str, usize)> {
+        match self.clone() {
+            SigmaA::Scalar(s) if n > 1 => {
+                *self = SigmaA::PerChannel(vec![s; n]);
+                Ok(Some(format!("sigma_a = {s}")))
+            }
+            SigmaA::PerChannel(v) if v.len() != n => Err(("sigma_a", v.len())),
+            _ => Ok(None),
+        }
+    }
+
+    /// True when it is one number for every channel.
+    pub fn is_scalar(&self) -> bool {
+        matches!(self, SigmaA::Scalar(_))
+    }
+
     /// An empty array gives no channel: an error naming `sigma_a`.
     pub fn require_channels(&self) -> Result<()> {
         if self.n_channels() == 0 {

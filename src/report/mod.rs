@@ -20,7 +20,7 @@ use plotters::prelude::*;
 
 use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
-use crate::families::FamilyModel;
+use crate::families::{FamilyModel, ModelFamily};
 use crate::files::{CurveRow, Curves, CurvesMode, FitJson, ProfileMethod};
 use crate::geometry::Angles;
 
@@ -82,8 +82,8 @@ fn check_fit_dir(dir: &Path, is_dir: bool) -> Result<()> {
     if dir.join("fit.json").is_file() {
         return Ok(());
     }
-    let families: Vec<&str> = ["marschner", "chiang"]
-        .into_iter()
+    let families: Vec<&str> = (ModelFamily::ALL.into_iter())
+        .map(ModelFamily::as_str)
         .filter(|f| dir.join(f).join("fit.json").is_file())
         .collect();
     Err(Error::Other(if families.is_empty() {

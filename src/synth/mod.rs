@@ -137,7 +137,7 @@ pub fn synthesize_model(source: &Source<'_>, how: &Acquisition<'_>) -> Result<(D
         seed: how.seed,
         rng: RNG_DESCRIPTION.into(),
         model: source.records.config,
-        chiang: source.records.chiang,
+        family_record: source.records.family_record.clone(),
         terms: source.records.terms.clone(),
         n_samples: dataset.len(),
         outliers: noisy.outliers,

@@ -224,7 +224,7 @@ fn synth_then_fit_recovers_noise_free_truth() {
     let t = Truth::load(&dir.path().join("d.truth.json")).unwrap();
     assert!(matches!(t.params, FamilyParams::Chiang(_)));
     assert_eq!(
-        t.chiang.unwrap().width_nodes,
+        t.family_record.unwrap().chiang().unwrap().width_nodes,
         hairfit::families::chiang::WidthNodes::Fixed(256)
     );
     let out = dir.path().join("fit");
@@ -399,11 +399,11 @@ fn auto_width_rule_fits_like_the_plain_rule() {
     };
     let (auto, plain) = (fit("auto"), fit("1024"));
     assert_eq!(
-        auto.chiang.unwrap().width_nodes,
+        auto.family_record.unwrap().chiang().unwrap().width_nodes,
         hairfit::families::chiang::WidthNodes::Auto
     );
     assert_eq!(
-        plain.chiang.unwrap().width_nodes,
+        plain.family_record.unwrap().chiang().unwrap().width_nodes,
         hairfit::families::chiang::WidthNodes::Fixed(1024)
     );
     assert_eq!(auto.verdict, plain.verdict);

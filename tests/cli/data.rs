@@ -72,9 +72,19 @@ fn a_parameter_file_given_as_data_is_named_as_such() {
         "chiang.json",
         r#"{"model": "chiang", "sigma_a": 0.3, "beta_m": 0.25, "beta_n": 0.35, "alpha_deg": -2}"#,
     );
+    // A table family's file may have no sigma_a: its tag marks it.
+    let karis = cli::write(
+        dir.path(),
+        "karis.json",
+        r#"{"model": "karis", "base_color": 0.5, "roughness": 0.4}"#,
+    );
     let out = dir.path().join("out");
     let p = |path: &Path| path.to_str().unwrap().to_string();
-    for (file, model) in [(&params, ""), (&chiang, " --model chiang")] {
+    for (file, model) in [
+        (&params, ""),
+        (&chiang, " --model chiang"),
+        (&karis, " --model karis"),
+    ] {
         let f = p(file);
         for args in [
             vec!["load", f.as_str()],

@@ -79,4 +79,13 @@ fn what_is_not_a_fit_directory_is_named_as_such() {
         stderr.contains("compare directory") && stderr.contains("marschner"),
         "{stderr}"
     );
+    // `compare --models karis,deon` writes no marschner or chiang folder: any family's counts.
+    let tables = dir.path().join("cmp_tables");
+    std::fs::create_dir_all(tables.join("deon")).unwrap();
+    write(&tables.join("deon"), "fit.json", "{}");
+    let stderr = failed(&hairfit(&["report", s(&tables)]));
+    assert!(
+        stderr.contains("compare directory") && stderr.contains("deon"),
+        "{stderr}"
+    );
 }

@@ -16,9 +16,10 @@ use hairfit::families::chiang::{ChiangEffects, ChiangModel};
 use hairfit::families::marschner::fit::forward::MarschnerForward;
 use hairfit::families::marschner::MarschnerFamily;
 use hairfit::families::marschner::{Lobes, ModelConfig};
+use hairfit::families::shared::quadrature::WidthNodes;
 use hairfit::families::table::fit::TableForward;
 use hairfit::families::table::{
-    demo_params, DynTable, Table, TableFamily, TableParamFile, TermSet,
+    demo_params, DynTable, Table, TableFamily, TableParamFile, Term, TermSet,
 };
 use hairfit::families::{deon::DEon, frostbite::Frostbite, kajiya_kay::KajiyaKay, karis::Karis};
 use hairfit::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
@@ -209,10 +210,18 @@ fn model(family: &Subject, setup: &ModelSetup) -> FamilyModel {
 /// different term sets would differ by its quadrature error), each table term.
 fn all_on(family: &Subject) -> ModelSetup {
     ModelSetup {
-        terms: family.table.map(|t| TermSet::all(t.terms().len())),
-        chiang: ChiangModel::new(ChiangEffects::default(), 256).unwrap(),
+        terms: term_list(family).map(|t| TermSet::all(t.len())),
+        width_nodes: WidthNodes::Fixed(256),
         ..ModelSetup::default()
     }
+}
+
+/// The family's `--terms` list (a table family's, Chiang's), if it has one.
+fn term_list(family: &Subject) -> Option<&'static [Term]> {
+    family
+        .registered
+        .and_then(ModelFamily::terms)
+        .or(family.table.map(|t| t.terms()))
 }
 
 fn eval(m: &FamilyModel, angles: &[Angles]) -> Vec<f64> {
@@ -567,11 +576,11 @@ fn file_round_trips(subject: &Subject) {
 }
 
 /// Each switchable term of the family, as (its name, the setup without it, the setup with it
-/// alone): Marschner's lobes, Chiang's four terms, each table term.
+/// alone): each of the family's `--terms` (Chiang's, a table family's), else each lobe.
 fn switches(family: &Subject) -> Vec<(String, ModelSetup, ModelSetup)> {
     let all = all_on(family);
-    if let Some(t) = family.table {
-        let n = t.terms().len();
+    if let Some(terms) = term_list(family) {
+        let n = terms.len();
         let every = TermSet::all(n);
         return (0..n)
             .filter(|&k| every.0 & !(1 << k) != 0)
@@ -581,59 +590,32 @@ fn switches(family: &Subject) -> Vec<(String, ModelSetup, ModelSetup)> {
                     ..all.clone()
                 };
                 (
-                    t.terms()[k].name.to_string(),
+                    terms[k].name.to_string(),
                     with(TermSet(every.0 & !(1 << k))),
                     with(TermSet(1 << k)),
                 )
             })
             .collect();
     }
-    match family.registered.expect("a registered family") {
-        ModelFamily::Chiang => {
-            let set = |e: &mut ChiangEffects, k: usize, v: bool| match k {
-                0 => e.r = v,
-                1 => e.tt = v,
-                2 => e.trt = v,
-                _ => e.residual = v,
-            };
-            (0..4)
-                .map(|k| {
-                    let mut without = ChiangEffects::default();
-                    set(&mut without, k, false);
-                    let mut only = ChiangEffects {
-                        r: false,
-                        tt: false,
-                        trt: false,
-                        residual: false,
-                    };
-                    set(&mut only, k, true);
-                    let with = |e| ModelSetup {
-                        chiang: ChiangModel::new(e, 256).unwrap(),
-                        ..all.clone()
-                    };
-                    (format!("{k}"), with(without), with(only))
-                })
-                .collect()
-        }
-        _ => (0..3)
-            .map(|k| {
-                let lobes = |on: [bool; 3]| {
-                    let mut s = all.clone();
-                    s.config.effects.lobes = Lobes {
-                        r: on[0],
-                        tt: on[1],
-                        trt: on[2],
-                    };
-                    s
+    // A family without terms switches the lobes of `--lobes`.
+    (0..3)
+        .map(|k| {
+            let lobes = |on: [bool; 3]| {
+                let mut s = all.clone();
+                s.config.effects.lobes = Lobes {
+                    r: on[0],
+                    tt: on[1],
+                    trt: on[2],
                 };
-                let mut without = [true; 3];
-                without[k] = false;
-                let mut only = [false; 3];
-                only[k] = true;
-                (format!("lobe {k}"), lobes(without), lobes(only))
-            })
-            .collect(),
-    }
+                s
+            };
+            let mut without = [true; 3];
+            without[k] = false;
+            let mut only = [false; 3];
+            only[k] = true;
+            (format!("lobe {k}"), lobes(without), lobes(only))
+        })
+        .collect()
 }
 
 /// With one term off, S is the sum of the others: total = without + alone, and the by-lobe

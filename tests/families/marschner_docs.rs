@@ -70,9 +70,12 @@ fn every_model_source_file_is_documented() {
     for entry in std::fs::read_dir(dir).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
         let module = name.trim_end_matches(".rs");
-        // The folder's parameter file, fit adaptor, demo truth and cost-ledger section are the
-        // family's, not the model's.
-        if matches!(module, "mod" | "params" | "fit" | "demo" | "cost") {
+        // The folder's parameter file, fit adaptor, demo truth, cost-ledger section and registry
+        // types (`family.rs`) are the family's, not the model's.
+        if matches!(
+            module,
+            "mod" | "params" | "fit" | "demo" | "cost" | "family"
+        ) {
             continue;
         }
         assert!(

@@ -236,7 +236,7 @@ fn fixture_fit(n_samples: usize, n_ch: usize) -> FitJson {
         reasons: vec!["k_g is undetermined — no sample near the glint".into()],
         goodness_of_fit: Default::default(),
         suggestions: vec![],
-        chiang: None,
+        family_record: None,
         terms: None,
     }
 }

@@ -22,7 +22,7 @@ use crate::families::frostbite::{
 };
 use crate::families::table::fit::{TableForward, TableParam};
 use crate::families::table::{TableFamily, TableParams, TermSet};
-use crate::families::FamilyModel;
+use crate::families::{FamilyModel, TableModel};
 use crate::fit::problem::Forward;
 use crate::geometry::{Angles, Measurement};
 use script::{csharp_identifier, script};
@@ -236,7 +236,7 @@ fn starting_inputs(model: &SourceModel, n: usize) -> Vec<UnityInputs> {
             .to_vec()
     };
     match model {
-        SourceModel::Table(FamilyModel::Table { table, params, .. })
+        SourceModel::Table(FamilyModel::Table(TableModel { table, params, .. }))
             if table.name() == Frostbite::NAME =>
         {
             vec![UnityInputs::from_params(params)]
@@ -315,11 +315,11 @@ pub fn fit_unity(source: &SourceFit) -> Result<UnityMapping> {
 /// What the inputs cannot carry of the source fit, and where HDRP departs from the family.
 fn warnings(source: &SourceFit, m: &UnityMapping) -> Vec<String> {
     let mut out = Vec::new();
-    if let SourceModel::Table(FamilyModel::Table {
+    if let SourceModel::Table(FamilyModel::Table(TableModel {
         table,
         params,
         terms,
-    }) = &source.model
+    })) = &source.model
     {
         if table.name() == Frostbite::NAME {
             if *terms != TermSet::all(Frostbite::TERMS.len()) {

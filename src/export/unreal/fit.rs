@@ -22,7 +22,7 @@ use crate::families::karis::{
 use crate::families::table::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
 };
-use crate::families::FamilyModel;
+use crate::families::{FamilyModel, TableModel};
 use crate::geometry::Angles;
 
 /// The smallest Base Color the fit reaches (the engine takes `ln C`).
@@ -188,7 +188,7 @@ fn start_inputs(model: &SourceModel) -> Vec<EngineInputs> {
         colour.collect()
     };
     let mut starts = match model {
-        SourceModel::Table(FamilyModel::Table { table, params, .. })
+        SourceModel::Table(FamilyModel::Table(TableModel { table, params, .. }))
             if table.name() == Karis::NAME =>
         {
             let get = |k: usize| params.values[k][0];
@@ -241,7 +241,9 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     let (_, _, all) = errors_of(&inputs, engine_terms());
     let errors = LogErrors::of(&all, n_measured * n);
     let as_fitted = match &source.model {
-        SourceModel::Table(FamilyModel::Table { table, .. }) if table.name() == Karis::NAME => {
+        SourceModel::Table(FamilyModel::Table(TableModel { table, .. }))
+            if table.name() == Karis::NAME =>
+        {
             let (r, m, _) = errors_of(&starts[0], engine_terms());
             Some((r, m))
         }

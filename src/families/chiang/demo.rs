@@ -1,8 +1,7 @@
 //! The Chiang demo's true parameters (`hairfit demo --model chiang`, the cost ledger): CHIANG.md's
 //! ranges, the Marschner demo's brown-ish absorption, R toward the root (`alpha` < 0).
 
-use super::{ChiangFamily, ChiangParamFile, ChiangParams};
-use crate::families::{FamilyParams, OwnFamily};
+use super::ChiangParams;
 
 /// The Chiang demo's true parameters (α in radians).
 pub fn demo_truth() -> ChiangParams<f64> {
@@ -12,11 +11,5 @@ pub fn demo_truth() -> ChiangParams<f64> {
         beta_m: 0.25,
         beta_n: 0.35,
         alpha: (-2.5f64).to_radians(),
-    }
-}
-
-impl OwnFamily for ChiangFamily {
-    fn demo_truth(&self) -> FamilyParams {
-        ChiangParamFile::from_params(&demo_truth()).into()
     }
 }

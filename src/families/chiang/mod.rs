@@ -27,6 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::families::effects::{Effects, Lobes, ModelConfig};
+use crate::families::table::{LobeColumn, Term, TermSet};
 use crate::geometry::Angles;
 pub use crate::geometry::ParamFact;
 use crate::geometry::{Fitted, Interval, Unit};
@@ -35,6 +36,7 @@ pub mod azimuthal;
 pub mod cost;
 pub mod demo;
 pub mod evaluator;
+pub mod family;
 pub mod file;
 pub mod fit;
 pub mod fixed_eta;
@@ -49,6 +51,30 @@ pub use evaluator::{scattering, scattering_batch, scattering_from_table};
 pub use file::ChiangParamFile;
 pub use jacobian::{batch_jacobian, batch_jacobian_static, seeded};
 pub use width::WidthNodes;
+
+/// Chiang's terms as `--terms` names them ([`ChiangEffects`] holds which are on).
+pub const TERMS: [Term; 4] = [
+    Term {
+        name: "R",
+        meaning: "p = 0, reflection",
+        column: LobeColumn::R,
+    },
+    Term {
+        name: "TT",
+        meaning: "p = 1, transmission",
+        column: LobeColumn::TT,
+    },
+    Term {
+        name: "TRT",
+        meaning: "p = 2, one internal reflection",
+        column: LobeColumn::TRT,
+    },
+    Term {
+        name: "residual",
+        meaning: "p >= 3 summed, azimuthally uniform",
+        column: LobeColumn::TRT,
+    },
+];
 
 /// Which terms of `S` are on; what is off is not computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -76,34 +102,30 @@ impl Default for ChiangEffects {
 }
 
 impl ChiangEffects {
-    /// Parse a list such as `"R,TT,TRT,residual"` (case-insensitive; `p3` also names the residual).
+    /// Parse a list such as `"R,TT,TRT,residual"` (case-insensitive), as `--terms` takes it.
     pub fn parse(list: &str) -> Result<ChiangEffects> {
-        let mut e = ChiangEffects {
-            r: false,
-            tt: false,
-            trt: false,
-            residual: false,
-        };
-        for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            match item.to_ascii_uppercase().as_str() {
-                "R" => e.r = true,
-                "TT" => e.tt = true,
-                "TRT" => e.trt = true,
-                "RESIDUAL" | "P3" => e.residual = true,
-                other => {
-                    return Err(Error::Other(format!(
-                        "unknown Chiang term `{other}` in `{list}`: use a comma-separated list of \
-                         R, TT, TRT, residual"
-                    )))
-                }
-            }
+        TermSet::parse(list, &TERMS, "chiang").map(ChiangEffects::from_terms)
+    }
+
+    /// The terms of `on` (bits over [`TERMS`]).
+    pub fn from_terms(on: TermSet) -> ChiangEffects {
+        ChiangEffects {
+            r: on.has(0),
+            tt: on.has(1),
+            trt: on.has(2),
+            residual: on.has(3),
         }
-        if !(e.r || e.tt || e.trt || e.residual) {
-            return Err(Error::Other(format!(
-                "term list `{list}` is empty: name at least one of R, TT, TRT, residual"
-            )));
-        }
-        Ok(e)
+    }
+
+    /// These terms as bits over [`TERMS`].
+    pub fn terms(self) -> TermSet {
+        let bits = [self.r, self.tt, self.trt, self.residual];
+        TermSet(
+            bits.iter()
+                .enumerate()
+                .map(|(k, &on)| (on as u32) << k)
+                .sum(),
+        )
     }
 
     /// `(these effects without the residual, the residual alone if on)`.
@@ -432,6 +454,17 @@ impl ChiangModel {
 pub struct WidthScratch {
     breaks: Vec<f64>,
     nodes: Vec<WidthNode>,
+}
+
+impl ChiangModel {
+    /// The model `setup` configures: its terms (`--terms`, over [`TERMS`]; default all) and
+    /// width rule (`--width-nodes`, checked when it was read).
+    pub fn of_setup(setup: &crate::families::ModelSetup) -> ChiangModel {
+        let effects = setup
+            .terms
+            .map_or_else(ChiangEffects::default, ChiangEffects::from_terms);
+        ChiangModel::with_width(effects, setup.width_nodes).expect("a checked width rule")
+    }
 }
 
 impl Default for ChiangModel {

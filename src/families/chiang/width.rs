@@ -1,120 +1,22 @@
-//! Which width rule a Chiang model integrates with (`--width-nodes auto | N`), how the choice is
-//! written to files, and the nodes it gives one exit direction.
+//! The nodes a Chiang model's width rule ([`WidthNodes`], `--width-nodes auto | N`) gives one
+//! exit direction.
 //!
 //! `N` is CHIANG.md's plain N-node Gauss–Legendre rule in γ, the same nodes for every direction.
 //! `auto` (the default) breaks γ where an enabled lobe's trimmed logistic wraps — its kink,
 //! which makes the plain rule converge only algebraically for wide logistics — and spends
-//! [`auto_density`] nodes per π of γ: many for β_n's narrow peaks, few for its smooth wide lobes.
-
-use std::fmt;
-use std::str::FromStr;
-
-use serde::{Deserialize, Serialize};
+//! [`crate::families::shared::quadrature::auto_density`] nodes per π of γ: many for β_n's narrow peaks, few for its smooth wide lobes.
 
 use super::azimuthal::wrap_kinks;
 use super::ChiangEffects;
-use crate::error::{Error, Result};
 use crate::families::shared::cylinder::ExitRefraction;
-use crate::families::shared::quadrature::{auto_density, composite, WidthNode, WidthRule};
+pub use crate::families::shared::quadrature::WidthNodes;
+use crate::families::shared::quadrature::{composite, WidthNode};
 
 /// Plain nodes of the residual `Ā₃ = ⟨A₃⟩_h` under the automatic rule: its integrand has no
 /// logistic, only a near-pole of `1/(1 − TF)` just past h = ±1 for small σ_a; 64 nodes keep it
 /// within 6.6e-8 relative (128: 9e-10) for σ_a from 1e-4 to 3, η 1.45–1.65, θ_r to 89° against
 /// 4096 nodes, the worst at σ_a = 0.01, θ_r = 0.
 pub const RESIDUAL_NODES: usize = 64;
-
-/// The width rule of a model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum WidthNodes {
-    /// Composite rule broken at the kinks, density [`auto_density`]`(β_n)`.
-    #[default]
-    Auto,
-    /// The composite rule at half the automatic density, at most this many nodes per π: the
-    /// fit's multi-start, which only looks for basins (S within ~1e-4 relative for β_n ≥ 0.07,
-    /// 7e-2 at 0.05; the plain 256-node rule it replaces had 0.11 there).
-    Coarse(usize),
-    /// The plain Gauss–Legendre rule with this many nodes.
-    Fixed(usize),
-}
-
-impl WidthNodes {
-    /// An error unless a fixed count is within the plain rule's range.
-    pub fn check(self) -> Result<WidthNodes> {
-        if let WidthNodes::Fixed(n) | WidthNodes::Coarse(n) = self {
-            WidthRule::check_nodes(n)?;
-        }
-        Ok(self)
-    }
-
-    /// True when the nodes depend on the exit direction and the parameters.
-    pub fn per_direction(self) -> bool {
-        !matches!(self, WidthNodes::Fixed(_))
-    }
-
-    /// The nodes per π of γ used at `beta_n` (the plain rule's count when fixed).
-    pub fn density(self, beta_n: f64) -> usize {
-        match self {
-            WidthNodes::Auto => auto_density(beta_n),
-            WidthNodes::Coarse(most) => (auto_density(beta_n) / 2).min(most),
-            WidthNodes::Fixed(n) => n,
-        }
-    }
-}
-
-impl fmt::Display for WidthNodes {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            WidthNodes::Auto => f.write_str("auto"),
-            WidthNodes::Coarse(n) => write!(f, "auto at half density, at most {n}"),
-            WidthNodes::Fixed(n) => write!(f, "{n}"),
-        }
-    }
-}
-
-impl FromStr for WidthNodes {
-    type Err = Error;
-
-    /// `auto` or a node count.
-    fn from_str(text: &str) -> Result<WidthNodes> {
-        let text = text.trim();
-        if text.eq_ignore_ascii_case("auto") {
-            return Ok(WidthNodes::Auto);
-        }
-        let n: usize = text.parse().map_err(|_| {
-            Error::Other(format!(
-                "`{text}` is not a width rule: give `auto` (the default: nodes chosen by beta_n, \
-                 split at the lobes' kinks) or a node count such as 1024 (the plain rule)"
-            ))
-        })?;
-        WidthNodes::Fixed(n).check()
-    }
-}
-
-/// Files hold `"auto"` or the plain rule's count.
-impl Serialize for WidthNodes {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        match self {
-            WidthNodes::Fixed(n) => s.serialize_u64(*n as u64),
-            _ => s.serialize_str("auto"),
-        }
-    }
-}
-
-impl<'de> Deserialize<'de> for WidthNodes {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(untagged)]
-        enum Repr {
-            Count(usize),
-            Word(String),
-        }
-        match Repr::deserialize(d)? {
-            Repr::Count(n) => WidthNodes::Fixed(n).check(),
-            Repr::Word(w) => w.parse(),
-        }
-        .map_err(serde::de::Error::custom)
-    }
-}
 
 /// The composite rule's nodes for exit inclination `theta_r` and azimuth `phi` at `eta`,
 /// `beta_n`: broken at every enabled lobe's wrap kink, written into `out`.

@@ -19,6 +19,7 @@ pub mod cost;
 pub mod demo;
 pub mod eccentricity;
 pub mod exit_angle;
+pub mod family;
 pub mod fit;
 pub mod fresnel;
 pub mod instrument;

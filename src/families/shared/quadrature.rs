@@ -5,7 +5,11 @@
 
 use std::collections::HashMap;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::fmt;
+use std::str::FromStr;
 use std::sync::{Arc, Mutex, OnceLock};
+
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
@@ -117,7 +121,7 @@ impl WidthRule {
     pub fn check_nodes(n: usize) -> Result<()> {
         if !(MIN_WIDTH_NODES..=MAX_WIDTH_NODES).contains(&n) {
             return Err(Error::Other(format!(
-                "{n} width-quadrature nodes requested: the Chiang width integral takes between \
+                "{n} width-quadrature nodes requested: the width integral takes between \
                  {MIN_WIDTH_NODES} and {MAX_WIDTH_NODES} nodes (1024 gives ~5e-7 relative error)"
             )));
         }
@@ -290,5 +294,98 @@ mod tests {
         let abs_h: f64 = out.iter().map(|n| n.weight * n.h.abs()).sum();
         assert!((abs_h - 0.5).abs() < 1e-14, "{abs_h}");
         assert!(auto_density(0.05) == 1024 && auto_density(1.0) < auto_density(0.3));
+    }
+}
+
+/// The width rule of a model (`--width-nodes auto | N`), as files record it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum WidthNodes {
+    /// Composite rule broken at the kinks, density [`auto_density`]`(β_n)`.
+    #[default]
+    Auto,
+    /// The composite rule at half the automatic density, at most this many nodes per π: the
+    /// fit's multi-start, which only looks for basins (S within ~1e-4 relative for β_n ≥ 0.07,
+    /// 7e-2 at 0.05; the plain 256-node rule it replaces had 0.11 there).
+    Coarse(usize),
+    /// The plain Gauss–Legendre rule with this many nodes.
+    Fixed(usize),
+}
+
+impl WidthNodes {
+    /// An error unless a fixed count is within the plain rule's range.
+    pub fn check(self) -> Result<WidthNodes> {
+        if let WidthNodes::Fixed(n) | WidthNodes::Coarse(n) = self {
+            WidthRule::check_nodes(n)?;
+        }
+        Ok(self)
+    }
+
+    /// True when the nodes depend on the exit direction and the parameters.
+    pub fn per_direction(self) -> bool {
+        !matches!(self, WidthNodes::Fixed(_))
+    }
+
+    /// The nodes per π of γ used at `beta_n` (the plain rule's count when fixed).
+    pub fn density(self, beta_n: f64) -> usize {
+        match self {
+            WidthNodes::Auto => auto_density(beta_n),
+            WidthNodes::Coarse(most) => (auto_density(beta_n) / 2).min(most),
+            WidthNodes::Fixed(n) => n,
+        }
+    }
+}
+
+impl fmt::Display for WidthNodes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            WidthNodes::Auto => f.write_str("auto"),
+            WidthNodes::Coarse(n) => write!(f, "auto at half density, at most {n}"),
+            WidthNodes::Fixed(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl FromStr for WidthNodes {
+    type Err = Error;
+
+    /// `auto` or a node count.
+    fn from_str(text: &str) -> Result<WidthNodes> {
+        let text = text.trim();
+        if text.eq_ignore_ascii_case("auto") {
+            return Ok(WidthNodes::Auto);
+        }
+        let n: usize = text.parse().map_err(|_| {
+            Error::Other(format!(
+                "`{text}` is not a width rule: give `auto` (the default: nodes chosen by beta_n, \
+                 split at the lobes' kinks) or a node count such as 1024 (the plain rule)"
+            ))
+        })?;
+        WidthNodes::Fixed(n).check()
+    }
+}
+
+/// Files hold `"auto"` or the plain rule's count.
+impl Serialize for WidthNodes {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            WidthNodes::Fixed(n) => s.serialize_u64(*n as u64),
+            _ => s.serialize_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for WidthNodes {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Repr {
+            Count(usize),
+            Word(String),
+        }
+        match Repr::deserialize(d)? {
+            Repr::Count(n) => WidthNodes::Fixed(n).check(),
+            Repr::Word(w) => w.parse(),
+        }
+        .map_err(serde::de::Error::custom)
     }
 }

@@ -309,3 +309,43 @@ fn resolve(
     }
     Ok(TableParamFile { table, values })
 }
+
+impl crate::families::FamilyFile for TableParamFile {
+    fn n_channels(&self) -> usize {
+        TableParamFile::n_channels(self)
+    }
+
+    fn is_scalar(&self) -> bool {
+        TableParamFile::is_scalar(self)
+    }
+
+    fn replicate_channels(
+        &mut self,
+        n: usize,
+    ) -> std::result::Result<Option<String>, (&'static str, usize)> {
+        let mut replicated = Vec::new();
+        for (f, v) in self.table.parameters().iter().zip(&mut self.values) {
+            if !f.per_channel || v.len() == n {
+                continue;
+            }
+            if v.len() != 1 {
+                return Err((f.name, v.len()));
+            }
+            *v = vec![v[0]; n];
+            replicated.push(format!("{} = {}", f.name, v[0]));
+        }
+        Ok((!replicated.is_empty()).then(|| replicated.join(", ")))
+    }
+
+    fn check(&self) -> Result<()> {
+        self.validate()
+    }
+
+    fn model(&self, setup: &crate::families::ModelSetup) -> crate::families::FamilyModel {
+        crate::families::FamilyModel::Table(super::TableModel {
+            table: self.table,
+            params: self.to_params(),
+            terms: setup.table_terms(self.table),
+        })
+    }
+}

@@ -368,6 +368,28 @@ impl<F> Table<F> {
     pub const NEW: Table<F> = Table(PhantomData);
 }
 
+/// A table family's model with its parameters and the terms that are on.
+#[derive(Debug, Clone)]
+pub struct TableModel {
+    pub table: &'static dyn DynTable,
+    pub params: TableParams<f64>,
+    pub terms: TermSet,
+}
+
+impl crate::families::ScatteringModel for TableModel {
+    fn n_channels(&self) -> usize {
+        self.params.n_channels
+    }
+
+    fn eval_batch(&self, angles: &[Angles], out: &mut [f64]) {
+        self.table.eval_batch(&self.params, self.terms, angles, out)
+    }
+
+    fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]) {
+        self.table.by_lobe(&self.params, self.terms, angles, out)
+    }
+}
+
 /// A table family behind a pointer, chosen at run time by `--model`; its name, title and
 /// parameter table are its [`FamilyFacts`](crate::geometry::FamilyFacts).
 pub trait DynTable: crate::geometry::FamilyFacts {

@@ -9,10 +9,10 @@ use std::time::Instant;
 
 use crate::error::Result;
 use crate::families::chiang::{
-    all_parameters, lobes_config, reference_params, ChiangEffects, ChiangFamily, ChiangModel,
-    ChiangParamFile, ChiangParamName, ChiangParams, WidthNodes,
+    all_parameters, reference_params, ChiangEffects, ChiangFamily, ChiangModel, ChiangParamFile,
+    ChiangParamName, ChiangParams, WidthNodes,
 };
-use crate::families::{ChiangRecord, FamilyParams};
+use crate::families::{FamilyParams, OwnFamily};
 use crate::files::{Floored, LoadReport};
 use crate::fit::family::{Family, FitInput};
 use crate::fit::fixes::FreeSet;
@@ -99,14 +99,15 @@ pub fn fit_chiang(
     let grouped = data.subset(&order);
     let data = &grouped;
     let mut warnings = Vec::new();
-    let effects = opts.model.chiang.effects;
+    let model = ChiangModel::of_setup(&opts.model);
+    let effects = model.effects;
     let forward = ChiangForward {
-        model: opts.model.chiang.clone(),
+        model: model.clone(),
         measurement: opts.measurement,
     };
     // The multi-start only looks for basins: a coarser width rule there, the polish at the
     // requested one (so the result is the requested model's optimum).
-    let screening = screening_model(&opts.model.chiang)?.map(|model| ChiangForward {
+    let screening = screening_model(&model)?.map(|model| ChiangForward {
         model,
         measurement: opts.measurement,
     });
@@ -120,24 +121,17 @@ pub fn fit_chiang(
         "the terms in play do not depend on it",
         &mut warnings,
     );
-    let terms: Vec<&str> = [
-        (effects.r, "R"),
-        (effects.tt, "TT"),
-        (effects.trt, "TRT"),
-        (effects.residual, "residual"),
-    ]
-    .iter()
-    .filter(|(on, _)| *on)
-    .map(|(_, n)| *n)
-    .collect();
     let screened = match &screening {
         Some(s) => format!("; the multi-start screens with {}", s.model.width()),
         None => String::new(),
     };
     let reasons = vec![format!(
         "Chiang 2016 model, terms {} (--terms), width nodes {} (--width-nodes{screened})",
-        terms.join("+"),
-        opts.model.chiang.width()
+        effects
+            .terms()
+            .names(&crate::families::chiang::TERMS)
+            .join("+"),
+        model.width()
     )];
     let options = |sub: usize, explicit: bool, floored: Floored| {
         let choice = crate::fit::stages::ModelChoice {
@@ -161,14 +155,7 @@ pub fn fit_chiang(
             base: set.base.clone(),
             free: set.free.clone(),
             options: &options,
-            records: crate::families::ModelRecords {
-                config: lobes_config(&effects),
-                chiang: Some(ChiangRecord {
-                    effects,
-                    width_nodes: opts.model.chiang.width(),
-                }),
-                terms: None,
-            },
+            records: ChiangFamily.records(&opts.model),
             all: all_parameters(nc),
             why: &why,
             params_file: |p| FamilyParams::Chiang(ChiangParamFile::from_params(p)),

@@ -5,6 +5,7 @@
 use crate::data::Dataset;
 use crate::error::Result;
 use crate::families::effects::ModelConfig;
+use crate::families::marschner::family::MarschnerModel;
 use crate::families::marschner::params::ParamFile;
 use crate::families::marschner::Params;
 use crate::families::{FamilyModel, FamilyParams, ModelRecords};
@@ -92,10 +93,10 @@ pub fn synthesize_directions(
     seed: u64,
 ) -> Result<(Dataset, Truth)> {
     params.validate()?;
-    let model = FamilyModel::Marschner {
+    let model = FamilyModel::Marschner(MarschnerModel {
         params: params.clone(),
         config: *config,
-    };
+    });
     let file = FamilyParams::Marschner(ParamFile::from_params(params));
     let source = Source {
         model: &model,
