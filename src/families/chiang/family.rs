@@ -109,11 +109,6 @@ impl ChiangRecord {
     pub fn effects_text(&self) -> String {
         self.effects.terms().names(&super::TERMS).join("+")
     }
-
-    /// The model this record describes (an out-of-range node count is an error).
-    pub fn model(&self) -> Result<ChiangModel> {
-        ChiangModel::with_width(self.effects, self.width_nodes)
-    }
 }
 
 impl OwnRecord for ChiangRecord {
