@@ -14,11 +14,14 @@ use num_dual::{DualDVec64, DualNum, DualSVec64};
 
 use super::source::{SourceFit, SourceModel};
 use crate::error::{Error, Result};
+use crate::families::chiang::family::ChiangEvaluation;
 use crate::families::chiang::variant::{
     variant_jacobian, variant_jacobian_static, variant_scattering_batch, Formulation, Tilt,
     VariantParams,
 };
 use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParams};
+use crate::families::marschner::family::MarschnerModel;
+use crate::families::FamilyModel;
 use crate::geometry::Angles;
 use crate::lm::LevenbergMarquardt;
 
@@ -105,9 +108,9 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
     } = MappingTarget::new(source)?;
     let n = source.model.n_channels();
     let final_model = ChiangModel::default();
-    let (params, exact, iterations, starts) = match (&source.model, formulation.tilt) {
-        (SourceModel::Chiang { params: p, effects }, Tilt::Exit)
-            if formulation == Formulation::PBRT_V4 && *effects == ChiangEffects::default() =>
+    let (params, exact, iterations, starts) = match (&source.model.model, formulation.tilt) {
+        (FamilyModel::Chiang(ChiangEvaluation { params: p, model }), Tilt::Exit)
+            if formulation == Formulation::PBRT_V4 && model.effects == ChiangEffects::default() =>
         {
             (
                 VariantParams {
@@ -154,8 +157,8 @@ pub fn fit_mapping(source: &SourceFit, formulation: Formulation) -> Result<Mappi
         log_errors(&fitted, &target, &floor, n)
     };
     let errors = errors_of(&params);
-    let as_fitted = match &source.model {
-        SourceModel::Chiang { effects, .. } if *effects != ChiangEffects::default() => {
+    let as_fitted = match &source.model.model {
+        FamilyModel::Chiang(c) if c.model.effects != ChiangEffects::default() => {
             let start = &start_points(&source.model, &formulation)[0];
             let e = errors_of(&build::<f64>(start, n, formulation.gain));
             Some((rms(&e), max(&e)))
@@ -322,8 +325,8 @@ fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>>
         Tilt::Incidence => -1.0,
     };
     let gain = 1.0 / formulation.factor;
-    let starts: Vec<VariantParams<f64>> = match model {
-        SourceModel::Chiang { params: p, .. } => vec![VariantParams {
+    let starts: Vec<VariantParams<f64>> = match &model.model {
+        FamilyModel::Chiang(ChiangEvaluation { params: p, .. }) => vec![VariantParams {
             chiang: ChiangParams {
                 alpha: sign * p.alpha,
                 ..p.clone()
@@ -331,17 +334,17 @@ fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>>
             gain,
         }],
         // Another family: the typical middle of pbrt's ranges, β_n at two widths.
-        SourceModel::Table(model) => [0.3, 0.7]
+        FamilyModel::Table(model) => [0.3, 0.7]
             .iter()
             .map(|&beta_n| VariantParams {
                 chiang: ChiangParams {
                     beta_n,
-                    ..crate::families::chiang::reference_params(model.n_channels())
+                    ..crate::families::chiang::reference_params(model.params.n_channels)
                 },
                 gain,
             })
             .collect(),
-        SourceModel::Marschner { params, .. } => [0.3, 0.7]
+        FamilyModel::Marschner(MarschnerModel { params, .. }) => [0.3, 0.7]
             .iter()
             .map(|&beta_n| VariantParams {
                 chiang: ChiangParams {

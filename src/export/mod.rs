@@ -23,7 +23,9 @@ use std::path::Path;
 use std::str::FromStr;
 
 use crate::error::{Error, Result};
+use crate::families::chiang::family::ChiangEvaluation;
 use crate::families::chiang::variant::Formulation;
+use crate::families::FamilyModel;
 
 pub use mapping::{dense_sphere, fit_mapping, Mapping};
 pub use source::{SourceFit, SourceModel};
@@ -289,9 +291,10 @@ pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
 /// switched off (every renderer renders R, TT, TRT and the residual), with the rms cost of
 /// exporting the fit's parameters as they are and of the refitted parameters actually written.
 pub fn unrepresentable(source: &SourceFit, renderer: Renderer, mapping: &Mapping) -> Vec<String> {
-    let SourceModel::Chiang { effects, .. } = &source.model else {
+    let FamilyModel::Chiang(ChiangEvaluation { model, .. }) = &source.model.model else {
         return Vec::new();
     };
+    let effects = model.effects;
     let Some((rms_as_is, max_as_is)) = mapping.as_fitted else {
         return Vec::new();
     };

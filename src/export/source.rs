@@ -1,5 +1,5 @@
 //! What `hairfit export` reads from a fit directory: the model family and its parameters
-//! (`params.json`, a Chiang or table family's file when tagged with its `"model"`), the fit's quality, channel
+//! (`params.json`, read as its `"model"` says), the fit's quality, channel
 //! names, switched-off terms and held parameters (`fit.json`, read loosely so every family's
 //! records serve), and the measured directions (`curves.csv`, one per sample).
 
@@ -9,76 +9,39 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::error::{Error, Result};
-use crate::families::chiang::family::ChiangRecord;
-use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParamFile, ChiangParams};
 use crate::families::effects::ModelConfig;
-use crate::families::marschner::params::ParamFile;
-use crate::families::marschner::Params;
-use crate::families::{FamilyModel, FamilyParams, ModelFamily, ModelSetup};
-use crate::files::{Curves, ParameterFile};
+use crate::families::shared::quadrature::WidthNodes;
+use crate::families::{FamilyModel, FamilyParams, FamilyRecord, ModelFamily, ModelSetup};
+use crate::files::Curves;
 use crate::geometry::Angles;
 
 /// At most this many measured directions enter a mapping (a 3-channel, 8-variable Jacobian of
 /// 20 000 directions is ≈ 4 MB); larger fits are thinned evenly and the header says so.
 pub const MAX_MEASURED_DIRECTIONS: usize = 20_000;
 
-/// The fitted model whose `S` a renderer must reproduce.
+/// The fitted model whose `S` a renderer must reproduce: the fit's family and its model under
+/// the configuration the fit ran with (a renderer's target may start from its parameters).
 #[derive(Debug, Clone)]
-pub enum SourceModel {
-    /// A Chiang fit and the terms it ran with (a renderer always renders all four).
-    Chiang {
-        params: ChiangParams<f64>,
-        effects: ChiangEffects,
-    },
-    Marschner {
-        params: Params<f64>,
-        config: ModelConfig,
-    },
-    /// A table family's fit under the terms it ran with.
-    Table(FamilyModel),
+pub struct SourceModel {
+    pub family: ModelFamily,
+    pub model: FamilyModel,
 }
 
 impl SourceModel {
-    /// `"Chiang"` or `"Marschner"`.
+    /// The family's name in sentences (`"Marschner"`).
     pub fn name(&self) -> &'static str {
-        match self {
-            SourceModel::Chiang { .. } => "Chiang",
-            SourceModel::Marschner { .. } => "Marschner",
-            SourceModel::Table(model) => match model {
-                FamilyModel::Table(m) => m.table.title(),
-                _ => "a model family",
-            },
-        }
+        self.family.title()
     }
 
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
-        match self {
-            SourceModel::Chiang { params, .. } => params.sigma_a.len(),
-            SourceModel::Marschner { params, .. } => params.sigma_a.len(),
-            SourceModel::Table(model) => model.n_channels(),
-        }
+        self.model.n_channels()
     }
 
     /// `S` at every direction, `out[k·n + c]`.
     pub fn scattering(&self, angles: &[Angles]) -> Vec<f64> {
-        let n = self.n_channels();
-        let mut out = vec![0.0; angles.len() * n];
-        match self {
-            SourceModel::Chiang { params, effects } => {
-                // The fit's terms (its S), at the default width rule (the renderer's reference).
-                let model =
-                    ChiangModel::with_width(*effects, crate::families::chiang::WidthNodes::Auto)
-                        .expect("auto needs no count");
-                crate::families::chiang::scattering_batch(params, &model, angles, &mut out);
-            }
-            SourceModel::Marschner { params, config } => {
-                for (a, row) in angles.iter().zip(out.chunks_mut(n)) {
-                    crate::families::marschner::scattering(params, config, a, row);
-                }
-            }
-            SourceModel::Table(model) => model.eval_batch(angles, &mut out),
-        }
+        let mut out = vec![0.0; angles.len() * self.n_channels()];
+        self.model.eval_batch(angles, &mut out);
         out
     }
 }
@@ -130,50 +93,18 @@ impl SourceFit {
                 )));
             }
         }
-        let model = match tag.as_deref() {
-            Some("chiang") => SourceModel::Chiang {
-                params: ChiangParamFile::from_json_str(&text, &params_path)?.to_params(),
-                // A fit.json without the record predates term switches: all four were on.
-                effects: fit
-                    .get("chiang")
-                    .and_then(|r| serde_json::from_value::<ChiangRecord>(r.clone()).ok())
-                    .map(|r| r.effects)
-                    .unwrap_or_default(),
-            },
-            None | Some("marschner") => {
-                let mut value: Value =
-                    serde_json::from_str(&text).map_err(|e| Error::json(&params_path, &e, None))?;
-                if let Some(map) = value.as_object_mut() {
-                    map.remove("model");
-                }
-                let file = ParamFile::from_json_str(&value.to_string(), &params_path)?;
-                // The fit's model switches (root mode, lobes, glints, eccentricity), so the S
-                // matched is the fitted one; defaults when fit.json does not record them.
-                let config = fit
-                    .get("model")
-                    .and_then(|m| serde_json::from_value::<ModelConfig>(m.clone()).ok())
-                    .unwrap_or_default();
-                SourceModel::Marschner {
-                    params: file.to_params(),
-                    config,
-                }
-            }
-            Some(other) => {
-                let family = ModelFamily::parse(other)
-                    .map_err(|e| Error::Other(format!("{}: {e}", params_path.display())))?;
-                let file = FamilyParams::from_json_text(text.clone(), &params_path, family)?;
-                // The fit's terms, so the S matched is the fitted one.
-                let terms = fit
-                    .get("terms")
-                    .and_then(|t| serde_json::from_value::<Vec<String>>(t.clone()).ok());
-                let setup = ModelSetup::from_records(
-                    family,
-                    ModelConfig::default(),
-                    None,
-                    terms.as_deref(),
-                )?;
-                SourceModel::Table(FamilyModel::new(&file, &setup))
-            }
+        let family = match tag.as_deref() {
+            Some(tag) => ModelFamily::parse(tag)
+                .map_err(|e| Error::Other(format!("{}: {e}", params_path.display())))?,
+            None => ModelFamily::default(),
+        };
+        let file = FamilyParams::from_json_text(text, &params_path, family)?;
+        let mut setup = fit_setup(&fit, family)?;
+        // At the default width rule, the renderers' reference, whatever rule the fit used.
+        setup.width_nodes = WidthNodes::default();
+        let model = SourceModel {
+            family,
+            model: FamilyModel::new(&file, &setup),
         };
         let n = model.n_channels();
         let channels = fit
@@ -253,6 +184,19 @@ impl SourceFit {
             ))),
         }
     }
+}
+
+/// The configuration fit.json records (`model`, an `Own` family's record, a table family's
+/// `terms`), read loosely: what it lacks (a file older than the record) is the family's
+/// default, so the `S` matched is the fitted one.
+fn fit_setup(fit: &Value, family: ModelFamily) -> Result<ModelSetup> {
+    let read = |key: &str| fit.get(key).cloned();
+    let config = read("model")
+        .and_then(|m| serde_json::from_value::<ModelConfig>(m).ok())
+        .unwrap_or_default();
+    let record = read("chiang").and_then(|r| serde_json::from_value::<FamilyRecord>(r).ok());
+    let terms = read("terms").and_then(|t| serde_json::from_value::<Vec<String>>(t).ok());
+    ModelSetup::from_records(family, config, record.as_ref(), terms.as_deref())
 }
 
 /// fit.json's parameters that were not free or not determined, with why:

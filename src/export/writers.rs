@@ -5,6 +5,7 @@
 use super::mapping::Mapping;
 use super::source::SourceFit;
 use super::Renderer;
+use crate::families::FamilyModel;
 
 /// The header's lines (no comment markers).
 pub fn header_lines(
@@ -32,7 +33,7 @@ pub fn header_lines(
         format!("mapping: {}", mapping.quality_text()),
         format!("measured directions: {}", source.measured_from),
     ]);
-    if matches!(source.model, super::SourceModel::Chiang { .. }) && !source.held.is_empty() {
+    if matches!(source.model.model, FamilyModel::Chiang(_)) && !source.held.is_empty() {
         lines.push(format!(
             "held by the fit, not fitted from the data: {}",
             source.held.join(", ")

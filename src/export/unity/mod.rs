@@ -16,10 +16,12 @@ use super::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
 use super::mapping::{max as largest, MappingTarget};
 use super::source::{SourceFit, SourceModel};
 use crate::error::Result;
+use crate::families::chiang::family::ChiangEvaluation;
 use crate::families::frostbite::{
     absorption_denominator, Frostbite, BASE_COLOR, BASE_COLOR_MIN, CUTICLE_ANGLE, ETA,
     RADIAL_SMOOTHNESS, RADIAL_SMOOTHNESS_MAX, SMOOTHNESS, SMOOTHNESS_MAX,
 };
+use crate::families::marschner::family::MarschnerModel;
 use crate::families::table::fit::{TableForward, TableParam};
 use crate::families::table::{TableFamily, TableParams, TermSet};
 use crate::families::{FamilyModel, TableModel};
@@ -235,17 +237,15 @@ fn starting_inputs(model: &SourceModel, n: usize) -> Vec<UnityInputs> {
             })
             .to_vec()
     };
-    match model {
-        SourceModel::Table(FamilyModel::Table(TableModel { table, params, .. }))
-            if table.name() == Frostbite::NAME =>
-        {
+    match &model.model {
+        FamilyModel::Table(TableModel { table, params, .. }) if table.name() == Frostbite::NAME => {
             vec![UnityInputs::from_params(params)]
         }
-        SourceModel::Marschner { params, .. } => {
+        FamilyModel::Marschner(MarschnerModel { params, .. }) => {
             at_radial(&params.sigma_a, params.beta_r, params.alpha_r)
         }
         // d'Eon's M has standard deviation ≈ 0.726β_m in θ_r, half that in θ_h.
-        SourceModel::Chiang { params, .. } => {
+        FamilyModel::Chiang(ChiangEvaluation { params, .. }) => {
             at_radial(&params.sigma_a, 0.363 * params.beta_m, params.alpha)
         }
         _ => [(0.8, 0.5), (0.92, 0.8)]
@@ -315,11 +315,11 @@ pub fn fit_unity(source: &SourceFit) -> Result<UnityMapping> {
 /// What the inputs cannot carry of the source fit, and where HDRP departs from the family.
 fn warnings(source: &SourceFit, m: &UnityMapping) -> Vec<String> {
     let mut out = Vec::new();
-    if let SourceModel::Table(FamilyModel::Table(TableModel {
+    if let FamilyModel::Table(TableModel {
         table,
         params,
         terms,
-    })) = &source.model
+    }) = &source.model.model
     {
         if table.name() == Frostbite::NAME {
             if *terms != TermSet::all(Frostbite::TERMS.len()) {

@@ -15,10 +15,12 @@ use crate::error::{Error, Result};
 use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
 use crate::export::mapping::{max, rms, MappingTarget};
 use crate::export::source::{SourceFit, SourceModel};
+use crate::families::chiang::family::ChiangEvaluation;
 use crate::families::karis::{
     Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS, SCATTER,
     SCATTER_TERM, SHIFT, SPECULAR,
 };
+use crate::families::marschner::family::MarschnerModel;
 use crate::families::table::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
 };
@@ -187,10 +189,8 @@ fn start_inputs(model: &SourceModel) -> Vec<EngineInputs> {
         let colour = sigma_a.iter().map(|s| (-4.0 * s).exp().clamp(0.01, 0.99));
         colour.collect()
     };
-    let mut starts = match model {
-        SourceModel::Table(FamilyModel::Table(TableModel { table, params, .. }))
-            if table.name() == Karis::NAME =>
-        {
+    let mut starts = match &model.model {
+        FamilyModel::Table(TableModel { table, params, .. }) if table.name() == Karis::NAME => {
             let get = |k: usize| params.values[k][0];
             vec![EngineInputs {
                 base_color: params.values[BASE_COLOR].clone(),
@@ -202,18 +202,18 @@ fn start_inputs(model: &SourceModel) -> Vec<EngineInputs> {
             }]
         }
         // Marschner's β_R is the θ_h width of R; Karis's is ≈ r²/2.
-        SourceModel::Marschner { params, .. } => vec![EngineInputs {
+        FamilyModel::Marschner(MarschnerModel { params, .. }) => vec![EngineInputs {
             base_color: legacy_colour(&params.sigma_a),
             roughness: (2.0 * params.beta_r).sqrt().clamp(0.1, 1.0),
             ..generic(0.5, 0.5)
         }],
         // Chiang's θ_h width is ≈ 0.363 β_m.
-        SourceModel::Chiang { params, .. } => vec![EngineInputs {
+        FamilyModel::Chiang(ChiangEvaluation { params, .. }) => vec![EngineInputs {
             base_color: legacy_colour(&params.sigma_a),
             roughness: (0.726 * params.beta_m).sqrt().clamp(0.1, 1.0),
             ..generic(0.5, 0.5)
         }],
-        SourceModel::Table(_) => Vec::new(),
+        FamilyModel::Table(_) => Vec::new(),
     };
     starts.extend([generic(0.3, 0.35), generic(0.6, 0.6)]);
     starts
@@ -240,10 +240,8 @@ pub fn fit_engine(source: &SourceFit) -> Result<EngineMapping> {
     let n_measured = source.measured.len();
     let (_, _, all) = errors_of(&inputs, engine_terms());
     let errors = LogErrors::of(&all, n_measured * n);
-    let as_fitted = match &source.model {
-        SourceModel::Table(FamilyModel::Table(TableModel { table, .. }))
-            if table.name() == Karis::NAME =>
-        {
+    let as_fitted = match &source.model.model {
+        FamilyModel::Table(TableModel { table, .. }) if table.name() == Karis::NAME => {
             let (r, m, _) = errors_of(&starts[0], engine_terms());
             Some((r, m))
         }
