@@ -463,8 +463,10 @@ fn beam_dir(omega_i: V3) -> [f64; 2] {
     [-omega_i[1] / len, -omega_i[2] / len]
 }
 
-/// Rays traced at once by [`Sampler::trace_batch`].
-pub const LANES: usize = 8;
+/// Rays traced at once by [`Sampler::trace_batch`]: four AVX-512 registers per quantity, so a
+/// step's chain of divisions, square roots and `exp` runs as four independent chains that
+/// overlap (docs/trace.md, Speed).
+pub const LANES: usize = 32;
 
 /// The state of [`LANES`] rays inside the fibre, one array per quantity (the lanes' loops
 /// vectorise over them). An inactive lane's values are stale and never read as results.

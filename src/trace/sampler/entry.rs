@@ -1,9 +1,9 @@
 //! The entry of new rays, [`LANES`] at a time: their offsets drawn first, then the point where
 //! each meets the surface, its normal and the facet draw's setup in one branch-free loop over
-//! all of them (square roots and divisions 8-wide, where one ray's were a serial chain), their
-//! facets drawn in ray order, then Fresnel from outside, the reflected and the refracted
-//! directions in another such loop; R's exits are tallied in ray order. The entered rays wait
-//! in [`Entries`] until a lane is free.
+//! all of them (square roots and divisions a vector at a time, where one ray's were a serial
+//! chain), their facets drawn in ray order, then Fresnel from outside, the reflected and the
+//! refracted directions in another such loop; R's exits are tallied in ray order. The entered
+//! rays wait in [`Entries`] until a lane is free.
 
 use rand_chacha::rand_core::RngCore;
 
