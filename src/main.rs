@@ -163,7 +163,6 @@ struct LoadArgs {
 static ALLOCATOR: hairfit::cli::oom::ExitOnOom = hairfit::cli::oom::ExitOnOom;
 
 fn main() -> ExitCode {
-    hairfit::cli::heap::keep_freed_blocks();
     hairfit::cli::oom::set_aside();
     hairfit::cli::exit::write_errors_not_signals();
     let command = hairfit::cli::help::with_registries(Cli::command());

@@ -8,7 +8,6 @@ pub mod exit;
 pub mod export;
 mod family_options;
 pub mod fit;
-pub mod heap;
 pub mod help;
 pub mod oom;
 pub mod summary;
