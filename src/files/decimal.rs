@@ -117,9 +117,59 @@ fn tie_possible(v: f64) -> bool {
     }
 }
 
+/// zmij's text of a finite `v` in its parts: sign, the digits before the point, those after it
+/// (none in `5e-7`; `0` in `12.0`, an integer) and the exponent (0 in fixed notation).
+struct Parts<'a> {
+    negative: bool,
+    mantissa: &'a [u8],
+    int: &'a [u8],
+    frac: &'a [u8],
+    exp: i32,
+}
+
+impl Parts<'_> {
+    #[inline]
+    fn of(text: &[u8]) -> Parts<'_> {
+        let (negative, body) = match text.split_first() {
+            Some((b'-', rest)) => (true, rest),
+            _ => (false, text),
+        };
+        let (mantissa, exp) = split_exponent(body);
+        let (int, frac) = match mantissa.iter().position(|&b| b == b'.') {
+            Some(p) => (&mantissa[..p], &mantissa[p + 1..]),
+            None => (mantissa, &mantissa[mantissa.len()..]),
+        };
+        Parts {
+            negative,
+            mantissa,
+            int,
+            frac,
+            exp,
+        }
+    }
+}
+
 /// Append `v` as `format!("{v}")` writes it (finite `v`).
 pub fn push_display(out: &mut Vec<u8>, v: f64, buf: &mut DigitBuffer) {
-    let d = Decimal::of(v, buf);
+    // zmij's fixed notation is std's but for an integer's `.0`; its exponent form and the
+    // values whose digits may differ (ties) go through the digits.
+    if !tie_possible(v) {
+        let text = buf.format_finite(v).as_bytes();
+        if !has_exponent(text) {
+            out.extend_from_slice(text.strip_suffix(b".0").unwrap_or(text));
+            return;
+        }
+    }
+    push_display_of(out, &Decimal::of(v, buf));
+}
+
+/// Whether zmij wrote `text` with an exponent (within its last five bytes, as in `1e-300`).
+#[inline]
+fn has_exponent(text: &[u8]) -> bool {
+    text[text.len().saturating_sub(5)..].contains(&b'e')
+}
+
+fn push_display_of(out: &mut Vec<u8>, d: &Decimal) {
     let digits = &d.digits[..d.len];
     if d.negative {
         out.push(b'-');
@@ -143,7 +193,59 @@ pub fn push_display(out: &mut Vec<u8>, v: f64, buf: &mut DigitBuffer) {
 
 /// Append `v` as `format!("{v:e}")` writes it (finite `v`).
 pub fn push_exponent(out: &mut Vec<u8>, v: f64, buf: &mut DigitBuffer) {
-    let d = Decimal::of(v, buf);
+    if tie_possible(v) {
+        return push_exponent_of(out, &Decimal::of(v, buf));
+    }
+    // Without a tie zmij's digits are std's: move its point behind the first significant digit.
+    let p = Parts::of(buf.format_finite(v).as_bytes());
+    if p.negative {
+        out.push(b'-');
+    }
+    let exp = if p.int.len() == 1 && p.int[0] != b'0' && p.frac != b"0" {
+        // `1.25`, `5e-7`, `1.5e+16`: the mantissa is std's already.
+        out.extend_from_slice(p.mantissa);
+        p.exp
+    } else if p.int[0] != b'0' {
+        // `123.25` → `1.2325e2`; `12300.0` → `1.23e4`.
+        out.push(p.int[0]);
+        let (rest, frac) = if p.frac == b"0" {
+            (trim_trailing_zeros(&p.int[1..]), &p.frac[..0])
+        } else {
+            (&p.int[1..], p.frac)
+        };
+        if !rest.is_empty() || !frac.is_empty() {
+            out.push(b'.');
+            out.extend_from_slice(rest);
+            out.extend_from_slice(frac);
+        }
+        p.int.len() as i32 - 1 + p.exp
+    } else {
+        // `0.00125` → `1.25e-3`; `0.0` → `0e0`.
+        let zeros = p.frac.iter().take_while(|&&b| b == b'0').count();
+        match p.frac.get(zeros) {
+            None => {
+                out.push(b'0');
+                0
+            }
+            Some(&first) => {
+                out.push(first);
+                if zeros + 1 < p.frac.len() {
+                    out.push(b'.');
+                    out.extend_from_slice(&p.frac[zeros + 1..]);
+                }
+                -(zeros as i32) - 1
+            }
+        }
+    };
+    push_exponent_suffix(out, exp);
+}
+
+fn trim_trailing_zeros(digits: &[u8]) -> &[u8] {
+    let end = digits.iter().rposition(|&b| b != b'0').map_or(0, |k| k + 1);
+    &digits[..end]
+}
+
+fn push_exponent_of(out: &mut Vec<u8>, d: &Decimal) {
     if d.negative {
         out.push(b'-');
     }
@@ -152,11 +254,17 @@ pub fn push_exponent(out: &mut Vec<u8>, v: f64, buf: &mut DigitBuffer) {
         out.push(b'.');
         out.extend_from_slice(&d.digits[1..d.len]);
     }
+    push_exponent_suffix(out, d.exp);
+}
+
+/// `e-3`, `e16`, `e0`.
+#[inline]
+fn push_exponent_suffix(out: &mut Vec<u8>, exp: i32) {
     out.push(b'e');
-    if d.exp < 0 {
+    if exp < 0 {
         out.push(b'-');
     }
-    push_u64(out, d.exp.unsigned_abs() as u64);
+    push_u64(out, exp.unsigned_abs() as u64);
 }
 
 /// Append `v` in decimal.
@@ -225,6 +333,28 @@ mod tests {
                 cases.push(v);
             }
         }
+        // Values of every decade zmij writes in fixed notation and around it (random bits seldom
+        // land there): integers, short and full-length digit strings, both signs.
+        for exp in -8..=18 {
+            let decade = 10f64.powi(exp);
+            for k in 0..2_000u64 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                let unit = (x >> 11) as f64 / (1u64 << 53) as f64;
+                let v = if k % 2 == 0 {
+                    1.0 + 9.0 * unit
+                } else {
+                    -(1.0 + 9.0 * unit)
+                };
+                cases.push(v * decade);
+                cases.push((v * 1000.0).round() / 1000.0 * decade);
+                cases.push((v * decade).round());
+            }
+        }
+        cases.extend([
+            5.0, 12300.0, 0.00125, 123.25, 1e-5, 1.5e-5, 9.5e-6, 1e-6, 0.1, 1e17,
+        ]);
         for v in cases {
             let (display, exp) = both(v);
             assert_eq!(display, format!("{v}"), "{v:e}");
