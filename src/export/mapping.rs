@@ -20,7 +20,6 @@ use crate::families::chiang::variant::{
     VariantParams,
 };
 use crate::families::chiang::{ChiangEffects, ChiangModel, ChiangParams};
-use crate::families::marschner::family::MarschnerModel;
 use crate::families::FamilyModel;
 use crate::geometry::Angles;
 use crate::lm::LevenbergMarquardt;
@@ -317,8 +316,8 @@ pub fn unbuild(p: &VariantParams<f64>, gain: bool) -> Vec<f64> {
 }
 
 /// Where the LM starts. A Chiang source: its own parameters, α mirrored for a θ_i-tilt renderer
-/// (R sits at −α there). A Marschner source: η and σ_a as fitted, β_m from β_R (√v₀ ≈ 0.726β_m
-/// for small β), α from α_R (the same sign rule), β_n at two widths.
+/// (R sits at −α there). Another family with an R lobe: η and σ_a as fitted, β_m from R's width
+/// (√v₀ ≈ 0.726β_m for small β), α from R's shift (the same sign rule), β_n at two widths.
 fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>> {
     let sign = match formulation.tilt {
         Tilt::Exit => 1.0,
@@ -333,30 +332,32 @@ fn start_points(model: &SourceModel, formulation: &Formulation) -> Vec<Vec<f64>>
             },
             gain,
         }],
-        // Another family: the typical middle of pbrt's ranges, β_n at two widths.
-        FamilyModel::Table(model) => [0.3, 0.7]
-            .iter()
-            .map(|&beta_n| VariantParams {
-                chiang: ChiangParams {
-                    beta_n,
-                    ..crate::families::chiang::reference_params(model.params.n_channels)
-                },
-                gain,
-            })
-            .collect(),
-        FamilyModel::Marschner(MarschnerModel { params, .. }) => [0.3, 0.7]
-            .iter()
-            .map(|&beta_n| VariantParams {
-                chiang: ChiangParams {
-                    eta: params.eta,
-                    sigma_a: params.sigma_a.clone(),
-                    beta_m: (params.beta_r / 0.726).clamp(0.02, 0.9),
-                    beta_n,
-                    alpha: sign * params.alpha_r,
-                },
-                gain,
-            })
-            .collect(),
+        _ => match model.specular_lobe() {
+            Some(lobe) => [0.3, 0.7]
+                .iter()
+                .map(|&beta_n| VariantParams {
+                    chiang: ChiangParams {
+                        eta: lobe.eta,
+                        sigma_a: lobe.sigma_a.clone(),
+                        beta_m: (lobe.width / 0.726).clamp(0.02, 0.9),
+                        beta_n,
+                        alpha: sign * lobe.shift,
+                    },
+                    gain,
+                })
+                .collect(),
+            // No R lobe to start from: the typical middle of pbrt's ranges, β_n at two widths.
+            None => [0.3, 0.7]
+                .iter()
+                .map(|&beta_n| VariantParams {
+                    chiang: ChiangParams {
+                        beta_n,
+                        ..crate::families::chiang::reference_params(model.n_channels())
+                    },
+                    gain,
+                })
+                .collect(),
+        },
     };
     starts
         .iter()

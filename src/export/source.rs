@@ -11,7 +11,9 @@ use serde_json::Value;
 use crate::error::{Error, Result};
 use crate::families::effects::ModelConfig;
 use crate::families::shared::quadrature::WidthNodes;
-use crate::families::{FamilyModel, FamilyParams, FamilyRecord, ModelFamily, ModelSetup};
+use crate::families::{
+    FamilyModel, FamilyParams, FamilyRecord, ModelFamily, ModelSetup, SpecularLobe,
+};
 use crate::files::Curves;
 use crate::geometry::Angles;
 
@@ -36,6 +38,11 @@ impl SourceModel {
     /// Number of colour channels.
     pub fn n_channels(&self) -> usize {
         self.model.n_channels()
+    }
+
+    /// Its R lobe, where another family's model starts its fit ([`SpecularLobe`]).
+    pub fn specular_lobe(&self) -> Option<SpecularLobe> {
+        self.model.scattering().specular_lobe()
     }
 
     /// `S` at every direction, `out[k·n + c]`.

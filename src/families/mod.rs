@@ -172,6 +172,24 @@ pub trait ScatteringModel {
     /// Per-lobe values `[R, TT, TRT]` per channel; terms beyond TRT add to the TRT column, a
     /// table family's terms each to its column, so the three add up to `S`.
     fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]);
+    /// Its R lobe in the terms every family that has one shares, where a model of another
+    /// family starts its fit to this one's `S` (`hairfit export`); `None`: no such lobe.
+    fn specular_lobe(&self) -> Option<SpecularLobe> {
+        None
+    }
+}
+
+/// A model's R lobe (reflection at the cuticle), described alike by every family that has one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpecularLobe {
+    /// Refractive index of the fibre.
+    pub eta: f64,
+    /// Absorption per channel, per unit of the fibre's radius.
+    pub sigma_a: Vec<f64>,
+    /// R's standard deviation in θ_h = (θ_i + θ_r)/2, radians.
+    pub width: f64,
+    /// R's longitudinal shift, radians (Marschner's α_R and Chiang's α share its sign).
+    pub shift: f64,
 }
 
 /// A fit.json or truth.json given where a parameter file goes: both hold the parameters under

@@ -16,12 +16,10 @@ use super::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
 use super::mapping::{max as largest, MappingTarget};
 use super::source::{SourceFit, SourceModel};
 use crate::error::Result;
-use crate::families::chiang::family::ChiangEvaluation;
 use crate::families::frostbite::{
     absorption_denominator, Frostbite, BASE_COLOR, BASE_COLOR_MIN, CUTICLE_ANGLE, ETA,
     RADIAL_SMOOTHNESS, RADIAL_SMOOTHNESS_MAX, SMOOTHNESS, SMOOTHNESS_MAX,
 };
-use crate::families::marschner::family::MarschnerModel;
 use crate::families::table::fit::{TableForward, TableParam};
 use crate::families::table::{TableFamily, TableParams, TermSet};
 use crate::families::{FamilyModel, TableModel};
@@ -219,8 +217,8 @@ fn base_color_for(sigma_a: f64, beta_n: f64) -> f64 {
         .clamp(2.0 * BASE_COLOR_MIN, 0.999)
 }
 
-/// Where the LM starts: a frostbite fit's own inputs; from a Marschner or Chiang fit, the
-/// inputs their parameters suggest (R's θ_h width → 1 − Smoothness, R's centre → −Cuticle Angle,
+/// Where the LM starts: a frostbite fit's own inputs; from a fit with an R lobe, the
+/// inputs it suggests (R's θ_h width → 1 − Smoothness, R's centre → −Cuticle Angle,
 /// σ_a → Base Color) at two Radial Smoothness values; from any other family a small grid.
 fn starting_inputs(model: &SourceModel, n: usize) -> Vec<UnityInputs> {
     let at_radial = |sigma: &[f64], width: f64, centre: f64| {
@@ -241,22 +239,18 @@ fn starting_inputs(model: &SourceModel, n: usize) -> Vec<UnityInputs> {
         FamilyModel::Table(TableModel { table, params, .. }) if table.name() == Frostbite::NAME => {
             vec![UnityInputs::from_params(params)]
         }
-        FamilyModel::Marschner(MarschnerModel { params, .. }) => {
-            at_radial(&params.sigma_a, params.beta_r, params.alpha_r)
-        }
-        // d'Eon's M has standard deviation ≈ 0.726β_m in θ_r, half that in θ_h.
-        FamilyModel::Chiang(ChiangEvaluation { params, .. }) => {
-            at_radial(&params.sigma_a, 0.363 * params.beta_m, params.alpha)
-        }
-        _ => [(0.8, 0.5), (0.92, 0.8)]
-            .map(|(smoothness, radial_smoothness)| UnityInputs {
-                base_color: vec![0.5; n],
-                smoothness,
-                radial_smoothness,
-                cuticle_angle_deg: 3.0,
-                gain: 1.0,
-            })
-            .to_vec(),
+        _ => match model.specular_lobe() {
+            Some(lobe) => at_radial(&lobe.sigma_a, lobe.width, lobe.shift),
+            None => [(0.8, 0.5), (0.92, 0.8)]
+                .map(|(smoothness, radial_smoothness)| UnityInputs {
+                    base_color: vec![0.5; n],
+                    smoothness,
+                    radial_smoothness,
+                    cuticle_angle_deg: 3.0,
+                    gain: 1.0,
+                })
+                .to_vec(),
+        },
     }
 }
 

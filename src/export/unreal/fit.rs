@@ -15,12 +15,10 @@ use crate::error::{Error, Result};
 use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
 use crate::export::mapping::{max, rms, MappingTarget};
 use crate::export::source::{SourceFit, SourceModel};
-use crate::families::chiang::family::ChiangEvaluation;
 use crate::families::karis::{
     Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS, SCATTER,
     SCATTER_TERM, SHIFT, SPECULAR,
 };
-use crate::families::marschner::family::MarschnerModel;
 use crate::families::table::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
 };
@@ -171,7 +169,7 @@ fn unbuild(inputs: &EngineInputs) -> Vec<f64> {
 }
 
 /// Where the LM starts: a Karis fit's own inputs (the engine renders that model, so this is
-/// the answer when its η and shift are the engine's); for a Marschner or Chiang fit, the
+/// the answer when its η and shift are the engine's); for a fit with an R lobe, the
 /// legacy colour of its σ_a (`C = e^{−4σ_a}`, docs/karis.md) and the Roughness whose lobe
 /// width matches its β; then two generic starts. Values sit off the ends of `[0, 1]`, where
 /// the transform's derivative vanishes, unless the source put them there.
@@ -201,19 +199,14 @@ fn start_inputs(model: &SourceModel) -> Vec<EngineInputs> {
                 gain: 1.0,
             }]
         }
-        // Marschner's β_R is the θ_h width of R; Karis's is ≈ r²/2.
-        FamilyModel::Marschner(MarschnerModel { params, .. }) => vec![EngineInputs {
-            base_color: legacy_colour(&params.sigma_a),
-            roughness: (2.0 * params.beta_r).sqrt().clamp(0.1, 1.0),
-            ..generic(0.5, 0.5)
-        }],
-        // Chiang's θ_h width is ≈ 0.363 β_m.
-        FamilyModel::Chiang(ChiangEvaluation { params, .. }) => vec![EngineInputs {
-            base_color: legacy_colour(&params.sigma_a),
-            roughness: (0.726 * params.beta_m).sqrt().clamp(0.1, 1.0),
-            ..generic(0.5, 0.5)
-        }],
-        FamilyModel::Table(_) => Vec::new(),
+        // Karis's θ_h width of R is ≈ r²/2.
+        _ => (model.specular_lobe().into_iter())
+            .map(|lobe| EngineInputs {
+                base_color: legacy_colour(&lobe.sigma_a),
+                roughness: (2.0 * lobe.width).sqrt().clamp(0.1, 1.0),
+                ..generic(0.5, 0.5)
+            })
+            .collect(),
     };
     starts.extend([generic(0.3, 0.35), generic(0.6, 0.6)]);
     starts

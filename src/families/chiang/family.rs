@@ -8,6 +8,7 @@ use super::evaluator::{scattering_batch, scattering_by_lobe};
 use super::{ChiangEffects, ChiangFamily, ChiangModel, ChiangParamFile, ChiangParams, WidthNodes};
 use crate::error::Result;
 use crate::families::table::Term;
+use crate::families::SpecularLobe;
 use crate::families::{FamilyModel, FamilyParams, ModelSetup, OwnTypes, SigmaAFile};
 use crate::families::{FamilyRecord, ModelRecords, OwnFamily, OwnRecord, ScatteringModel};
 use crate::geometry::{Angles, SigmaA};
@@ -57,6 +58,16 @@ impl ScatteringModel for ChiangEvaluation {
 
     fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]) {
         scattering_by_lobe(&self.params, &self.model, angles, out)
+    }
+
+    /// d'Eon's M_p has standard deviation ≈ 0.726 β_m in θ_r, so half that in θ_h.
+    fn specular_lobe(&self) -> Option<SpecularLobe> {
+        Some(SpecularLobe {
+            eta: self.params.eta,
+            sigma_a: self.params.sigma_a.clone(),
+            width: 0.363 * self.params.beta_m,
+            shift: self.params.alpha,
+        })
     }
 }
 

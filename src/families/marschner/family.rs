@@ -5,8 +5,8 @@ use super::params::ParamFile;
 use super::{
     scattering_batch, scattering_by_lobe, scattering_lanes, MarschnerFamily, ModelConfig, Params,
 };
-use crate::families::ScatteringModel;
 use crate::families::{FamilyModel, FamilyParams, ModelSetup, NoRecord, OwnTypes, SigmaAFile};
+use crate::families::{ScatteringModel, SpecularLobe};
 use crate::geometry::{Angles, SigmaA};
 
 impl OwnTypes for MarschnerFamily {
@@ -64,6 +64,16 @@ impl ScatteringModel for MarschnerModel {
 
     fn by_lobe(&self, angles: &Angles, out: &mut [[f64; 3]]) {
         scattering_by_lobe(&self.params, &self.config, angles, out)
+    }
+
+    /// β_R is R's width in θ_h and α_R its shift.
+    fn specular_lobe(&self) -> Option<SpecularLobe> {
+        Some(SpecularLobe {
+            eta: self.params.eta,
+            sigma_a: self.params.sigma_a.clone(),
+            width: self.params.beta_r,
+            shift: self.params.alpha_r,
+        })
     }
 }
 
