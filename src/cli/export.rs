@@ -6,8 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::error::{Error, Result};
-use crate::export::unity::export_unity;
-use crate::export::{export, unreal, write_export, Renderer, Target};
+use crate::export::{warning_lines, Target};
 
 /// Write what a renderer loads from a fit directory.
 #[derive(Debug, Clone, Args)]
@@ -49,18 +48,12 @@ fn parse_target(s: &str) -> std::result::Result<Target, String> {
 /// stdout.
 pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
     // Checked before the model is fitted, which takes a while: the options first, then the fit.
-    if args.to == Target::Unity {
-        unity_output(args.output.as_deref())?;
-    }
+    args.to.check_output(args.output.as_deref())?;
     if let Some(path) = &args.output {
         crate::atomic::refuse_directory_output("--output", path, args.to.file_name())?;
         args.to.check_output_name("--output", path)?;
         let mut written = vec![path.clone()];
-        match args.to {
-            Target::Unreal => written.push(unreal::script_path(path)),
-            Target::Unity => written.push(path.with_extension("cs")),
-            Target::Renderer(_) => {}
-        }
+        written.extend(args.to.companion(path));
         let inputs = ["params.json", "fit.json", "curves.csv"].map(|f| args.dir.join(f));
         let inputs: Vec<(&str, &std::path::Path)> =
             inputs.iter().map(|p| ("the fit", p.as_path())).collect();
@@ -70,11 +63,7 @@ pub fn export_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
         }
     }
     let verdict_warnings = crate::export::source::exportable(&args.dir, args.allow_failed)?;
-    let (summary, text) = match args.to {
-        Target::Renderer(renderer) => renderer_command(args, renderer),
-        Target::Unreal => unreal_command(args),
-        Target::Unity => unity_command(args).map(|summary| (summary, None)),
-    }?;
+    let (summary, text) = args.to.run(&args.dir, args.output.as_deref())?;
     Ok((
         format!("{}{summary}", warning_lines(&verdict_warnings)),
         text,
@@ -98,102 +87,4 @@ fn refuse_inside_a_set(output: &Path, written: &Path) -> Result<()> {
         dir.display(),
         marker.command,
     )))
-}
-
-/// `--to pbrt|blender|materialx`: one file.
-fn renderer_command(args: &ExportArgs, renderer: Renderer) -> Result<(String, Option<String>)> {
-    let result = export(&args.dir, renderer)?;
-    let warned = warning_lines(&result.warnings);
-    match &args.output {
-        Some(path) => {
-            write_export(path, &result)?;
-            Ok((
-                format!("{warned}{}; wrote {}", result.summary, path.display()),
-                None,
-            ))
-        }
-        None => Ok((format!("{warned}{}", result.summary), Some(result.text))),
-    }
-}
-
-/// `--to unreal`: the JSON (stdout without --output) and, with --output, the script beside it.
-fn unreal_command(args: &ExportArgs) -> Result<(String, Option<String>)> {
-    let result = unreal::export(&args.dir)?;
-    let warned = warning_lines(&result.warnings);
-    match &args.output {
-        Some(path) => {
-            unreal::write_files(path, &result)?;
-            Ok((
-                format!(
-                    "{warned}{}; wrote {} and {}",
-                    result.summary,
-                    path.display(),
-                    unreal::script_path(path).display()
-                ),
-                None,
-            ))
-        }
-        None => Ok((
-            format!(
-                "{warned}{}; the Python script is written with --output (beside the JSON)",
-                result.summary
-            ),
-            Some(result.json),
-        )),
-    }
-}
-
-/// Warnings first, each on its own line (main prefixes the first with `hairfit: `).
-fn warning_lines(warnings: &[String]) -> String {
-    warnings
-        .iter()
-        .map(|w| format!("warning: {w}\nhairfit: "))
-        .collect()
-}
-
-/// `--to unity`'s `--output`: required (two files cannot go to stdout), and the JSON's name,
-/// not the script's.
-fn unity_output(output: Option<&Path>) -> Result<&Path> {
-    let json = output.ok_or_else(|| {
-        Error::Other(
-            "--to unity writes two files, NAME.json and the C# editor script NAME.cs beside it: \
-             pass --output NAME.json"
-                .into(),
-        )
-    })?;
-    if json
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("cs"))
-    {
-        return Err(Error::Other(format!(
-            "--output {}: --to unity's --output names the JSON file; the C# script is written \
-             beside it with .cs: pass --output {}",
-            json.display(),
-            json.with_extension("json").display()
-        )));
-    }
-    Ok(json)
-}
-
-/// `--to unity`: the JSON and the C# script beside it.
-fn unity_command(args: &ExportArgs) -> Result<String> {
-    let json = unity_output(args.output.as_deref())?;
-    let script = json.with_extension("cs");
-    let script_name = script
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let result = export_unity(&args.dir, &script_name)?;
-    // Both or neither: a pair from two different fits would load without complaint.
-    crate::atomic::write_together(&[
-        (json, result.json.as_bytes()),
-        (&script, result.script.as_bytes()),
-    ])?;
-    Ok(format!(
-        "{}{}; wrote {} and {}",
-        warning_lines(&result.warnings),
-        result.summary,
-        json.display(),
-        script.display()
-    ))
 }

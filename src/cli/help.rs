@@ -1,5 +1,5 @@
 //! The help text that names families and export targets, written from the lists the code uses
-//! ([`ModelFamily::ALL`], [`Target::ALL`]) so a family or target added there shows in
+//! ([`ModelFamily::ALL`], [`Target::all`]) so a family or target added there shows in
 //! `hairfit --help` without anyone editing a doc comment.
 
 use clap::Command;
@@ -17,9 +17,9 @@ pub fn family_list() -> String {
 
 /// `pbrt (pbrt-v4), blender (Blender Cycles), …`.
 pub fn target_list() -> String {
-    Target::ALL
-        .map(|t| format!("{t} ({})", t.program()))
-        .join(", ")
+    let targets = Target::all().iter();
+    let each: Vec<String> = targets.map(|t| format!("{t} ({})", t.program())).collect();
+    each.join(", ")
 }
 
 /// The command's one-line description.
@@ -61,15 +61,17 @@ pub fn with_registries(command: Command) -> Command {
             })
         })
         .mut_subcommand("export", |c| {
-            let programs = Target::ALL.map(|t| t.program()).join(", ");
+            let programs: Vec<&str> = Target::all().iter().map(|t| t.program()).collect();
+            let programs = programs.join(", ");
             c.about(format!(
                 "Write what a renderer or engine loads ({programs}) from a fit, \
                  its model fitted to the fit's S"
             ))
             .mut_arg("to", |a| {
-                let each = Target::ALL
+                let each: Vec<String> = (Target::all().iter())
                     .map(|t| format!("{t}: {}", t.file_kind()))
-                    .join("; ");
+                    .collect();
+                let each = each.join("; ");
                 a.help(format!("Target, one of {}. {each}", target_list()))
             })
         })

@@ -7,7 +7,7 @@
 use argmin::core::{Jacobian, Operator};
 use nalgebra::{DMatrix, DVector};
 
-use super::mapping::{channel_floor, least_squares, log_floored, max, rms, MAX_ITERATIONS};
+use super::reference::{channel_floor, least_squares, log_floored, max, rms, MAX_ITERATIONS};
 use crate::error::{Error, Result};
 
 /// An engine's `S` as a function of its free (unconstrained) variables.

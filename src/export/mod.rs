@@ -1,184 +1,110 @@
-//! `hairfit export`: from a fit directory, the file a renderer loads — a pbrt-v4
-//! `MakeNamedMaterial` block, a Blender script creating a Principled Hair BSDF (Chiang), a
-//! MaterialX document with a `chiang_hair_bsdf` — with the renderer's own formulation FITTED to
-//! the fit's `S` (never converted by a formula), and the mapping's error in the file's header.
+//! `hairfit export`: from a fit directory, the files a renderer or engine loads, with the
+//! program's own hair model FITTED to the fit's `S` (never converted by a formula) and the
+//! mapping's error in the files. A target ([`ExportTarget`]) belongs to the family whose model
+//! the program draws and lives in that family's folder (`families/<name>/export/`); the list
+//! `--to` takes ([`Target::all`]) is read from the registry.
 //!
 //! - [`source`]: what a fit directory holds (model, parameters, quality, measured directions);
-//! - [`mapping`]: the least-squares fit of a renderer's variant to the source `S`;
-//! - [`writers`]: the three file formats;
-//! - [`unreal`]: Unreal Engine 5's hair material inputs (the Karis family) fitted the same way,
-//!   written as a JSON file and a Python script beside it;
-//! - [`unity`] (with [`log_fit`]): Unity HDRP's hair inputs, fitted through
-//!   the frostbite family, as a JSON file and a C# editor script beside it.
+//! - [`reference`]: what every target fits to (the source's `S` over measured directions and a
+//!   dense sphere) and the least-squares run;
+//! - [`log_fit`]: the log-`S` fit of a target whose model is not a variant of the source's;
+//! - [`text`]: numbers, colours and names as the targets' files write them.
 
 pub mod log_fit;
-pub mod mapping;
+pub mod reference;
 pub mod source;
-pub mod unity;
-pub mod unreal;
-pub mod writers;
+pub mod text;
 
 use std::fmt;
-use std::path::Path;
+use std::marker::PhantomData;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::OnceLock;
 
 use crate::error::{Error, Result};
-use crate::families::chiang::family::ChiangEvaluation;
-use crate::families::chiang::variant::Formulation;
-use crate::families::FamilyModel;
 
-pub use mapping::{dense_sphere, fit_mapping, Mapping};
+pub use reference::dense_sphere;
 pub use source::{SourceFit, SourceModel};
 
-/// A renderer `hairfit export` writes for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Renderer {
-    Pbrt,
-    Blender,
-    Materialx,
-}
-
-impl Renderer {
-    /// How the renderer's `f` differs from pbrt-v4's (docs/chiang.md).
-    pub fn formulation(&self) -> Formulation {
-        match self {
-            Renderer::Pbrt => Formulation::PBRT_V4,
-            Renderer::Blender => Formulation::CYCLES,
-            Renderer::Materialx => Formulation::MATERIALX,
-        }
-    }
-
-    /// A file name of the renderer's kind, for hints (`hair.pbrt`).
-    pub fn file_name(&self) -> &'static str {
-        match self {
-            Renderer::Pbrt => "hair.pbrt",
-            Renderer::Blender => "hair.py",
-            Renderer::Materialx => "hair.mtlx",
-        }
-    }
-
-    /// Every renderer, in `--to`'s order.
-    pub const ALL: [Renderer; 3] = [Renderer::Pbrt, Renderer::Blender, Renderer::Materialx];
-
-    /// The extension of the file the renderer loads (without the dot).
-    pub fn extension(&self) -> &'static str {
-        match self {
-            Renderer::Pbrt => "pbrt",
-            Renderer::Blender => "py",
-            Renderer::Materialx => "mtlx",
-        }
-    }
-
+/// One `--to` target: a renderer or engine whose hair model is a family's, fitted to a fit's `S`
+/// and written in the program's format. Implemented in that family's `export` folder.
+pub trait ExportTarget: Sync {
+    /// Its `--to` name (`pbrt`).
+    fn name(&self) -> &'static str;
+    /// Other spellings `--to` accepts (`pbrt-v4`).
+    fn aliases(&self) -> &'static [&'static str];
+    /// The renderer or engine that loads the file, for help ("pbrt-v4", "Unreal Engine 5").
+    fn program(&self) -> &'static str;
+    /// The extension of the (main) file written, without the dot.
+    fn extension(&self) -> &'static str;
+    /// A file name of the target's kind, for hints (`hair.pbrt`).
+    fn file_name(&self) -> &'static str;
     /// What the written file is, for messages.
-    pub fn file_kind(&self) -> &'static str {
-        match self {
-            Renderer::Pbrt => "a pbrt-v4 MakeNamedMaterial block",
-            Renderer::Blender => "a Blender Python script",
-            Renderer::Materialx => "a MaterialX document",
+    fn file_kind(&self) -> &'static str;
+    /// The file written beside `output` (a script that loads it), if the target writes one.
+    fn companion(&self, _output: &Path) -> Option<PathBuf> {
+        None
+    }
+    /// `--output` checked before anything is fitted (fitting takes a while).
+    fn check_output(&self, _output: Option<&Path>) -> Result<()> {
+        Ok(())
+    }
+    /// Fit the target to the fit in `dir` and write its files to `output` (all or nothing), or
+    /// return the main file's text for stdout: (the summary line for stderr, that text).
+    fn run(&self, dir: &Path, output: Option<&Path>) -> Result<(String, Option<String>)>;
+}
+
+/// The targets of a family's model, implemented in its `export` folder; a family without one
+/// implements nothing.
+pub trait FamilyTargets {
+    fn targets() -> &'static [&'static dyn ExportTarget];
+}
+
+/// What `--to` names: one of [`Target::all`].
+#[derive(Clone, Copy)]
+pub struct Target(pub &'static dyn ExportTarget);
+
+/// A family's targets, or none when its type does not implement [`FamilyTargets`] (so a family
+/// without targets writes nothing): method lookup on `&TargetsProbe<T>` takes
+/// [`ProbeTargets`] when `T: FamilyTargets` holds and otherwise falls back, one autoref later,
+/// to [`ProbeNoTargets`] (autoref specialisation).
+struct TargetsProbe<T>(PhantomData<T>);
+
+trait ProbeTargets {
+    fn targets(&self) -> &'static [&'static dyn ExportTarget];
+}
+
+impl<T: FamilyTargets> ProbeTargets for TargetsProbe<T> {
+    fn targets(&self) -> &'static [&'static dyn ExportTarget] {
+        T::targets()
+    }
+}
+
+trait ProbeNoTargets {
+    fn targets(&self) -> &'static [&'static dyn ExportTarget] {
+        &[]
+    }
+}
+
+impl<T> ProbeNoTargets for &TargetsProbe<T> {}
+
+/// [`registry_targets`]: every family's targets, in the registry's order.
+macro_rules! registry_targets {
+    ($($variant:ident => $kind:ident($ty:path)),* $(,)?) => {
+        fn registry_targets() -> Vec<Target> {
+            let mut all = Vec::new();
+            $(all.extend((&TargetsProbe::<$ty>(PhantomData)).targets().iter().map(|t| Target(*t)));)*
+            all
         }
-    }
-
-    /// Refuse an output file named with another export's extension ([`Target::check_output_name`]).
-    pub fn check_output_name(&self, flag: &str, path: &Path) -> Result<()> {
-        Target::Renderer(*self).check_output_name(flag, path)
-    }
-
-    /// The model a header names.
-    pub fn model_name(&self) -> &'static str {
-        match self {
-            Renderer::Pbrt => "pbrt-v4 hair (Chiang 2016, tilt on theta_r)",
-            Renderer::Blender => {
-                "Blender Cycles Principled Hair BSDF, model Chiang (tilt on theta_i)"
-            }
-            Renderer::Materialx => "MaterialX chiang_hair_bsdf (tilt on theta_i, f/pi, tints)",
-        }
-    }
+    };
 }
-
-impl FromStr for Renderer {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Renderer> {
-        match s.to_ascii_lowercase().as_str() {
-            "pbrt" | "pbrt-v4" => Ok(Renderer::Pbrt),
-            "blender" | "cycles" => Ok(Renderer::Blender),
-            "materialx" | "mtlx" => Ok(Renderer::Materialx),
-            other => Err(Error::Other(format!(
-                "unknown renderer `{other}`: use --to {}",
-                or_list(&Renderer::ALL.map(|r| r.to_string()))
-            ))),
-        }
-    }
-}
-
-impl fmt::Display for Renderer {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Renderer::Pbrt => "pbrt",
-            Renderer::Blender => "blender",
-            Renderer::Materialx => "materialx",
-        })
-    }
-}
-
-/// What `--to` names: a renderer of the Chiang model (one file), or a game engine whose own
-/// hair model is fitted (a JSON file of its material inputs and a script beside it).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Target {
-    Renderer(Renderer),
-    /// Unreal Engine 5's Hair shading model ([`unreal`]).
-    Unreal,
-    /// Unity HDRP's hair, Material Type Physical ([`unity`]).
-    Unity,
-}
+crate::families::registry!(registry_targets);
 
 impl Target {
-    /// Every target, in `--to`'s order.
-    pub const ALL: [Target; 5] = [
-        Target::Renderer(Renderer::Pbrt),
-        Target::Renderer(Renderer::Blender),
-        Target::Renderer(Renderer::Materialx),
-        Target::Unreal,
-        Target::Unity,
-    ];
-
-    /// The renderer or engine that loads the file, for help ("pbrt-v4", "Unreal Engine 5").
-    pub fn program(&self) -> &'static str {
-        match self {
-            Target::Renderer(Renderer::Pbrt) => "pbrt-v4",
-            Target::Renderer(Renderer::Blender) => "Blender Cycles",
-            Target::Renderer(Renderer::Materialx) => "MaterialX",
-            Target::Unreal => "Unreal Engine 5",
-            Target::Unity => "Unity HDRP",
-        }
-    }
-
-    /// The extension of the (main) file written, without the dot.
-    pub fn extension(&self) -> &'static str {
-        match self {
-            Target::Renderer(r) => r.extension(),
-            Target::Unreal | Target::Unity => "json",
-        }
-    }
-
-    /// A file name of the target's kind, for hints.
-    pub fn file_name(&self) -> &'static str {
-        match self {
-            Target::Renderer(r) => r.file_name(),
-            Target::Unreal | Target::Unity => "hair.json",
-        }
-    }
-
-    /// What the written file is, for messages.
-    pub fn file_kind(&self) -> &'static str {
-        match self {
-            Target::Renderer(r) => r.file_kind(),
-            Target::Unreal => {
-                "an Unreal material-parameter file (JSON; its Python script goes beside it)"
-            }
-            Target::Unity => {
-                "a Unity HDRP hair material (JSON; its C# editor script goes beside it)"
-            }
-        }
+    /// Every target, in `--to`'s order: each family's, in the registry's order.
+    pub fn all() -> &'static [Target] {
+        static ALL: OnceLock<Vec<Target>> = OnceLock::new();
+        ALL.get_or_init(registry_targets)
     }
 
     /// Refuse an output file named with another target's extension (`--to pbrt --output
@@ -192,8 +118,9 @@ impl Target {
         if ext.eq_ignore_ascii_case(self.extension()) {
             return Ok(());
         }
-        let others: Vec<Target> = (Target::ALL.into_iter())
+        let others: Vec<Target> = (Target::all().iter())
             .filter(|t| ext.eq_ignore_ascii_case(t.extension()))
+            .copied()
             .collect();
         let Some(other) = others.first() else {
             return Ok(());
@@ -211,19 +138,47 @@ impl Target {
     }
 }
 
+impl std::ops::Deref for Target {
+    type Target = dyn ExportTarget;
+    fn deref(&self) -> &(dyn ExportTarget + 'static) {
+        self.0
+    }
+}
+
+impl PartialEq for Target {
+    fn eq(&self, other: &Target) -> bool {
+        self.name() == other.name()
+    }
+}
+
+impl Eq for Target {}
+
+impl fmt::Debug for Target {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Target({})", self.name())
+    }
+}
+
+impl fmt::Display for Target {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl FromStr for Target {
     type Err = Error;
     fn from_str(s: &str) -> Result<Target> {
-        match s.to_ascii_lowercase().as_str() {
-            "unreal" | "ue" | "ue5" => Ok(Target::Unreal),
-            "unity" | "hdrp" => Ok(Target::Unity),
-            other => other.parse().map(Target::Renderer).map_err(|_| {
-                Error::Other(format!(
-                    "unknown export target `{other}`: use --to {}",
-                    or_list(&Target::ALL.map(|t| t.to_string()))
-                ))
-            }),
-        }
+        let s = s.to_ascii_lowercase();
+        let found = Target::all()
+            .iter()
+            .find(|t| t.name() == s || t.aliases().contains(&s.as_str()));
+        found.copied().ok_or_else(|| {
+            let names: Vec<String> = Target::all().iter().map(|t| t.to_string()).collect();
+            Error::Other(format!(
+                "unknown export target `{s}`: use --to {}",
+                or_list(&names)
+            ))
+        })
     }
 }
 
@@ -236,101 +191,10 @@ fn or_list(names: &[String]) -> String {
     }
 }
 
-impl fmt::Display for Target {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Target::Renderer(r) => r.fmt(f),
-            Target::Unreal => f.write_str("unreal"),
-            Target::Unity => f.write_str("unity"),
-        }
-    }
-}
-
-/// One export: the file's text and the mapping it was written from.
-#[derive(Debug, Clone)]
-pub struct Export {
-    pub renderer: Renderer,
-    pub text: String,
-    pub mapping: Mapping,
-    /// One line for stderr: what was fitted and how well.
-    pub summary: String,
-    /// What the renderer cannot represent of the fit (also in the file's header).
-    pub warnings: Vec<String>,
-}
-
-/// Export the fit in `dir` for `renderer`.
-pub fn export(dir: &Path, renderer: Renderer) -> Result<Export> {
-    let source = SourceFit::load(dir)?;
-    let rgb_channels = source.rgb_order()?;
-    let mapping = fit_mapping(&source, renderer.formulation())?;
-    let warnings = unrepresentable(&source, renderer, &mapping);
-    let header = writers::header_lines(&source, renderer, &mapping, &rgb_channels, &warnings);
-    let name = writers::material_name(&source);
-    let text = match renderer {
-        Renderer::Pbrt => writers::pbrt(&name, &header, &mapping),
-        Renderer::Blender => writers::blender(&name, &header, &mapping),
-        Renderer::Materialx => writers::materialx(&name, &header, &mapping),
-    };
-    let summary = format!(
-        "export to {renderer}: {} from the {} fit in {}: {}",
-        renderer.model_name(),
-        source.model.name(),
-        dir.display(),
-        mapping.quality_text()
-    );
-    Ok(Export {
-        renderer,
-        text,
-        mapping,
-        summary,
-        warnings,
-    })
-}
-
-/// Warnings for what the fit used and `renderer` cannot render: a Chiang fit with a term
-/// switched off (every renderer renders R, TT, TRT and the residual), with the rms cost of
-/// exporting the fit's parameters as they are and of the refitted parameters actually written.
-pub fn unrepresentable(source: &SourceFit, renderer: Renderer, mapping: &Mapping) -> Vec<String> {
-    let FamilyModel::Chiang(ChiangEvaluation { model, .. }) = &source.model.model else {
-        return Vec::new();
-    };
-    let effects = model.effects;
-    let Some((rms_as_is, max_as_is)) = mapping.as_fitted else {
-        return Vec::new();
-    };
-    let terms = [
-        (effects.r, "R"),
-        (effects.tt, "TT"),
-        (effects.trt, "TRT"),
-        (effects.residual, "residual"),
-    ];
-    let list = |on: bool| {
-        terms
-            .iter()
-            .filter(|(t, _)| *t == on)
-            .map(|(_, n)| *n)
-            .collect::<Vec<_>>()
-            .join("+")
-    };
-    vec![format!(
-        "the fit ran with terms {} only ({} switched off), but {renderer} always renders all four \
-         (R, TT, TRT, residual) and cannot switch one off: the fit's parameters as they are would \
-         miss the fit's S by rms |d ln S| {rms_as_is:.4} (max {max_as_is:.3}); the exported \
-         parameters were refitted to the fit's S instead and miss it by rms |d ln S| {:.4} \
-         (max {:.3}) over {} measured + {} sphere directions",
-        list(true),
-        list(false),
-        mapping.rms_log,
-        mapping.max_log,
-        mapping.n_measured,
-        mapping.n_sphere
-    )]
-}
-
-/// Write `export.text` to `path` atomically.
-pub fn write_export(path: &Path, export: &Export) -> Result<()> {
-    crate::atomic::write_atomically(path, |w| {
-        w.write_all(export.text.as_bytes())
-            .map_err(|e| Error::io(path, e))
-    })
+/// Warnings first, each on its own line (main prefixes the first with `hairfit: `).
+pub fn warning_lines(warnings: &[String]) -> String {
+    warnings
+        .iter()
+        .map(|w| format!("warning: {w}\nhairfit: "))
+        .collect()
 }

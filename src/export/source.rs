@@ -14,6 +14,7 @@ use crate::families::shared::quadrature::WidthNodes;
 use crate::families::{
     FamilyModel, FamilyParams, FamilyRecord, ModelFamily, ModelSetup, SpecularLobe,
 };
+use crate::files::fit_json::FAMILY_RECORD_KEY;
 use crate::files::Curves;
 use crate::geometry::Angles;
 
@@ -201,7 +202,8 @@ fn fit_setup(fit: &Value, family: ModelFamily) -> Result<ModelSetup> {
     let config = read("model")
         .and_then(|m| serde_json::from_value::<ModelConfig>(m).ok())
         .unwrap_or_default();
-    let record = read("chiang").and_then(|r| serde_json::from_value::<FamilyRecord>(r).ok());
+    let record =
+        read(FAMILY_RECORD_KEY).and_then(|r| serde_json::from_value::<FamilyRecord>(r).ok());
     let terms = read("terms").and_then(|t| serde_json::from_value::<Vec<String>>(t).ok());
     ModelSetup::from_records(family, config, record.as_ref(), terms.as_deref())
 }

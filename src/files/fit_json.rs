@@ -16,6 +16,10 @@ use crate::families::effects::{ModelConfig, RootMode};
 use crate::families::{FamilyParams, FamilyRecord};
 use crate::geometry::Measurement;
 
+/// fit.json's key of [`FitJson::family_record`], the name the first family with a record gave it
+/// (the `serde(rename)` there says the same; readers of the file as JSON use this).
+pub const FAMILY_RECORD_KEY: &str = "chiang";
+
 /// How a fit (or one solver run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -464,7 +468,7 @@ pub struct FitJson {
     #[serde(default)]
     pub suggestions: Vec<Suggestion>,
     /// What the fit's family records of its configuration beside `model`, when it records
-    /// anything ([`crate::families::OwnTypes::Record`]; Chiang's is the file's key).
+    /// anything ([`crate::families::OwnTypes::Record`]), under [`FAMILY_RECORD_KEY`].
     #[serde(rename = "chiang", default, skip_serializing_if = "Option::is_none")]
     pub family_record: Option<FamilyRecord>,
     /// A table family's terms that were on (`--terms`); absent for Marschner and Chiang.

@@ -37,7 +37,7 @@ fn the_help_names_every_family() {
 fn the_help_names_every_export_target() {
     let top = help(&["--help"]);
     let export = help(&["export", "--help"]);
-    for target in Target::ALL {
+    for target in Target::all() {
         assert!(top.contains(target.program()), "{target} in: {top}");
         assert!(
             export.contains(&format!("{target} ({})", target.program())),

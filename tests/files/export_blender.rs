@@ -7,7 +7,7 @@
 use crate::support;
 use std::path::Path;
 
-use hairfit::export::{export, write_export, Renderer};
+use hairfit::families::chiang::export::{export, write_export, Renderer};
 
 #[test]
 #[ignore = "needs bpy (scripts/install-test-tools.sh --with-bpy); renders with Cycles"]

@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 
 use crate::support::export::{chiang_fit_dir, marschner_fit_dir, set_a_rgb};
-use hairfit::export::{export, Renderer};
+use hairfit::families::chiang::export::{export, Renderer};
 use hairfit::families::chiang::ChiangParams;
 
 /// pbrt-v4's `hair` material parameters (materials.cpp: HairMaterial::Create) with the types

@@ -5,7 +5,7 @@
 use crate::support;
 use std::path::Path;
 
-use hairfit::export::{export, write_export, Renderer};
+use hairfit::families::chiang::export::{export, write_export, Renderer};
 
 /// Load `path` with the standard data libraries imported and validate it; Ok(()) or the
 /// validation message. Panics (with the install command) when the tool is missing.

@@ -11,8 +11,8 @@ use std::process::Output;
 
 use crate::support::export::marschner_fit_dir;
 use cli::{failed, hairfit, stderr};
-use hairfit::export::unity::fit_unity;
 use hairfit::export::SourceFit;
+use hairfit::families::frostbite::export::fit_unity;
 
 fn p(path: &Path) -> &str {
     path.to_str().unwrap()

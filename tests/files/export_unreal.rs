@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use cli::{hairfit, hairfit_ok, s, stderr, stdout};
-use hairfit::export::unreal::{self, files::DEFAULT_PARENT};
+use hairfit::families::karis::export::{self as unreal, files::DEFAULT_PARENT};
 use serde_json::{json, Value};
 
 /// `root/name` holding a Karis fit: params.json as `hairfit fit` writes it, a fit.json with the

@@ -253,8 +253,9 @@ fn cycles(edges: &BTreeMap<Module, BTreeSet<Module>>) -> Vec<Vec<String>> {
 }
 
 /// A module's top-level module; a family's fit adaptor (`families::<x>::fit`,
-/// `families::table::fit`) belongs to the fit, whose stages it hands its family to, and its
-/// section of the cost ledger (`families::<x>::cost`) to the ledger.
+/// `families::table::fit`) belongs to the fit, whose stages it hands its family to, its
+/// section of the cost ledger (`families::<x>::cost`) to the ledger, and the export targets
+/// that draw its model (`families::<x>::export`) to the export.
 fn top(m: &Module) -> &str {
     match m.as_slice() {
         [f, _, part, ..] if f == "families" && FAMILY_PARTS.contains(&part.as_str()) => part,
@@ -264,7 +265,7 @@ fn top(m: &Module) -> &str {
 
 /// The parts of a family's folder that belong to a layer above the families (the module of that
 /// name): each plugs the family into that layer.
-const FAMILY_PARTS: &[&str] = &["fit", "cost"];
+const FAMILY_PARTS: &[&str] = &["fit", "cost", "export"];
 
 #[test]
 fn the_checker_sees_a_cycle_and_an_import_through_a_group() {

@@ -36,6 +36,7 @@ pub mod azimuthal;
 pub mod cost;
 pub mod demo;
 pub mod evaluator;
+pub mod export;
 pub mod family;
 pub mod file;
 pub mod fit;

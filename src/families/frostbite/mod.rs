@@ -15,6 +15,7 @@
 //! η fixed at 1.55 as HDRP fixes it (`--free eta` moves only Fresnel and the refracted angle).
 
 pub mod azimuthal;
+pub mod export;
 
 use std::f64::consts::PI;
 

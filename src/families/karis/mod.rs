@@ -13,6 +13,8 @@
 //! strands (docs/karis.md, "Which way the tangent points"), so its `sin θ_L`, `sin θ_V` are
 //! `sin θ_i`, `sin θ_r` here and its shift signs are kept: R sits toward the root.
 
+pub mod export;
+
 use std::f64::consts::PI;
 
 use num_dual::DualNum;

@@ -1,7 +1,7 @@
 //! The Unreal mapping fit: the engine's material inputs (Base Color per channel, Roughness,
 //! Specular, Backlit, Scatter) and ONE shared gain (the light's intensity), fitted by least
 //! squares in log S to the source fit's `S` over the measured directions plus the dense sphere
-//! ([`super::super::mapping::MappingTarget`]). The engine's model is the Karis family with every
+//! ([`crate::export::reference::MappingTarget`]). The engine's model is the Karis family with every
 //! term on and the engine's fixed η and cuticle shift; the colour can only come from Base Color.
 //!
 //! Free variables are unconstrained: each input in `[lo, 1]` is `lo + (1 − lo) sin² x` (every
@@ -11,14 +11,14 @@
 use nalgebra::{allocator::Allocator, Const, DefaultAllocator, Dim, Dyn, U1};
 use num_dual::{Derivative, DualNum, DualVec64};
 
-use crate::error::{Error, Result};
-use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
-use crate::export::mapping::{max, rms, MappingTarget};
-use crate::export::source::{SourceFit, SourceModel};
-use crate::families::karis::{
+use super::super::{
     Karis, BACKLIT, BASE_COLOR, ENGINE_ETA, ENGINE_SHIFT, ETA, MIN_ROUGHNESS, ROUGHNESS, SCATTER,
     SCATTER_TERM, SHIFT, SPECULAR,
 };
+use crate::error::{Error, Result};
+use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
+use crate::export::reference::{max, rms, MappingTarget};
+use crate::export::source::{SourceFit, SourceModel};
 use crate::families::table::{
     clear_terms, total, zero_terms, DynTable, Table, TableFamily, TableParams, TermSet,
 };
@@ -114,7 +114,7 @@ impl EngineMapping {
             self.directions.1,
             e.rms,
             e.max,
-            crate::export::mapping::FLOOR_FRACTION,
+            crate::export::reference::FLOOR_FRACTION,
             self.work.0,
             self.work.1
         )
@@ -340,7 +340,7 @@ mod tests {
             scatter: 0.1,
             gain: 2.0,
         };
-        let angles = crate::export::mapping::dense_sphere();
+        let angles = crate::export::reference::dense_sphere();
         let target = engine_scattering(&truth, engine_terms(), &angles);
         let model = UnrealModel {
             angles: &angles,

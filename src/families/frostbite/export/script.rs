@@ -8,7 +8,7 @@
 
 use super::{quality_text, rgb, UnityMapping, HDRP_CONVENTIONS};
 use crate::export::source::SourceFit;
-use crate::export::writers::num;
+use crate::export::text::num;
 
 /// A C# identifier from a material name: other characters become `_`, a leading digit gets one.
 pub fn csharp_identifier(name: &str) -> String {

@@ -5,12 +5,12 @@
 
 use serde_json::{json, Value};
 
+use super::super::{ENGINE_ETA, ENGINE_SHIFT};
 use super::fit::EngineMapping;
 use super::{ENGINE_VERSION, MODEL_NAME, PARAMETERS};
-use crate::export::mapping::FLOOR_FRACTION;
+use crate::export::reference::FLOOR_FRACTION;
 use crate::export::source::SourceFit;
-use crate::export::writers::{material_name, rgb};
-use crate::families::karis::{ENGINE_ETA, ENGINE_SHIFT};
+use crate::export::text::{material_name, rgb};
 
 /// Where a parent material lives unless the script is told otherwise.
 pub const DEFAULT_PARENT: &str = "/Game/Hairfit/M_HairfitHair";

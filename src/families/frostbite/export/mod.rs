@@ -6,20 +6,21 @@
 //! follow, the mapping's error and the source fit, and a C# editor script beside it
 //! ([`script`]) that sets them on a material.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 
 mod script;
 
-use super::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
-use super::mapping::{max as largest, MappingTarget};
-use super::source::{SourceFit, SourceModel};
-use crate::error::Result;
-use crate::families::frostbite::{
+use super::{
     absorption_denominator, Frostbite, BASE_COLOR, BASE_COLOR_MIN, CUTICLE_ANGLE, ETA,
     RADIAL_SMOOTHNESS, RADIAL_SMOOTHNESS_MAX, SMOOTHNESS, SMOOTHNESS_MAX,
 };
+use crate::error::{Error, Result};
+use crate::export::log_fit::{fit_log, LogErrors, LogFit, LogModel, LogTarget};
+use crate::export::reference::{max as largest, MappingTarget};
+use crate::export::source::{SourceFit, SourceModel};
+use crate::export::{warning_lines, ExportTarget, FamilyTargets};
 use crate::families::table::fit::{TableForward, TableParam};
 use crate::families::table::{TableFamily, TableParams, TermSet};
 use crate::families::{FamilyModel, TableModel};
@@ -364,6 +365,103 @@ fn warnings(source: &SourceFit, m: &UnityMapping) -> Vec<String> {
     out
 }
 
+/// `--to unity`: the frostbite family is HDRP's physical hair.
+impl FamilyTargets for Frostbite {
+    fn targets() -> &'static [&'static dyn ExportTarget] {
+        &[&Unity]
+    }
+}
+
+/// Unity HDRP's hair, Material Type Physical: a JSON file of its inputs and a C# editor script
+/// beside it.
+pub struct Unity;
+
+impl ExportTarget for Unity {
+    fn name(&self) -> &'static str {
+        "unity"
+    }
+
+    fn aliases(&self) -> &'static [&'static str] {
+        &["hdrp"]
+    }
+
+    fn program(&self) -> &'static str {
+        "Unity HDRP"
+    }
+
+    fn extension(&self) -> &'static str {
+        "json"
+    }
+
+    fn file_name(&self) -> &'static str {
+        "hair.json"
+    }
+
+    fn file_kind(&self) -> &'static str {
+        "a Unity HDRP hair material (JSON; its C# editor script goes beside it)"
+    }
+
+    fn companion(&self, output: &Path) -> Option<PathBuf> {
+        Some(output.with_extension("cs"))
+    }
+
+    /// Two files cannot go to stdout: `--output` names the JSON.
+    fn check_output(&self, output: Option<&Path>) -> Result<()> {
+        unity_output(output).map(|_| ())
+    }
+
+    fn run(&self, dir: &Path, output: Option<&Path>) -> Result<(String, Option<String>)> {
+        unity_command(dir, output).map(|summary| (summary, None))
+    }
+}
+
+/// `--to unity`'s `--output`: required (two files cannot go to stdout), and the JSON's name,
+/// not the script's.
+fn unity_output(output: Option<&Path>) -> Result<&Path> {
+    let json = output.ok_or_else(|| {
+        Error::Other(
+            "--to unity writes two files, NAME.json and the C# editor script NAME.cs beside it: \
+             pass --output NAME.json"
+                .into(),
+        )
+    })?;
+    if json
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("cs"))
+    {
+        return Err(Error::Other(format!(
+            "--output {}: --to unity's --output names the JSON file; the C# script is written \
+             beside it with .cs: pass --output {}",
+            json.display(),
+            json.with_extension("json").display()
+        )));
+    }
+    Ok(json)
+}
+
+/// `--to unity`: the JSON and the C# script beside it.
+fn unity_command(dir: &Path, output: Option<&Path>) -> Result<String> {
+    let json = unity_output(output)?;
+    let script = json.with_extension("cs");
+    let script_name = script
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let result = export_unity(dir, &script_name)?;
+    // Both or neither: a pair from two different fits would load without complaint.
+    crate::atomic::write_together(&[
+        (json, result.json.as_bytes()),
+        (&script, result.script.as_bytes()),
+    ])?;
+    Ok(format!(
+        "{}{}; wrote {} and {}",
+        warning_lines(&result.warnings),
+        result.summary,
+        json.display(),
+        script.display()
+    ))
+}
+
 /// Export the fit in `dir` for Unity; `script_file` is the name the C# script will have (its
 /// class is named after the material).
 pub fn export_unity(dir: &Path, script_file: &str) -> Result<UnityExport> {
@@ -371,7 +469,7 @@ pub fn export_unity(dir: &Path, script_file: &str) -> Result<UnityExport> {
     let channels = source.rgb_order()?;
     let mapping = fit_unity(&source)?;
     let warnings = warnings(&source, &mapping);
-    let name = super::writers::material_name(&source);
+    let name = crate::export::text::material_name(&source);
     let json = json_text(&source, &mapping, &channels, &warnings, script_file);
     let script = script(&csharp_identifier(&name), &source, &mapping, &warnings);
     let summary = format!(
@@ -449,7 +547,7 @@ fn json_text(
             "rms_abs_d_ln_s_measured": m.errors.rms_measured,
             "measured_directions": m.directions.0,
             "sphere_directions": m.directions.1,
-            "floor_fraction": super::mapping::FLOOR_FRACTION,
+            "floor_fraction": crate::export::reference::FLOOR_FRACTION,
             "lm_iterations": m.work.0,
             "starts": m.work.1,
             "max_s": m.max_s,

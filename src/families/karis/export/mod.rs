@@ -8,11 +8,80 @@
 pub mod files;
 pub mod fit;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
+use super::Karis;
 use crate::error::Result;
 use crate::export::source::SourceFit;
+use crate::export::{warning_lines, ExportTarget, FamilyTargets};
 pub use fit::{fit_engine, EngineInputs, EngineMapping};
+
+/// `--to unreal`: the engine draws the Karis model.
+impl FamilyTargets for Karis {
+    fn targets() -> &'static [&'static dyn ExportTarget] {
+        &[&Unreal]
+    }
+}
+
+/// Unreal Engine 5's Hair shading model: a JSON file of its inputs and a Python script beside it.
+pub struct Unreal;
+
+impl ExportTarget for Unreal {
+    fn name(&self) -> &'static str {
+        "unreal"
+    }
+
+    fn aliases(&self) -> &'static [&'static str] {
+        &["ue", "ue5"]
+    }
+
+    fn program(&self) -> &'static str {
+        "Unreal Engine 5"
+    }
+
+    fn extension(&self) -> &'static str {
+        "json"
+    }
+
+    fn file_name(&self) -> &'static str {
+        "hair.json"
+    }
+
+    fn file_kind(&self) -> &'static str {
+        "an Unreal material-parameter file (JSON; its Python script goes beside it)"
+    }
+
+    fn companion(&self, output: &Path) -> Option<PathBuf> {
+        Some(script_path(output))
+    }
+
+    /// The JSON (stdout without an output) and, with one, the script beside it.
+    fn run(&self, dir: &Path, output: Option<&Path>) -> Result<(String, Option<String>)> {
+        let result = export(dir)?;
+        let warned = warning_lines(&result.warnings);
+        match output {
+            Some(path) => {
+                write_files(path, &result)?;
+                Ok((
+                    format!(
+                        "{warned}{}; wrote {} and {}",
+                        result.summary,
+                        path.display(),
+                        script_path(path).display()
+                    ),
+                    None,
+                ))
+            }
+            None => Ok((
+                format!(
+                    "{warned}{}; the Python script is written with --output (beside the JSON)",
+                    result.summary
+                ),
+                Some(result.json),
+            )),
+        }
+    }
+}
 
 /// The engine versions whose conventions the export follows.
 pub const ENGINE_VERSION: &str = "Unreal Engine 5.0-5.3";
@@ -122,6 +191,6 @@ pub fn write_files(path: &Path, export: &UnrealExport) -> Result<()> {
 }
 
 /// The script written beside the JSON `path`: the same name with `.py`.
-pub fn script_path(path: &Path) -> std::path::PathBuf {
+pub fn script_path(path: &Path) -> PathBuf {
     path.with_extension("py")
 }
