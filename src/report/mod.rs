@@ -432,8 +432,7 @@ fn profile_panels(fit: &FitJson) -> Vec<ProfilePanel> {
         .iter()
         .filter(|p| !p.profile.is_empty())
         .map(|p| {
-            let unit = crate::families::marschner::ParamName::from_json_name(&p.name)
-                .map_or("", |n| n.fact().unit.label());
+            let unit = fit.family().unit_label(&p.name);
             ProfilePanel {
                 title: if unit.is_empty() {
                     p.name.clone()
