@@ -36,7 +36,7 @@
 //! - [`synth`]: synthetic datasets with known truth.
 //! - [`trace`]: `hairfit trace`, a Monte Carlo ray tracer of one fibre: data no model made.
 //! - [`eval`]: `hairfit eval`, streaming angles in and scattering values out.
-//! - [`export`]: `hairfit export`, the files a renderer or engine loads ([`export::Target::ALL`]),
+//! - [`export`]: `hairfit export`, the files a renderer or engine loads ([`export::Target::all`]),
 //!   fitted to a fit's S.
 //!
 //! Results:

@@ -305,7 +305,7 @@ impl ModelFamily {
         self.facts().citation()
     }
 
-    /// The table family this is, or `None` for Marschner and Chiang.
+    /// The table family this is, or `None` for an `Own` family.
     pub fn table(self) -> Option<&'static dyn DynTable> {
         match self.entry() {
             Entry::Own(_) => None,

@@ -471,7 +471,7 @@ pub struct FitJson {
     /// anything ([`crate::families::OwnTypes::Record`]), under [`FAMILY_RECORD_KEY`].
     #[serde(rename = "chiang", default, skip_serializing_if = "Option::is_none")]
     pub family_record: Option<FamilyRecord>,
-    /// A table family's terms that were on (`--terms`); absent for Marschner and Chiang.
+    /// A table family's terms that were on (`--terms`); absent for an `Own` family.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub terms: Option<Vec<String>>,
 }
