@@ -1,4 +1,4 @@
-"""hairfit: fit hair scattering models (Marschner 2003, Chiang 2016) to fiber-scattering data.
+"""hairfit: fit hair scattering models (Marschner 2003, Chiang 2016, ...) to fiber-scattering data.
 
 Python bindings of the hairfit Rust library (the one implementation; the ``hairfit`` command
 line calls the same functions). Arrays are NumPy float64; angles are in degrees unless
@@ -15,6 +15,7 @@ Functions:
 - :func:`synth` -- a synthetic dataset with its truth (``hairfit synth``).
 - :func:`compare` -- fit several model families and rank them (``hairfit compare``).
 - :func:`export` -- a renderer's material from a saved fit (``hairfit export``).
+- :func:`families`, :func:`export_targets` -- what ``model=`` and ``to=`` take, with their facts.
 
 Long calls (:func:`fit`, :func:`compare`) release the GIL and stop on Ctrl-C with
 ``KeyboardInterrupt``.
@@ -51,6 +52,8 @@ __all__ = [
     "synth",
     "compare",
     "export",
+    "families",
+    "export_targets",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -630,3 +633,31 @@ def export(
         if line.startswith("warning: "):
             warnings.warn(line[len("warning: "):], stacklevel=2)
     return text
+
+
+def families() -> List[Dict[str, Any]]:
+    """Every model family ``model=`` takes, in the order ``compare(models="all")`` ranks them (the
+    first is the default), from the registry the command line's help is written from.
+
+    Returns:
+        One dict per family: ``name`` (the ``model=`` word), ``title``, ``citation``,
+        ``parameters`` (the names its parameter files use) and ``terms`` (the words ``terms=``
+        switches, or None when it takes no ``terms=``).
+    """
+    return [
+        {"name": name, "title": title, "citation": citation, "parameters": parameters, "terms": terms}
+        for name, title, citation, parameters, terms in _native.families()
+    ]
+
+
+def export_targets() -> List[Dict[str, str]]:
+    """Every target ``export(to=...)`` takes, in ``hairfit export --to``'s order.
+
+    Returns:
+        One dict per target: ``name`` (the ``to=`` word), ``program`` (what loads the file),
+        ``extension`` (of the main file written, without the dot) and ``file_kind``.
+    """
+    return [
+        {"name": name, "program": program, "extension": extension, "file_kind": kind}
+        for name, program, extension, kind in _native.export_targets()
+    ]

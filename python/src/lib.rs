@@ -9,8 +9,9 @@
 //!
 //! The modules: `errors` (the exception, error text, warnings), `args` (option parsing),
 //! `interrupt` (work off the GIL, interruptibly), `arrays` (angles and tables ⇄ NumPy),
-//! `eval`, `load` (the `Data` class), `fit` (the `Fit` class) and `commands` (synth, compare,
-//! export); this file registers what they define.
+//! `eval`, `load` (the `Data` class), `fit` (the `Fit` class), `commands` (synth, compare,
+//! export) and `registry` (the families and export targets); this file registers what they
+//! define.
 
 mod args;
 mod arrays;
@@ -20,6 +21,7 @@ mod eval;
 mod fit;
 mod interrupt;
 mod load;
+mod registry;
 
 use pyo3::prelude::*;
 
@@ -49,5 +51,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(commands::synth, m)?)?;
     m.add_function(wrap_pyfunction!(commands::compare, m)?)?;
     m.add_function(wrap_pyfunction!(commands::export, m)?)?;
+    m.add_function(wrap_pyfunction!(registry::families, m)?)?;
+    m.add_function(wrap_pyfunction!(registry::export_targets, m)?)?;
     Ok(())
 }
