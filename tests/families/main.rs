@@ -28,5 +28,6 @@ mod marschner_lanes;
 mod marschner_params;
 mod marschner_params_fuzz;
 mod marschner_proptest;
+mod registry_docs;
 mod table_families;
 mod trace_physics;
