@@ -194,3 +194,18 @@ fn value_of(file: &TableParamFile, name: &str) -> f64 {
     let v = &file.values[k];
     v[if v.len() == 1 { 0 } else { channel }]
 }
+
+/// A refused table file's message lists what the file holds, defaults as the family's page
+/// writes them (seven significant digits, not a float's seventeen).
+#[test]
+fn a_refused_file_names_its_keys_and_defaults_as_the_page_does() {
+    let path = std::path::Path::new("karis.json");
+    let family = ModelFamily::parse("karis").unwrap();
+    let err = FamilyParams::from_json_text(r#"{"model": "karis"}"#.into(), path, family)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("missing `base_color`"), "{err}");
+    // The engine's 0.035 rad shift, in degrees.
+    assert!(err.contains("shift_deg, optional, 2.005352"), "{err}");
+    assert!(!err.contains("2.0053522829578814"), "{err}");
+}

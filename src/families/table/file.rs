@@ -117,7 +117,11 @@ fn hint(table: &dyn DynTable) -> String {
             };
             match f.fitted {
                 Fitted::Yes => format!("{}{list}", f.name),
-                _ => format!("{}{list}, optional, {}", f.name, f.held()),
+                _ => format!(
+                    "{}{list}, optional, {}",
+                    f.name,
+                    super::table_number(f.held())
+                ),
             }
         })
         .collect();

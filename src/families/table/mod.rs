@@ -175,16 +175,20 @@ pub fn demo_params(facts: &[ParamFact], nc: usize) -> TableParams<f64> {
     p
 }
 
+/// A table's number as its page and messages write it: seven significant digits
+/// (`2.005352`, not `2.0053522829578814`), `inf` for an open end.
+pub fn table_number(x: f64) -> String {
+    if x.is_infinite() {
+        return if x > 0.0 { "inf" } else { "-inf" }.to_string();
+    }
+    let rounded: f64 = format!("{x:.6e}").parse().unwrap_or(x);
+    format!("{rounded}")
+}
+
 /// The parameter table as docs print it (a header and one Markdown row per line), so
 /// `tests/families/table_families.rs` can check each family's page holds exactly its table.
 pub fn markdown_table(facts: &[ParamFact]) -> Vec<String> {
-    let num = |x: f64| {
-        if x.is_infinite() {
-            return if x > 0.0 { "inf" } else { "-inf" }.to_string();
-        }
-        let rounded: f64 = format!("{x:.6e}").parse().unwrap_or(x);
-        format!("{rounded}")
-    };
+    let num = table_number;
     let mut rows = vec![
         "| key | symbol | meaning | unit | per channel | domain | fit bounds | typical | default | fitted | read by |".to_string(),
         "|---|---|---|---|---|---|---|---|---|---|---|".to_string(),
