@@ -1,5 +1,5 @@
 //! `hairfit --help` names every family and export target the code has (the lists come from
-//! `ModelFamily::ALL` and `Target::ALL`, so a new one cannot be left out of the help), and no
+//! `ModelFamily::ALL` and `Target::all()`, so a new one cannot be left out of the help), and no
 //! command's default output is a path kept in git (running a command must not modify the
 //! checkout).
 
@@ -44,6 +44,37 @@ fn the_help_names_every_export_target() {
             "{target} in: {export}"
         );
     }
+}
+
+/// Every target is reached by its name and each of its spellings, in any case, and no two
+/// targets claim one word; its example file name has its extension.
+#[test]
+fn every_target_parses_from_its_names_and_no_word_is_shared() {
+    let mut words = std::collections::BTreeMap::new();
+    for target in Target::all() {
+        for word in std::iter::once(target.name()).chain(target.aliases().iter().copied()) {
+            for spelling in [word.to_string(), word.to_ascii_uppercase()] {
+                assert_eq!(spelling.parse::<Target>().unwrap(), *target, "{spelling}");
+            }
+            assert!(
+                words.insert(word, target.name()).is_none(),
+                "`{word}` names two targets"
+            );
+        }
+        assert!(
+            target
+                .file_name()
+                .ends_with(&format!(".{}", target.extension())),
+            "{target}: {}",
+            target.file_name()
+        );
+    }
+    let err = "nope".parse::<Target>().unwrap_err().to_string();
+    let names: Vec<&str> = Target::all().iter().map(|t| t.name()).collect();
+    assert!(
+        err.contains(names[..names.len() - 1].join(", ").as_str()),
+        "{err}"
+    );
 }
 
 #[test]
