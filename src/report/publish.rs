@@ -20,20 +20,23 @@ pub fn write_fit<P: Sync>(
     let writing = std::time::Instant::now();
     // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
     let curves = crate::fit::written_curves(&outcome);
-    // The files and the figures do not read each other: drawn side by side, the report's
-    // serial parts (regrouping 100k rows by sample, the slice search, PNG encoding) fill the
-    // core that curves.csv's formatting and writing leave idle.
-    let (files, report) = rayon::join(
-        || crate::fit::write_outputs_with(dir, &outcome, curves.as_deref()),
-        || {
-            super::write_report_of(
+    // The files and the figures do not read each other: the report is drawn on the pool while
+    // this thread writes the files (curves.csv's writes stay here, its formatting goes to the
+    // pool), so the report's serial parts (regrouping 100k rows by sample, the slice search,
+    // PNG encoding) fill the core that curves.csv's formatting and writing leave idle.
+    let mut report = None;
+    let files = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| {
+            report = Some(super::write_report_of(
                 dir,
                 &outcome.json,
                 curves.as_deref(),
                 &super::ReportOptions::default(),
-            )
-        },
-    );
+            ))
+        });
+        crate::fit::write_outputs_with(dir, &outcome, curves.as_deref())
+    });
+    let report = report.expect("the scope ends after the report");
     files.map_err(|e| set.explain(e))?;
     report.map_err(|e| {
         let e = set.explain(e);
