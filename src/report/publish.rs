@@ -12,7 +12,7 @@ use crate::outdir::OutputSet;
 /// report into `dir`, the staging directory of `set` or a [`OutputSet::sub_dir`] of it. A report
 /// that cannot be drawn (a full disk) is an error: the set is then not published, and what
 /// `--out` held stays whole. Messages name the published place, not the staging one.
-pub fn write_fit<P>(
+pub fn write_fit<P: Sync>(
     set: &OutputSet,
     dir: &Path,
     mut outcome: FitOutcome<P>,
@@ -20,14 +20,25 @@ pub fn write_fit<P>(
     let writing = std::time::Instant::now();
     // The report draws what curves.csv holds (`--curves`), as `hairfit report` would later.
     let curves = crate::fit::written_curves(&outcome);
-    crate::fit::write_outputs_with(dir, &outcome, curves.as_deref()).map_err(|e| set.explain(e))?;
-    super::write_report_of(
-        dir,
-        &outcome.json,
-        curves.as_deref(),
-        &super::ReportOptions::default(),
-    )
-    .map_err(|e| {
+    // The files and the figures do not read each other: the report is drawn on the pool while
+    // this thread writes the files (curves.csv's writes stay here, its formatting goes to the
+    // pool), so the report's serial parts (regrouping 100k rows by sample, the slice search,
+    // PNG encoding) fill the core that curves.csv's formatting and writing leave idle.
+    let mut report = None;
+    let files = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| {
+            report = Some(super::write_report_of(
+                dir,
+                &outcome.json,
+                curves.as_deref(),
+                &super::ReportOptions::default(),
+            ))
+        });
+        crate::fit::write_outputs_with(dir, &outcome, curves.as_deref())
+    });
+    let report = report.expect("the scope ends after the report");
+    files.map_err(|e| set.explain(e))?;
+    report.map_err(|e| {
         let e = set.explain(e);
         Error::Other(format!("the plotted report could not be drawn: {e}"))
     })?;
@@ -58,7 +69,7 @@ impl<P> PublishedFit<P> {
 /// Run `produce` (which may write extra files, e.g. the demo's data, into the staging directory
 /// it is given) under the lock of `out`, write the fit's files and its report beside them, and
 /// publish the whole set. `inputs` are the files the run reads (see [`OutputSet::begin`]).
-pub fn publish_fit<P>(
+pub fn publish_fit<P: Sync>(
     out: &Path,
     command: &str,
     force: bool,
