@@ -336,7 +336,10 @@ impl Sampler {
             // is 0), the point there and the geometric normal, all lanes.
             for k in 0..LANES {
                 let (c, s, ia2) = (l.c[k], l.s[k], l.ia2[k]);
-                let (px, py) = (c * l.pv[k] + s * l.pw[k], c * l.pw[k] - s * l.pv[k]);
+                let (px, py) = (
+                    c * l.hit.pv[k] + s * l.hit.pw[k],
+                    c * l.hit.pw[k] - s * l.hit.pv[k],
+                );
                 let (dx, dy) = (c * l.dv[k] + s * l.dw[k], c * l.dw[k] - s * l.dv[k]);
                 let qa = dx * dx + dy * dy * ia2;
                 let qb = 2.0 * (px * dx + py * dy * ia2);
@@ -346,23 +349,23 @@ impl Sampler {
                 l.ok[k] = ok;
                 let t = if ok { t } else { 0.0 };
                 l.len[k] = t;
-                let (pv, pw) = (l.pv[k] + t * l.dv[k], l.pw[k] + t * l.dw[k]);
-                l.pv[k] = pv;
-                l.pw[k] = pw;
+                let (pv, pw) = (l.hit.pv[k] + t * l.dv[k], l.hit.pw[k] + t * l.dw[k]);
+                l.hit.pv[k] = pv;
+                l.hit.pw[k] = pw;
                 let g0 = c * pv + s * pw;
                 let g1 = (c * pw - s * pv) * ia2;
                 let inv = 1.0 / (g0 * g0 + g1 * g1).sqrt();
                 let (g0, g1) = (g0 * inv, g1 * inv);
                 let (nv, nw) = (c * g0 - s * g1, s * g0 + c * g1);
-                l.nv[k] = nv;
-                l.nw[k] = nw;
+                l.hit.nv[k] = nv;
+                l.hit.nw[k] = nw;
                 // The facet draw's setup (square root, division) here, where lanes overlap.
                 let dn = l.dv[k] * nv + l.dw[k] * nw;
-                l.dn[k] = dn;
-                l.dt[k] = l.dw[k] * nv - l.dv[k] * nw;
+                l.hit.dn[k] = dn;
+                l.hit.dt[k] = l.dw[k] * nv - l.dv[k] * nw;
                 let (a, b, root) = self.tangent_terms(l.du[k], dn);
-                l.a[k] = a;
-                l.lambda[k] = Self::tangent_lambda(a, b, root);
+                l.hit.a[k] = a;
+                l.hit.lambda[k] = Self::tangent_lambda(a, b, root);
             }
             // The attenuation along the chord, every channel and lane (vectorised exp).
             for (att, &sigma_a) in l.att.iter_mut().zip(sigma_a) {
@@ -389,21 +392,28 @@ impl Sampler {
                     *absorbed += *w - kept;
                     *w = kept;
                 }
-                (l.sl[k], l.sa[k]) =
-                    self.slopes(l.a[k], l.lambda[k], l.du[k], l.dn[k], l.dt[k], rng, balance);
+                (l.hit.sl[k], l.hit.sa[k]) = self.slopes(
+                    l.hit.a[k],
+                    l.hit.lambda[k],
+                    l.du[k],
+                    l.hit.dn[k],
+                    l.hit.dt[k],
+                    rng,
+                    balance,
+                );
             }
             // Fresnel from inside, the refracted and the reflected directions, all lanes.
             for k in 0..LANES {
                 let d = [l.du[k], l.dv[k], l.dw[k]];
-                let m = facet([0.0, l.nv[k], l.nw[k]], l.sl[k], l.sa[k]);
+                let m = facet([0.0, l.hit.nv[k], l.hit.nw[k]], l.hit.sl[k], l.hit.sa[k]);
                 let cos_i = dot(d, m);
                 let (f, cos_t) = fresnel_lane(cos_i, eta);
-                l.f[k] = f;
+                l.hit.f[k] = f;
                 // refract(d, −m, η, cos_i, cos_t) and reflect(d, m), written out.
                 let a = eta * cos_i - cos_t;
                 for j in 0..3 {
                     l.out[j][k] = d[j] * eta - m[j] * a;
-                    l.refl[j][k] = d[j] - 2.0 * cos_i * m[j];
+                    l.hit.refl[j][k] = d[j] - 2.0 * cos_i * m[j];
                 }
             }
             // Exits and the next segment, lane by lane.
@@ -411,8 +421,8 @@ impl Sampler {
                 if !l.active[k] {
                     continue;
                 }
-                let ng = [0.0, l.nv[k], l.nw[k]];
-                let f = l.f[k];
+                let ng = [0.0, l.hit.nv[k], l.hit.nw[k]];
+                let f = l.hit.f[k];
                 let seg = l.seg[k];
                 if f < 1.0 {
                     let out = [l.out[0][k], l.out[1][k], l.out[2][k]];
@@ -422,7 +432,7 @@ impl Sampler {
                     exit.exit::<NC>(seg, out, &we);
                     l.w[k][..nc].iter_mut().for_each(|x| *x *= f);
                 }
-                let r = [l.refl[0][k], l.refl[1][k], l.refl[2][k]];
+                let r = [l.hit.refl[0][k], l.hit.refl[1][k], l.hit.refl[2][k]];
                 let d = keep_side(r, ng, false, balance);
                 [l.du[k], l.dv[k], l.dw[k]] = d;
                 if seg >= max_seg || l.w[k][..nc].iter().all(|&x| x < WEIGHT_CUTOFF) {
@@ -477,22 +487,32 @@ struct Lanes {
     c: [f64; LANES],
     s: [f64; LANES],
     ia2: [f64; LANES],
-    /// Point on the boundary, direction, weights, the segment being followed.
-    pv: [f64; LANES],
-    pw: [f64; LANES],
+    /// Direction, weights, the segment being followed.
     du: [f64; LANES],
     dv: [f64; LANES],
     dw: [f64; LANES],
     w: [Weights; LANES],
     seg: [usize; LANES],
-    /// Per step: chord found, its length, the attenuation along it per channel, geometric
-    /// normal, reflectance, refracted and reflected directions.
+    /// Per step: chord found, its length, the attenuation along it per channel, the refracted
+    /// direction.
     ok: [bool; LANES],
     len: [f64; LANES],
     att: [[f64; LANES]; MAX_CHANNELS],
+    out: [[f64; LANES]; 3],
+    /// Where each ray meets the boundary and what its facet does there.
+    hit: Hits,
+}
+
+/// Where [`LANES`] rays meet the boundary and what their facets do there, for the rays inside
+/// ([`Lanes`]) and those entering (`entry::Entries`) alike: the point, the geometric normal,
+/// the ray's components along ng and u × ng, the facet draw's `(A, λ)`, the slopes drawn, the
+/// reflectance and R's direction.
+#[derive(Default)]
+struct Hits {
+    pv: [f64; LANES],
+    pw: [f64; LANES],
     nv: [f64; LANES],
     nw: [f64; LANES],
-    /// The ray's components along ng and u × ng, the facet draw's `(A, λ)`, the slopes drawn.
     dn: [f64; LANES],
     dt: [f64; LANES],
     a: [f64; LANES],
@@ -500,7 +520,6 @@ struct Lanes {
     sl: [f64; LANES],
     sa: [f64; LANES],
     f: [f64; LANES],
-    out: [[f64; LANES]; 3],
     refl: [[f64; LANES]; 3],
 }
 

@@ -8,7 +8,7 @@
 use rand_chacha::rand_core::RngCore;
 
 use super::lane_math::fresnel_in_lane;
-use super::{add_n, facet, Balance, Exits, Lanes, Sampler, Weights, LANES};
+use super::{add_n, facet, Balance, Exits, Hits, Lanes, Sampler, Weights, LANES};
 use crate::trace::optics::V3;
 use crate::trace::section::Section;
 
@@ -25,20 +25,9 @@ pub(super) struct Entries {
     offset: [f64; LANES],
     /// Met the surface (not a grazing miss).
     ok: [bool; LANES],
-    /// The point on the boundary, the geometric normal, the facet draw's inputs and slopes.
-    pv: [f64; LANES],
-    pw: [f64; LANES],
-    nv: [f64; LANES],
-    nw: [f64; LANES],
-    dn: [f64; LANES],
-    dt: [f64; LANES],
-    a: [f64; LANES],
-    lambda: [f64; LANES],
-    sl: [f64; LANES],
-    sa: [f64; LANES],
-    /// Reflectance, R's direction, the refracted direction, and whether each was mirrored.
-    f: [f64; LANES],
-    refl: [[f64; LANES]; 3],
+    /// The point on the boundary, the geometric normal, the facet draw and R's direction.
+    hit: Hits,
+    /// The refracted direction, and whether R's and it were mirrored.
     refr: [[f64; LANES]; 3],
     mirror_r: [bool; LANES],
     mirror_t: [bool; LANES],
@@ -63,10 +52,10 @@ impl Entries {
         l.c[k] = self.c[j];
         l.s[k] = self.s[j];
         l.ia2[k] = self.ia2[j];
-        l.pv[k] = self.pv[j];
-        l.pw[k] = self.pw[j];
+        l.hit.pv[k] = self.hit.pv[j];
+        l.hit.pw[k] = self.hit.pw[j];
         [l.du[k], l.dv[k], l.dw[k]] = [self.refr[0][j], self.refr[1][j], self.refr[2][j]];
-        let t = 1.0 - self.f[j];
+        let t = 1.0 - self.hit.f[j];
         l.w[k] = std::array::from_fn(|c| if c < nc { t } else { 0.0 });
         l.seg[k] = 1;
     }
@@ -106,8 +95,15 @@ impl Sampler {
         let d = [-omega_i[0], -omega_i[1], -omega_i[2]];
         for j in 0..q.len {
             if q.ok[j] {
-                (q.sl[j], q.sa[j]) =
-                    self.slopes(q.a[j], q.lambda[j], -d[0], q.dn[j], q.dt[j], rng, balance);
+                (q.hit.sl[j], q.hit.sa[j]) = self.slopes(
+                    q.hit.a[j],
+                    q.hit.lambda[j],
+                    -d[0],
+                    q.hit.dn[j],
+                    q.hit.dt[j],
+                    rng,
+                    balance,
+                );
             } else {
                 let w = self.unit_weights::<NC>();
                 balance.grazing += 1;
@@ -121,10 +117,14 @@ impl Sampler {
             if !q.ok[j] {
                 continue;
             }
-            let f = q.f[j];
+            let f = q.hit.f[j];
             let wr: Weights = std::array::from_fn(|c| if c < nc { f } else { 0.0 });
             add_n(&mut balance.tallied[0], &wr, nc);
-            exit.exit::<NC>(0, [q.refl[0][j], q.refl[1][j], q.refl[2][j]], &wr);
+            exit.exit::<NC>(
+                0,
+                [q.hit.refl[0][j], q.hit.refl[1][j], q.hit.refl[2][j]],
+                &wr,
+            );
             balance.mirrored += u64::from(q.mirror_r[j]) + u64::from(q.mirror_t[j]);
         }
         exhausted
@@ -152,20 +152,20 @@ impl Sampler {
             q.ok[j] = ok;
             let t = if ok { t } else { 0.0 };
             let (pv, pw) = (p0v + t * d[1], p0w + t * d[2]);
-            q.pv[j] = pv;
-            q.pw[j] = pw;
+            q.hit.pv[j] = pv;
+            q.hit.pw[j] = pw;
             let g0 = c * pv + s * pw;
             let g1 = (c * pw - s * pv) * ia2;
             let inv = 1.0 / (g0 * g0 + g1 * g1).sqrt();
             let (g0, g1) = (g0 * inv, g1 * inv);
             let (nv, nw) = (c * g0 - s * g1, s * g0 + c * g1);
-            q.nv[j] = nv;
-            q.nw[j] = nw;
+            q.hit.nv[j] = nv;
+            q.hit.nw[j] = nw;
             // shading_normal's components for a ray from outside: −d·u, −d·ng, −d·(u × ng).
             let dn = -(d[1] * nv + d[2] * nw);
-            q.dn[j] = dn;
-            q.dt[j] = -(d[2] * nv - d[1] * nw);
-            (q.a[j], q.lambda[j]) = self.tangent(-d[0], dn);
+            q.hit.dn[j] = dn;
+            q.hit.dt[j] = -(d[2] * nv - d[1] * nw);
+            (q.hit.a[j], q.hit.lambda[j]) = self.tangent(-d[0], dn);
         }
     }
 
@@ -175,11 +175,11 @@ impl Sampler {
     fn entry_optics(&self, q: &mut Entries, d: V3) {
         let eta = self.fiber.eta;
         for j in 0..LANES {
-            let ng = [0.0, q.nv[j], q.nw[j]];
-            let m = facet(ng, q.sl[j], q.sa[j]);
+            let ng = [0.0, q.hit.nv[j], q.hit.nw[j]];
+            let m = facet(ng, q.hit.sl[j], q.hit.sa[j]);
             let cos_i = -(d[0] * m[0] + d[1] * m[1] + d[2] * m[2]);
             let (f, cos_t) = fresnel_in_lane(cos_i, eta);
-            q.f[j] = f;
+            q.hit.f[j] = f;
             // reflect(d, m) and refract(d, m, 1/η, cos_i, cos_t), written out.
             let e = 1.0 / eta;
             let a = e * cos_i - cos_t;
@@ -188,7 +188,7 @@ impl Sampler {
             let (r, mr) = side_lane(r, ng, true);
             let (t, mt) = side_lane(t, ng, false);
             for i in 0..3 {
-                q.refl[i][j] = r[i];
+                q.hit.refl[i][j] = r[i];
                 q.refr[i][j] = t[i];
             }
             q.mirror_r[j] = mr;
