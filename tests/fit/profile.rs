@@ -382,7 +382,7 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| profile::profile_all(&opt, &vec![None; opt.free.len()]))
+        pool.install(|| profile::profile_all(&opt, &vec![Default::default(); opt.free.len()]))
             .unwrap()
             .unwrap()
     };
@@ -400,7 +400,7 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
 
     let flag = Arc::new(AtomicBool::new(true));
     let stopped = optimum(&forward, &data, &out, Some(flag));
-    let r = profile::profile_all(&stopped, &vec![None; stopped.free.len()]).unwrap();
+    let r = profile::profile_all(&stopped, &vec![Default::default(); stopped.free.len()]).unwrap();
     assert!(r.is_none(), "a set cancel flag stops profiling");
 }
 
