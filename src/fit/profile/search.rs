@@ -248,7 +248,8 @@ impl Shape {
         for _ in 0..30 {
             let f = x * x * (1.0 + self.c * x + self.q * x * x) - target;
             let slope = x * (2.0 + 3.0 * self.c * x + 4.0 * self.q * x * x);
-            if !(slope * dir > 0.0) {
+            // Falling or flat (or NaN) here: no crossing this shape can aim at.
+            if slope * dir <= 0.0 || slope.is_nan() {
                 return None;
             }
             let dx = f / slope;
