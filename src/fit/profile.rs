@@ -31,8 +31,7 @@ mod record;
 mod search;
 use crate::files::{FitStatus, ProfileMethod, StageTiming};
 pub use record::apply;
-use search::first_steps;
-pub use search::{profile_parameter, FirstStep};
+pub use search::{first_steps, profile_parameter, FirstStep};
 
 /// Δχ² of a 68.27% interval for one parameter.
 pub const CHI2_68: f64 = 1.0;

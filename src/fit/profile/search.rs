@@ -434,7 +434,7 @@ fn path_start<F: Forward>(
 
 /// Each free parameter's first step (its natural standard error) and linearised profile path,
 /// from fit.json's standard errors and correlations (report units; the ratio `σ_k/σ_j` is taken
-/// in natural units). A parameter without an error or a correlation has no path.
+/// in natural units). A parameter without an error has no path.
 pub fn first_steps<P: FitParam>(json: &FitJson, free: &[P]) -> Vec<FirstStep> {
     let se: Vec<Option<f64>> = free
         .iter()
@@ -457,18 +457,64 @@ pub fn first_steps<P: FitParam>(json: &FitJson, free: &[P]) -> Vec<FirstStep> {
     };
     (0..free.len())
         .map(|j| {
-            let slopes = (0..free.len())
-                .map(|k| match (k == j, se[j], se[k], rho(k, j)) {
-                    (true, ..) => Some(1.0),
-                    (false, Some(sj), Some(sk), Some(r)) if sj > 0.0 => Some(r * sk / sj),
-                    _ => None,
-                })
-                .collect::<Option<Vec<f64>>>()
-                .unwrap_or_default();
+            // A parameter without an error or a correlation stays where the optimum has it.
+            let slopes = match se[j] {
+                Some(sj) if sj > 0.0 => (0..free.len())
+                    .map(|k| match (k == j, se[k], rho(k, j)) {
+                        (true, ..) => 1.0,
+                        (false, Some(sk), Some(r)) => r * sk / sj,
+                        _ => 0.0,
+                    })
+                    .collect(),
+                _ => Vec::new(),
+            };
             FirstStep {
                 step: se[j],
                 slopes,
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pt(h: f64, d: f64) -> Pt {
+        Pt {
+            h,
+            d,
+            u: Vec::new(),
+        }
+    }
+
+    /// On an exact cubic–quartic profile the shape from its two first points finds the true
+    /// crossings (to the Newton iteration's 1e-12), where the quadratic through one side's
+    /// point misses by ~0.94·c in √Δχ².
+    #[test]
+    fn a_skewed_profile_is_aimed_at_its_own_crossing() {
+        let (c, q, unit) = (-0.12, 0.006, 0.5);
+        let profile = |x: f64| x * x * (1.0 + c * x + q * x * x);
+        let shape = Shape::of(&pt(-unit, profile(-1.0)), &pt(unit, profile(1.0))).unwrap();
+        for (target, dir) in [(CHI2_95, -1.0), (CHI2_95, 1.0), (CHI2_68, -1.0)] {
+            let h = shape.crossing(target, dir).unwrap();
+            assert!(
+                (profile(h / unit) - target).abs() < 1e-9,
+                "{target} {dir}: {h}"
+            );
+        }
+        let quadratic = (CHI2_95 / profile(-1.0)).sqrt();
+        assert!((profile(-quadratic).sqrt() - CHI2_95.sqrt()).abs() > SQRT_TOL);
+    }
+
+    /// A profile whose asymmetry is below the crossing tolerance gets no shape (the quadratic's
+    /// aim lands, and the shape's even part is the re-fits' noise), nor does one that bends
+    /// over before its crossing.
+    #[test]
+    fn a_nearly_symmetric_or_turning_profile_has_no_aim() {
+        assert!(Shape::of(&pt(-1.0, 1.004), &pt(1.0, 0.996)).is_none());
+        assert!(Shape::of(&pt(-1.0, 1.004), &pt(0.5, 0.996)).is_none());
+        let turning = Shape::of(&pt(-1.0, 1.6), &pt(1.0, 0.4)).unwrap();
+        assert_eq!(turning.crossing(CHI2_95, 1.0), None);
+    }
 }
