@@ -215,11 +215,12 @@ pub struct ParameterEntry {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ProfileMethod {
-    /// The local quadratic held: the re-fit at the linearised standard error landed on Δχ² ≈ 1
-    /// and the re-fit at the quadratic's 95% point on 3.84, both accepted as they stand.
+    /// The local shape held: the re-fit at the linearised standard error landed on Δχ² ≈ 1
+    /// and the re-fit aimed at the 95% crossing (the quadratic's, or a skewed profile's cubic)
+    /// on 3.84, both accepted as they stand.
     Quadratic,
     /// The local quadratic held tightly: the re-fit at the linearised standard error landed on
-    /// Δχ² within 0.2% of 1, so the 95% end is the quadratic's (no re-fit there; its error is
+    /// √Δχ² within 2.5e-3 of 1, so the 95% end is the quadratic's (no re-fit there; its error is
     /// under the 1% in √Δχ² a re-fitted crossing is accepted at).
     Extrapolated,
     /// The quadratic did not hold (or the side is open): the crossings were bracketed and

@@ -44,6 +44,25 @@ impl Bound {
         }
     }
 
+    /// The internal `u` of a natural value nearest `near`: the transforms are even (lower
+    /// bound) or periodic (both bounds), so a solver point may sit on any branch, and a start
+    /// derived from it must stay on the same one.
+    pub fn to_internal_near(&self, x: f64, near: f64) -> f64 {
+        let v = self.to_internal(x);
+        match *self {
+            Bound::Free => v,
+            Bound::Lower(_) => v.copysign(near),
+            Bound::Both(..) => {
+                use std::f64::consts::{PI, TAU};
+                [v, PI - v]
+                    .into_iter()
+                    .map(|c| c + TAU * ((near - c) / TAU).round())
+                    .min_by(|a, b| (a - near).abs().total_cmp(&(b - near).abs()))
+                    .unwrap_or(v)
+            }
+        }
+    }
+
     /// Clamp a natural value into the bounds.
     pub fn clamp(&self, x: f64) -> f64 {
         match *self {
@@ -68,6 +87,32 @@ impl Bound {
 mod tests {
     use super::*;
     use std::f64::consts::FRAC_1_SQRT_2;
+
+    #[test]
+    fn the_internal_value_near_a_point_is_on_its_branch() {
+        // A solver point on another period of the sine (or the other half of the even lower
+        // transform) gets the same natural value back, within one half-period of it.
+        for b in [Bound::Lower(0.0), Bound::Both(FRAC_1_SQRT_2, 1.0)] {
+            for near in [-40.0, -7.0, -1.0, 0.3, 2.5, 15.9] {
+                for x in [0.75, 0.8, 0.99] {
+                    let u = b.to_internal_near(x, near);
+                    // 1e-12 as the round trip below.
+                    assert!((b.to_natural(u) - x).abs() < 1e-12, "{b:?} {x} near {near}");
+                    assert!(
+                        (u - near).abs() <= std::f64::consts::PI + near.abs().max(1.0) * 1e-12
+                            || matches!(b, Bound::Lower(_)),
+                        "{b:?} {x} near {near}: {u}"
+                    );
+                }
+            }
+        }
+        // On the branch of a point that is itself the image of x, the point comes back.
+        let b = Bound::Both(0.0, 1.0);
+        let u = 0.4 + 6.0 * std::f64::consts::TAU;
+        assert!((b.to_internal_near(b.to_natural(u), u) - u).abs() < 1e-9);
+        let u = std::f64::consts::PI - 0.4 - 2.0 * std::f64::consts::TAU;
+        assert!((b.to_internal_near(b.to_natural(u), u) - u).abs() < 1e-9);
+    }
 
     #[test]
     fn transforms_round_trip_and_stay_inside() {

@@ -55,6 +55,14 @@ pub const POLISH_CHI2: f64 = 25.0;
 /// times the multi-start's subsample; screening runs only on data over four times its size.
 pub const SCREEN_FACTOR: usize = 25;
 
+/// From this many rows (samples × channels) the polish on all data computes the gradients with
+/// every trial step's values: it starts at the multi-start's optimum, so its steps are nearly
+/// always accepted and linearised where they were tried, and the separate value pass (a fifth of
+/// a Marschner gradient pass) is saved twice. Below it a rejected step's gradients would cost
+/// more than the value passes save; above the memo's budget (a few hundred thousand rows) the
+/// pass is not kept and each trial runs as before.
+pub const FUSED_POLISH_MIN_ROWS: usize = 50_000;
+
 /// Above this many rows (samples × channels) an interrupted fit writes the summary curves.
 pub const INTERRUPTED_FULL_CURVES_ROWS: usize = 300_000;
 
@@ -326,6 +334,7 @@ pub fn fit_with<F: Forward>(
         }
     };
     ev_full.loss_scale = loss_scale;
+    ev_full.gradients_with_values = data.len() * data.n_channels() >= FUSED_POLISH_MIN_ROWS;
     ev_sub.loss_scale = loss_scale;
     let (runs, order) = stages::multistart("multistart", &ev_sub, &starts, opts, &mut log);
     let mut candidates = stages::distinct_candidates(&ev_sub, &runs, &order, &ranges, opts.polish);

@@ -7,12 +7,12 @@
 //! optimum (the residual variance; with a `sigma` column and a good fit it is ≈ 1), so for a
 //! linear problem the 68% interval is exactly `value ± SE`.
 //!
-//! Each crossing is bracketed by steps that grow like a parabola's extrapolation would need, then
-//! refined by a few regula-falsi steps on `√Δχ²` (linear in the value for a quadratic profile).
-//! Where the first step (the linearised SE) lands on Δχ² ≈ 1, the profile is the local
-//! quadratic there, so the next solve is aimed at the quadratic's 95% point and accepted as it
-//! stands when it lands within the crossing tolerance: two solves a side instead of three.
-//! Every solve is warm-started from the nearest solved point. Parameters run in parallel (rayon);
+//! Each side's first re-fit is at the linearised SE, started on the linearised profile path (the
+//! correlations' `∂x_k/∂x_j`), so it settles without a step; where it lands on Δχ² ≈ 1 the 95%
+//! end is the local quadratic's, else the next re-fit is aimed at the crossing of the profile's
+//! local shape and accepted as it stands when it lands within the crossing tolerance. Crossings
+//! not found so are bracketed and refined by regula falsi on `√Δχ²` (`search`). Every later
+//! solve starts where the solved points extrapolate to. Parameters run in parallel (rayon);
 //! each parameter's sequence of solves is fixed, so results are identical for any thread count.
 
 use std::sync::atomic::AtomicBool;
@@ -20,17 +20,18 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::bounds::Bound;
-use super::problem::{Evaluator, FitData, FitParam, Forward, ParamSet, Space};
-use super::solve::{is_cancelled, run_lm, LocalRun};
+use super::problem::{FitData, FitParam, Forward, ParamSet, Space};
+use super::solve::LocalRun;
 use super::verdict::Assessment;
 use super::Loss;
 use super::{FitOptions, FitOutcome};
 use crate::error::{Error, Result};
 
 mod record;
+mod search;
 use crate::files::{FitStatus, ProfileMethod, StageTiming};
 pub use record::apply;
+pub use search::{first_steps, profile_parameter, FirstStep};
 
 /// Δχ² of a 68.27% interval for one parameter.
 pub const CHI2_68: f64 = 1.0;
@@ -42,23 +43,6 @@ pub const AUTO_BUDGET_S: f64 = 10.0;
 /// the 2-core machine, model and AD included: measured 8e6/s on the demo (7020 residuals × 8
 /// columns) and 4e6/s on a 360-sample fit (per-solve overhead), taken at the lower end.
 const JACOBIAN_ENTRIES_PER_S: f64 = 5e6;
-/// On a side without a fit bound the search stops this many typical ranges from the optimum.
-const SEARCH_RANGES: f64 = 3.0;
-/// Bracketing steps per side at most.
-const MAX_BRACKET: usize = 10;
-const MAX_REFINE: usize = 4; // Regula-falsi steps per crossing at most.
-/// A crossing is accepted when `√Δχ²` is this close to its target (Δχ² within ~2% at 68%).
-const SQRT_TOL: f64 = 0.01;
-/// A side's 95% end is the local quadratic's, without a re-fit there, when the re-fit at the
-/// linearised SE found `√Δχ²` this close to 1 (Δχ² within 0.2%): a cubic or quartic term that
-/// small at 1 SE moves Δχ² at the 95% point (1.96 SE) by at most ~4× as much, under 1% — inside
-/// the [`SQRT_TOL`] a re-fitted crossing is accepted at.
-const EXTRAPOLATE_TOL: f64 = 1e-3;
-/// A profile solve stops when a step gains less than this many χ² units (the polish's own
-/// tolerance is 10⁻¹²·dof, far finer than a crossing needs).
-const SOLVE_CHI2_TOL: f64 = 1e-3;
-/// LM iterations per profile solve at most (warm-started solves need 3–15).
-const SOLVE_MAX_ITERS: u64 = 100;
 /// Estimated cost of a profile, for `--intervals auto`: solves per side and LM iterations per
 /// (warm-started) solve. Measured: the demo (8 well-determined parameters) 3 solves per side,
 /// 2 iterations each; `data/azimuthal_1ch_noisy.csv` with cauchy (two undetermined parameters
@@ -193,293 +177,16 @@ pub struct Profile<P> {
     pub methods: [ProfileMethod; 2],
 }
 
-/// A solved point at signed distance `h` from the optimum.
-struct Pt {
-    h: f64,
-    d: f64,
-    u: Vec<f64>,
-}
-
-/// One parameter pinned: an evaluator without it, and its solves.
-struct Pinned<'a, 'o, F: Forward> {
-    opt: &'o Optimum<'a, F>,
-    ev: Evaluator<'a, F>,
-    p: F::Param,
-    x0: f64,
-    iterations: u64,
-    solves: usize,
-}
-
-impl<F: Forward> Pinned<'_, '_, F> {
-    /// Δχ² at `x0 + h` with the other parameters re-minimised from `u_start`.
-    fn solve(&mut self, h: f64, u_start: &[f64]) -> Pt {
-        self.p.set(&mut self.ev.base, self.x0 + h);
-        let max_iters = self.opt.max_iters.min(SOLVE_MAX_ITERS);
-        let (u, cost, iterations) = self.run(u_start, max_iters);
-        self.iterations += iterations;
-        self.solves += 1;
-        let d = 2.0 * (cost - self.opt.cost) / self.opt.chi2_unit;
-        Pt {
-            h,
-            d: if d.is_finite() { d } else { f64::INFINITY },
-            u,
-        }
-    }
-
-    /// The fit's LM runner ([`run_lm`]), stopping once the cost change or the Gauss–Newton
-    /// predicted χ² gain (a warm start that close takes no step) is below [`SOLVE_CHI2_TOL`],
-    /// without a final linearisation: `(u, cost, iterations)`, never worse than the start (the
-    /// solver's best point and its cost: no extra passes for the start's and the end's cost).
-    fn run(&self, u0: &[f64], max_iters: u64) -> (Vec<f64>, f64, u64) {
-        let ftol = (SOLVE_CHI2_TOL / self.opt.dof.max(1) as f64).clamp(super::solve::FTOL, 1e-4);
-        let solver = crate::lm::LevenbergMarquardt::new()
-            .with_tolerances(ftol, crate::lm::DEFAULT_XTOL, 0.0)
-            .and_then(|lm| lm.with_statistical_tolerance(self.opt.dof.max(1), SOLVE_CHI2_TOL))
-            .unwrap_or_default()
-            .with_lazy_final_linearization();
-        let run = run_lm(&self.ev, u0, solver, max_iters, &self.opt.cancel, None);
-        (run.u, run.cost, run.iterations)
-    }
-
-    /// Bracket both thresholds on one side (`dir` = ±1) out to `hmax`; the points, ascending in
-    /// |h| and starting at the optimum. `None` when cancelled.
-    /// `first_start`: where the first solve starts (the other side's first point mirrored
-    /// through the optimum), else the optimum.
-    fn bracket(
-        &mut self,
-        dir: f64,
-        step: f64,
-        hmax: f64,
-        u0: &[f64],
-        first_start: Option<Vec<f64>>,
-    ) -> Option<Vec<Pt>> {
-        let mut pts = vec![Pt {
-            h: 0.0,
-            d: 0.0,
-            u: u0.to_vec(),
-        }];
-        let mut first_start = first_start;
-        let mut h = step.min(hmax);
-        for _ in 0..MAX_BRACKET {
-            if h <= 0.0 {
-                break;
-            }
-            if is_cancelled(&self.opt.cancel) {
-                return None;
-            }
-            // The other parameters move nearly linearly with the pinned one near the optimum:
-            // start where the last two points extrapolate to (the LM then settles in about one
-            // iteration instead of two), the first solve from `first_start`.
-            let start = match pts.len() {
-                1 => first_start.take().unwrap_or_else(|| u0.to_vec()),
-                n => extrapolate(&pts[n - 2], &pts[n - 1], dir * h),
-            };
-            let pt = self.solve(dir * h, &start);
-            let d = pt.d;
-            pts.push(pt);
-            if d >= CHI2_95 || near(d, CHI2_95) || h >= hmax || quadratic_end(&pts, hmax).is_some()
-            {
-                break;
-            }
-            // Where the first step (the linearised SE) found Δχ² ≈ 1, the profile is the local
-            // quadratic there: aim at its 95% crossing, h·√(3.84/d), which the crossing search
-            // then accepts as it stands when the quadratic still holds (one solve, not a
-            // bracket and a refinement). Otherwise a parabola through the optimum reaches
-            // 1.3·3.84 at h·√(5/d); grow by 1.5–4×.
-            let grow = if pts.len() == 2 && near(d, CHI2_68) {
-                (CHI2_95 / d).sqrt()
-            } else {
-                (1.3 * CHI2_95 / d.max(0.05)).sqrt().clamp(1.5, 4.0)
-            };
-            h = (h * grow).min(hmax);
-        }
-        Some(pts)
-    }
-
-    /// Where the side's profile crosses `target` (refining between bracketing points, which are
-    /// added to `pts`), or where it ends open.
-    fn crossing(&mut self, pts: &mut Vec<Pt>, target: f64, bounded: bool) -> Option<End> {
-        let Some(k) = pts.iter().position(|p| p.d >= target || near(p.d, target)) else {
-            let last = pts.last()?;
-            return Some(End::Open {
-                at: self.x0 + last.h,
-                dchi2: last.d,
-                bound: bounded,
-            });
-        };
-        if near(pts[k].d, target) {
-            return Some(End::Closed(self.x0 + pts[k].h));
-        }
-        let g = |d: f64| d.max(0.0).sqrt() - target.sqrt();
-        let (mut a, mut b) = (k - 1, k);
-        for _ in 0..MAX_REFINE {
-            let (pa, pb) = (&pts[a], &pts[b]);
-            let (ga, gb) = (g(pa.d), g(pb.d));
-            if gb.abs() < SQRT_TOL {
-                return Some(End::Closed(self.x0 + pb.h));
-            }
-            if ga.abs() < SQRT_TOL && a > 0 {
-                return Some(End::Closed(self.x0 + pa.h));
-            }
-            let mut h = pa.h + (pb.h - pa.h) * (-ga) / (gb - ga);
-            let (lo, hi) = (pa.h.min(pb.h), pa.h.max(pb.h));
-            if !(h > lo && h < hi && h.is_finite()) {
-                h = 0.5 * (pa.h + pb.h);
-            }
-            if is_cancelled(&self.opt.cancel) {
-                return None;
-            }
-            let near = if (h - pa.h).abs() < (h - pb.h).abs() {
-                pa.u.clone()
-            } else {
-                pb.u.clone()
-            };
-            let pt = self.solve(h, &near);
-            let below = pt.d < target;
-            pts.insert(b, pt);
-            // The new point sits at index b; the old b moved to b + 1.
-            if below {
-                a = b;
-                b += 1;
-            }
-        }
-        let (pa, pb) = (&pts[a], &pts[b]);
-        let (ga, gb) = (g(pa.d), g(pb.d));
-        let t = if gb != ga { -ga / (gb - ga) } else { 0.5 };
-        Some(End::Closed(
-            self.x0 + pa.h + (pb.h - pa.h) * t.clamp(0.0, 1.0),
-        ))
-    }
-}
-
-/// The point on the line through `a` and `b` (solved points, in the solver's coordinates) at
-/// pinned offset `h`.
-fn extrapolate(a: &Pt, b: &Pt, h: f64) -> Vec<f64> {
-    let t = if b.h != a.h {
-        (h - b.h) / (b.h - a.h)
-    } else {
-        0.0
-    };
-    a.u.iter()
-        .zip(&b.u)
-        .map(|(ua, ub)| ub + (ub - ua) * t)
-        .collect()
-}
-
-/// The side's 95% offset from the local quadratic, when its only solve (at the linearised SE)
-/// found Δχ² within [`EXTRAPOLATE_TOL`] of 1 and the offset is inside the side's room `hmax`.
-fn quadratic_end(pts: &[Pt], hmax: f64) -> Option<f64> {
-    let [_, first] = pts else {
-        return None;
-    };
-    let h95 = first.h.abs() * (CHI2_95 / first.d).sqrt();
-    ((first.d.sqrt() - 1.0).abs() < EXTRAPOLATE_TOL && h95 <= hmax)
-        .then_some(first.h.signum() * h95)
-}
-
-/// Whether a solved Δχ² is close enough to `target` to be its crossing: `√Δχ²` within
-/// [`SQRT_TOL`] of `√target`.
-fn near(d: f64, target: f64) -> bool {
-    (d.max(0.0).sqrt() - target.sqrt()).abs() < SQRT_TOL
-}
-
-/// Profile free parameter `j` of `opt`, stepping first by `step` (natural units, e.g. the
-/// linearised SE). `None` when cancelled.
-pub fn profile_parameter<F: Forward>(
-    opt: &Optimum<'_, F>,
-    j: usize,
-    step: Option<f64>,
-) -> Result<Option<Profile<F::Param>>> {
-    let p = opt.free[j];
-    let free: Vec<F::Param> = opt.free.iter().copied().filter(|&q| q != p).collect();
-    let (ev, _) = Evaluator::new(
-        opt.forward,
-        opt.data,
-        opt.space,
-        opt.loss,
-        opt.loss_scale,
-        opt.params.clone(),
-        free,
-    )?;
-    let x0 = p.get(&opt.params);
-    let mut u0 = opt.u.clone();
-    u0.remove(j);
-    let (a, b) = p.typical_range();
-    let width = (b - a).abs().max(1e-12);
-    let step = step
-        .filter(|s| s.is_finite() && *s > 0.0)
-        .unwrap_or(0.05 * width)
-        .clamp(1e-6 * width, width);
-    let mut pin = Pinned {
-        opt,
-        ev,
-        p,
-        x0,
-        iterations: 0,
-        solves: 0,
-    };
-    let far = SEARCH_RANGES * width;
-    let (lo_room, lo_bounded, hi_room, hi_bounded) = match p.bound() {
-        Bound::Free => (far, false, far, false),
-        Bound::Lower(lo) => ((x0 - lo).max(0.0), true, far, false),
-        Bound::Both(lo, hi) => ((x0 - lo).max(0.0), true, (hi - x0).max(0.0), true),
-    };
-    let mut ends = [[End::Closed(x0); 2]; 2];
-    let mut methods = [ProfileMethod::Refits; 2];
-    let mut points = Vec::new();
-    let mut mirrored = None;
-    for (side, (dir, room, bounded)) in [(-1.0, lo_room, lo_bounded), (1.0, hi_room, hi_bounded)]
-        .into_iter()
-        .enumerate()
-    {
-        let Some(mut pts) = pin.bracket(dir, step, room, &u0, mirrored.take()) else {
-            return Ok(None);
-        };
-        // The upper side's first solve (at +step) starts from the lower side's (at −step)
-        // mirrored through the optimum.
-        if let Some(first) = pts.get(1).filter(|p| p.h == -step) {
-            mirrored = Some(u0.iter().zip(&first.u).map(|(o, f)| 2.0 * o - f).collect());
-        }
-        if let Some(h95) = quadratic_end(&pts, room) {
-            ends[0][side] = End::Closed(x0 + pts[1].h);
-            ends[1][side] = End::Closed(x0 + h95);
-            methods[side] = ProfileMethod::Extrapolated;
-        } else {
-            for (t, target) in [CHI2_68, CHI2_95].into_iter().enumerate() {
-                let Some(end) = pin.crossing(&mut pts, target, bounded) else {
-                    return Ok(None);
-                };
-                ends[t][side] = end;
-            }
-            // Two solves, no refinement inserted: the SE's solve at Δχ² ≈ 1 and the
-            // quadratic's 95% point at ≈ 3.84 were taken as they stand.
-            if pts.len() == 3 && near(pts[1].d, CHI2_68) && near(pts[2].d, CHI2_95) {
-                methods[side] = ProfileMethod::Quadratic;
-            }
-        }
-        points.extend(pts.iter().skip(side).map(|pt| (x0 + pt.h, pt.d)));
-    }
-    points.sort_by(|a, b| a.0.total_cmp(&b.0));
-    Ok(Some(Profile {
-        name: p,
-        points,
-        end_68: ends[0],
-        end_95: ends[1],
-        iterations: pin.iterations,
-        solves: pin.solves,
-        methods,
-    }))
-}
-
-/// Profile every free parameter in parallel (`steps[j]`: first step of parameter `j`). `None`
-/// when cancelled: the linearised intervals stand.
+/// Profile every free parameter in parallel (`first[j]`: how parameter `j`'s profile starts).
+/// `None` when cancelled: the linearised intervals stand.
 pub fn profile_all<F: Forward>(
     opt: &Optimum<'_, F>,
-    steps: &[Option<f64>],
+    first: &[FirstStep],
 ) -> Result<Option<Vec<Profile<F::Param>>>> {
+    let none = FirstStep::default();
     let out: Vec<Result<Option<Profile<F::Param>>>> = (0..opt.free.len())
         .into_par_iter()
-        .map(|j| profile_parameter(opt, j, steps.get(j).copied().flatten()))
+        .map(|j| profile_parameter(opt, j, first.get(j).unwrap_or(&none)))
         .collect();
     let mut profiles = Vec::with_capacity(out.len());
     for r in out {
@@ -586,18 +293,8 @@ pub fn intervals<F: Forward, Q>(
     }
     opt.chi2_unit = 2.0 * best.cost / dof as f64;
     opt.dof = dof;
-    let steps: Vec<Option<f64>> = opt
-        .free
-        .iter()
-        .map(|&p| {
-            json.parameters
-                .iter()
-                .find(|e| e.name == p.json_name())
-                .and_then(|e| e.std_error)
-                .map(|se| se / p.report_factor())
-        })
-        .collect();
-    let stage = match profile_all(&opt, &steps)? {
+    let first = first_steps(json, &opt.free);
+    let stage = match profile_all(&opt, &first)? {
         Some(profiles) => {
             let iterations: u64 = profiles.iter().map(|p| p.iterations).sum();
             let solves: usize = profiles.iter().map(|p| p.solves).sum();

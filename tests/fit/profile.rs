@@ -21,7 +21,9 @@ use hairfit::families::marschner::parameters::report_factor;
 use hairfit::families::marschner::{ParamName, Params};
 use hairfit::files::{FitStatus, ParamStatus, ProfileMethod};
 use hairfit::fit::profile::{self, End, Optimum, Profile};
-use hairfit::fit::{EffectsChoice, Evaluator, FitData, FitOptions, Intervals, Loss, Space};
+use hairfit::fit::{
+    EffectsChoice, Evaluator, FitData, FitOptions, FitParam, Intervals, Loss, Space,
+};
 use hairfit::geometry::Measurement;
 
 /// MODEL.md's example hair, one channel.
@@ -382,7 +384,7 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| profile::profile_all(&opt, &vec![None; opt.free.len()]))
+        pool.install(|| profile::profile_all(&opt, &vec![Default::default(); opt.free.len()]))
             .unwrap()
             .unwrap()
     };
@@ -400,8 +402,62 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
 
     let flag = Arc::new(AtomicBool::new(true));
     let stopped = optimum(&forward, &data, &out, Some(flag));
-    let r = profile::profile_all(&stopped, &vec![None; stopped.free.len()]).unwrap();
+    let r = profile::profile_all(&stopped, &vec![Default::default(); stopped.free.len()]).unwrap();
     assert!(r.is_none(), "a set cancel flag stops profiling");
+}
+
+/// The profile's fast path (each side's first re-fit started on the linearised path, the 95%
+/// end extrapolated or aimed by the local shape) finds the intervals a plain search finds (first
+/// re-fits from the optimum, bracket and regula falsi), and on a well-determined fit settles
+/// every side without an LM step and in at most two re-fits. Tolerance: each search accepts a
+/// crossing where `√Δχ²` is within 0.01 of its target, ≤ 1% of the half-width at 68% and ≤ 0.5%
+/// at 95% (√Δχ² ≈ |h|/SE there), and an extrapolated 95% end is within 1% (search.rs), so the
+/// two searches' ends differ by at most 2% of the half-width.
+#[test]
+fn path_started_profiles_match_a_plain_search_without_lm_steps() {
+    // Random directions: every free parameter is determined (the azimuthal scans leave α_R
+    // and β_R undetermined: they span no θ_h).
+    let data = dataset("sphere:n=800:max=85", 3);
+    let out = fit(
+        &data,
+        "three",
+        Default::default(),
+        &options(Intervals::Linear),
+    )
+    .unwrap();
+    let forward = MarschnerForward {
+        config: out.json.model,
+        measurement: Measurement::S,
+    };
+    let opt = optimum(&forward, &data, &out, None);
+    let first = profile::first_steps(&out.json, &opt.free);
+    assert_eq!(out.json.verdict, hairfit::files::Verdict::Good);
+    assert!(first.iter().all(|f| f.slopes.len() == opt.free.len()));
+    let fast = profile::profile_all(&opt, &first).unwrap().unwrap();
+    let plain = profile::profile_all(&opt, &vec![Default::default(); opt.free.len()])
+        .unwrap()
+        .unwrap();
+    for (f, p) in fast.iter().zip(&plain) {
+        let name = f.name.json_name();
+        assert_eq!(
+            f.iterations, 0,
+            "{name}: every re-fit settles where it starts"
+        );
+        assert!(f.solves <= 4, "{name}: {} re-fits", f.solves);
+        let x0 = f.name.get(&opt.params);
+        for (ends_f, ends_p) in [(f.end_68, p.end_68), (f.end_95, p.end_95)] {
+            for side in 0..2 {
+                let (End::Closed(a), End::Closed(b)) = (ends_f[side], ends_p[side]) else {
+                    panic!("{name}: both sides close ({:?}, {:?})", ends_f, ends_p);
+                };
+                let half = (b - x0).abs();
+                assert!(
+                    (a - b).abs() <= 0.02 * half,
+                    "{name} side {side}: {a} against {b} (half-width {half})"
+                );
+            }
+        }
+    }
 }
 
 #[test]

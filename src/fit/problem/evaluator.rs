@@ -37,6 +37,10 @@ pub struct Evaluator<'f, F: Forward> {
     pub explicit_scale: bool,
     /// The latest value and gradient passes, reused at the same point.
     pub(super) memo: PassMemo<ParamSet<F>, F::Param>,
+    /// Every value pass computes the gradients too (kept in the memo, within its budget), as a
+    /// family with cheap gradients always does: for a fit whose trial steps are nearly always
+    /// accepted, where the linearisation follows at the same point.
+    pub gradients_with_values: bool,
 }
 
 /// A reading below this many σ is not significantly positive: its log is not approximately
@@ -130,6 +134,7 @@ impl<'f, F: Forward> Evaluator<'f, F> {
                 bounds,
                 explicit_scale: loss != Loss::L2,
                 memo: PassMemo::default(),
+                gradients_with_values: false,
             },
             floored,
         ))

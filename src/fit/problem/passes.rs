@@ -87,8 +87,10 @@ impl<F: Forward> Evaluator<'_, F> {
         }
         let nc = self.n_channels;
         // A family whose gradients cost little more than its values (and give the same values)
-        // computes them with every value pass: the linearisation at an accepted step is then free.
-        if !self.free.is_empty() && self.forward.cheap_gradients(&self.free) {
+        // computes them with every value pass, as does an evaluator asked to: the linearisation
+        // at an accepted step is then free.
+        let fused = self.gradients_with_values || self.forward.cheap_gradients(&self.free);
+        if !self.free.is_empty() && fused {
             let layout = Layout::of(&self.free, nc);
             if let Some(pass) = self.kept_gradients(p, &layout, cancel)? {
                 return Some(pass.values.clone());

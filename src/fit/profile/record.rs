@@ -1,7 +1,8 @@
 //! Writing finished profiles into fit.json: each parameter's intervals, points and method per
 //! side, and the status and warnings of a profile that stays open inside the bounds.
 
-use super::{End, Label, Profile, SEARCH_RANGES};
+use super::search::SEARCH_RANGES;
+use super::{End, Label, Profile};
 use crate::files::{FitJson, Interval, ParamStatus};
 
 /// Write `profiles` into fit.json's parameter entries (reporting units): intervals, profile
