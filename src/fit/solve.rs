@@ -56,9 +56,6 @@ pub struct LocalRun {
     pub history: Vec<f64>,
     pub status: RunStatus,
     pub wall_s: f64,
-    /// Where the Gauss–Newton step from the solver's last linearisation leads, when that was at
-    /// `u` (a run stopped because the step would gain too little did not take it).
-    pub gauss_newton_end: Option<Vec<f64>>,
 }
 
 /// Relative cost-reduction tolerance of the fit's LM runs. Noisy fits normally stop earlier, by
@@ -166,7 +163,6 @@ pub fn run_lm<F: Forward>(
     // which it evaluated first); otherwise one pass each: on millions of samples a pass is
     // a noticeable share of the polish.
     let mut solver_cost = None;
-    let mut gauss_newton_end = None;
     let (u, iterations, status) = match result {
         Ok(res) => {
             let st = &res.state;
@@ -179,10 +175,6 @@ pub fn run_lm<F: Forward>(
                 .or(st.get_param())
                 .map(|p| p.as_slice().to_vec())
                 .unwrap_or_else(|| u0.to_vec());
-            gauss_newton_end = res
-                .solver()
-                .gauss_newton_end(&DVector::from_column_slice(&u))
-                .map(|e| e.as_slice().to_vec());
             let status = match st.get_termination_reason() {
                 Some(TerminationReason::Interrupt) => RunStatus::Interrupted,
                 Some(TerminationReason::MaxItersReached) => RunStatus::MaxIterations,
@@ -219,7 +211,6 @@ pub fn run_lm<F: Forward>(
         history,
         status,
         wall_s: t0.elapsed().as_secs_f64(),
-        gauss_newton_end,
     }
 }
 

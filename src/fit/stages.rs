@@ -125,7 +125,6 @@ pub fn multistart<F: Forward>(
                     history: Vec::new(),
                     status: FitStatus::Interrupted,
                     wall_s: 0.0,
-                    gauss_newton_end: None,
                 };
             }
             let r = run_local(

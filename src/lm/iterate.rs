@@ -157,7 +157,6 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         self.lambda = 0.0;
         self.rows = lin.rows;
         self.refresh(&lin, fnorm);
-        self.linearized_at = Some(x0.clone());
         let xnorm = self.diag.component_mul(&x0).norm();
         self.delta = if xnorm > 0.0 {
             self.radius_factor * xnorm
@@ -283,7 +282,6 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 )));
             }
             self.refresh(&lin, fnorm1);
-            self.linearized_at = Some(x_new.clone());
             let cost = 0.5 * fnorm1 * fnorm1;
             state = with_linearization(state.param(x_new.clone()).cost(cost), lin);
         }

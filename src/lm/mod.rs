@@ -145,8 +145,6 @@ pub struct LevenbergMarquardt {
     lambda: f64,
     first_step: bool,
     factor: Option<Factored>,
-    /// Where `factor` was linearised.
-    linearized_at: Option<DVector<f64>>,
     /// `Jᵀr` at the current point (judges noise-level steps).
     gradient: DVector<f64>,
     status: Option<LmTermination>,
@@ -214,7 +212,6 @@ impl LevenbergMarquardt {
             lambda: 0.0,
             first_step: true,
             factor: None,
-            linearized_at: None,
             gradient: DVector::zeros(0),
             status: None,
             rows: 0,
@@ -332,24 +329,6 @@ impl LevenbergMarquardt {
     /// Why the last run stopped, if it converged (None while running or after max iterations).
     pub fn termination(&self) -> Option<LmTermination> {
         self.status
-    }
-
-    /// Where the undamped (Gauss–Newton) step from the last linearisation leads, when that
-    /// linearisation was at `x`: the linear model's minimum, which a run that stopped because
-    /// the step would gain too little did not take. None when the last linearisation was
-    /// elsewhere (a lazy final step), or the step is not finite.
-    pub fn gauss_newton_end(&self, x: &DVector<f64>) -> Option<DVector<f64>> {
-        if self.linearized_at.as_ref() != Some(x) {
-            return None;
-        }
-        let z = match self.factor.as_ref()? {
-            Factored::Svd(svd) => step::trust_region_step(svd, f64::INFINITY, 0.0, self.rows).z,
-            Factored::Blocks(scaled) => {
-                blocks::block_trust_region_step(scaled, f64::INFINITY, 0.0, self.rows).z
-            }
-        };
-        let end = x + z.component_div(&self.diag);
-        end.iter().all(|v| v.is_finite()).then_some(end)
     }
 }
 

@@ -409,12 +409,12 @@ fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
 /// The profile's fast path (each side's first re-fit started on the linearised path, the 95%
 /// end extrapolated or aimed by the local shape) finds the intervals a plain search finds (first
 /// re-fits from the optimum, bracket and regula falsi), and on a well-determined fit settles
-/// every side without an LM step and in at most two re-fits. Tolerance: each search accepts a
+/// each side in at most two re-fits, with at most half the plain search's LM iterations. Tolerance: each search accepts a
 /// crossing where `√Δχ²` is within 0.01 of its target, ≤ 1% of the half-width at 68% and ≤ 0.5%
 /// at 95% (√Δχ² ≈ |h|/SE there), and an extrapolated 95% end is within 1% (search.rs), so the
 /// two searches' ends differ by at most 2% of the half-width.
 #[test]
-fn path_started_profiles_match_a_plain_search_without_lm_steps() {
+fn path_started_profiles_match_a_plain_search_with_fewer_lm_steps() {
     // Random directions: every free parameter is determined (the azimuthal scans leave α_R
     // and β_R undetermined: they span no θ_h).
     let data = dataset("sphere:n=800:max=85", 3);
@@ -437,12 +437,16 @@ fn path_started_profiles_match_a_plain_search_without_lm_steps() {
     let plain = profile::profile_all(&opt, &vec![Default::default(); opt.free.len()])
         .unwrap()
         .unwrap();
+    let iterations = |ps: &[Profile<ParamName>]| ps.iter().map(|p| p.iterations).sum::<u64>();
+    assert!(
+        iterations(&fast) * 2 <= iterations(&plain),
+        "the path starts save at least half the LM iterations: {} against {}",
+        iterations(&fast),
+        iterations(&plain)
+    );
     for (f, p) in fast.iter().zip(&plain) {
         let name = f.name.json_name();
-        assert_eq!(
-            f.iterations, 0,
-            "{name}: every re-fit settles where it starts"
-        );
+        assert!(f.iterations <= 2, "{name}: {} LM iterations", f.iterations);
         assert!(f.solves <= 4, "{name}: {} re-fits", f.solves);
         let x0 = f.name.get(&opt.params);
         for (ends_f, ends_p) in [(f.end_68, p.end_68), (f.end_95, p.end_95)] {

@@ -29,9 +29,7 @@ const SOLVE_CHI2_TOL: f64 = 1e-3;
 /// LM iterations per profile solve at most (warm-started solves need 3–15).
 const SOLVE_MAX_ITERS: u64 = 100;
 
-/// A solved point at signed distance `h` from the optimum: its Δχ² and where the re-fit's
-/// Gauss–Newton step leads (the re-fit's end when it took that step or had none left), the
-/// best estimate of the profile's path there, from which later solves start.
+/// A solved point at signed distance `h` from the optimum.
 struct Pt {
     h: f64,
     d: f64,
@@ -66,11 +64,8 @@ impl<F: Forward> Pinned<'_, '_, F> {
 
     /// The fit's LM runner ([`run_lm`]), stopping once the cost change or the Gauss–Newton
     /// predicted χ² gain (a warm start that close takes no step) is below [`SOLVE_CHI2_TOL`],
-    /// without a final linearisation: `(u, cost, iterations)` with the cost the solver's best
-    /// point's (never worse than the start; no extra passes for the start's and the end's cost)
-    /// and `u` where its last Gauss–Newton step leads (the step it declined to take is the
-    /// curvature of the path that the next solve's start extrapolates: without it a start on
-    /// the linearised path that needed no step would carry no curvature at all).
+    /// without a final linearisation: `(u, cost, iterations)`, never worse than the start (the
+    /// solver's best point and its cost: no extra passes for the start's and the end's cost).
     fn run(&self, u0: &[f64], max_iters: u64) -> (Vec<f64>, f64, u64) {
         let ftol =
             (SOLVE_CHI2_TOL / self.opt.dof.max(1) as f64).clamp(crate::fit::solve::FTOL, 1e-4);
@@ -80,11 +75,7 @@ impl<F: Forward> Pinned<'_, '_, F> {
             .unwrap_or_default()
             .with_lazy_final_linearization();
         let run = run_lm(&self.ev, u0, solver, max_iters, &self.opt.cancel, None);
-        (
-            run.gauss_newton_end.unwrap_or(run.u),
-            run.cost,
-            run.iterations,
-        )
+        (run.u, run.cost, run.iterations)
     }
 
     /// Bracket both thresholds on one side out to `hmax`, from `pts` (the optimum and the side's
