@@ -54,6 +54,11 @@ fn options(intervals: Intervals) -> FitOptions {
     }
 }
 
+/// The Marschner fit of `data` with default fixes and `intervals`.
+fn fitted(data: &FitData, intervals: Intervals) -> MarschnerOutcome {
+    fit(data, "data", Default::default(), &options(intervals)).unwrap()
+}
+
 /// Truth of a parameter in reporting units.
 fn true_value(name: &str) -> f64 {
     let p = ParamName::from_json_name(name).unwrap();
@@ -178,13 +183,7 @@ fn intervals_bracket_the_value_and_match_the_se_where_the_cost_is_nearly_quadrat
     // 0.5% noise: the cost is nearly quadratic over ±2 SE (at 5% k_G's SE is 60% of its value
     // and its profile is far from a parabola).
     let data = dataset_at(THREE_SCANS, "relative:0.005", 7);
-    let out = fit(
-        &data,
-        "three",
-        Default::default(),
-        &options(Intervals::Profile),
-    )
-    .unwrap();
+    let out = fitted(&data, Intervals::Profile);
     assert_eq!(out.json.status, FitStatus::Converged);
     let mut checked = 0;
     for e in out
@@ -365,13 +364,7 @@ fn optimum<'a>(
 #[test]
 fn profiles_are_identical_for_one_and_two_threads_and_ctrl_c_returns_none() {
     let data = dataset(THREE_SCANS, 3);
-    let out = fit(
-        &data,
-        "three",
-        Default::default(),
-        &options(Intervals::Linear),
-    )
-    .unwrap();
+    let out = fitted(&data, Intervals::Linear);
     assert_eq!(out.json.options.intervals, "linear");
     assert!(out.json.parameters.iter().all(|e| e.interval_68.is_none()));
     let forward = MarschnerForward {
@@ -418,13 +411,7 @@ fn path_started_profiles_match_a_plain_search_with_fewer_lm_steps() {
     // Random directions: every free parameter is determined (the azimuthal scans leave α_R
     // and β_R undetermined: they span no θ_h).
     let data = dataset("sphere:n=800:max=85", 3);
-    let out = fit(
-        &data,
-        "three",
-        Default::default(),
-        &options(Intervals::Linear),
-    )
-    .unwrap();
+    let out = fitted(&data, Intervals::Linear);
     let forward = MarschnerForward {
         config: out.json.model,
         measurement: Measurement::S,
@@ -467,13 +454,7 @@ fn path_started_profiles_match_a_plain_search_with_fewer_lm_steps() {
 #[test]
 fn a_profile_open_inside_the_bounds_makes_the_parameter_undetermined_naming_the_side() {
     let data = dataset(THREE_SCANS, 5);
-    let mut out = fit(
-        &data,
-        "three",
-        Default::default(),
-        &options(Intervals::Linear),
-    )
-    .unwrap();
+    let mut out = fitted(&data, Intervals::Linear);
     let k_g = out.params.k_g;
     let fake = Profile {
         name: ParamName::KG,
