@@ -47,16 +47,23 @@ pub fn write_fit_dir(
     curves: Option<&Curves>,
     timing: &Timing,
 ) -> Result<()> {
+    write_fit_files(dir, fit, curves)?;
+    write_timing(dir, timing)
+}
+
+/// [`write_fit_dir`] without `timing.json`, for a caller that writes it once its own outputs'
+/// time is known (a file written and replaced at once costs its first write-back on ext4).
+pub fn write_fit_files(dir: &Path, fit: &FitJson, curves: Option<&Curves>) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     write_json(&dir.join("fit.json"), fit)?;
     write_json(&dir.join("params.json"), &fit.params)?;
     if let Some(curves) = curves {
         curves.write_csv(&dir.join("curves.csv"), None)?;
     }
-    write_timing(dir, timing)
+    Ok(())
 }
 
-/// Write `timing.json` into `dir` (again after the report, with its `outputs_s`).
+/// Write `timing.json` into `dir`.
 pub fn write_timing(dir: &Path, timing: &Timing) -> Result<()> {
     write_json(&dir.join(timing::TIMING_FILE), timing)
 }

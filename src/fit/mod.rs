@@ -227,17 +227,7 @@ impl<P> FitOutcome<P> {
 /// Write the outcome's files into `dir` (fit.json, params.json, curves.csv as fit.json's
 /// `options.curves` asks, timing.json).
 pub fn write_outputs<P>(dir: &Path, out: &FitOutcome<P>) -> Result<()> {
-    write_outputs_with(dir, out, written_curves(out).as_deref())
-}
-
-/// [`write_outputs`] with the curves [`written_curves`] chose (so a caller that also reports
-/// them selects them once).
-pub fn write_outputs_with<P>(
-    dir: &Path,
-    out: &FitOutcome<P>,
-    curves: Option<&Curves>,
-) -> Result<()> {
-    crate::files::write_fit_dir(dir, &out.json, curves, &out.timing)
+    crate::files::write_fit_dir(dir, &out.json, written_curves(out).as_deref(), &out.timing)
 }
 
 /// The curves `curves.csv` gets under fit.json's `options.curves`: the outcome's (all rows, or

@@ -34,7 +34,7 @@ pub fn write_fit<P: Sync>(
                 &super::ReportOptions::default(),
             ))
         });
-        crate::fit::write_outputs_with(dir, &outcome, curves.as_deref())
+        crate::files::write_fit_files(dir, &outcome.json, curves.as_deref())
     });
     let report = report.expect("the scope ends after the report");
     files.map_err(|e| set.explain(e))?;
