@@ -606,6 +606,7 @@ pub fn assemble<F: Forward>(a: Assembly<'_, '_, '_, F>) -> Result<FitDraft<Param
             curves,
             relative_misfit: relative_misfit(data, &e),
             worst_row_misfit: worst_row,
+            curve_slices: None,
             timing: Timing {
                 wall_time_s: started.elapsed().as_secs_f64(),
                 stages: stage_times,
@@ -640,6 +641,10 @@ impl<P> FitDraft<P> {
             assessment,
         } = self;
         super::profile::write_into(&mut outcome, intervals, started);
+        // Full curves hold every sample in the data's order: the verdict's slices are theirs.
+        if outcome.json.options.curves == CurvesMode::Full {
+            outcome.curve_slices = Some(assessment.scan_slices().clone());
+        }
         let judgement = super::verdict::decide(&assessment, &outcome.json, data);
         outcome.json.verdict = judgement.verdict;
         outcome.json.reasons = judgement.reasons;

@@ -208,6 +208,9 @@ pub struct FitOutcome<P> {
     /// The largest row's |fit − data| / max(|data|, 1e-9 · its channel's peak) (NaN when a
     /// value is missing): at most [`EXACT_MISFIT`] when the model reproduces the data.
     pub worst_row_misfit: f64,
+    /// The scan slices of `curves`' samples when the verdict found them on the same samples
+    /// (full curves): the report draws them without searching again.
+    pub curve_slices: Option<Arc<crate::slices::FoundSlices>>,
 }
 
 impl<P> FitOutcome<P> {
@@ -220,6 +223,7 @@ impl<P> FitOutcome<P> {
             timing: self.timing,
             relative_misfit: self.relative_misfit,
             worst_row_misfit: self.worst_row_misfit,
+            curve_slices: self.curve_slices,
         }
     }
 }

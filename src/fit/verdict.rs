@@ -6,6 +6,8 @@
 //! reasons come first; the others follow, so a poor fit still names its undetermined parameters.
 //! What to try next is [`super::suggest`]'s.
 
+use std::sync::Arc;
+
 use super::evidence::Evidence;
 use super::evidence::LARGE_RESIDUAL;
 use super::gof::{
@@ -18,7 +20,7 @@ use crate::files::{
     Verdict,
 };
 use crate::fit::Loss;
-use crate::slices::{find_slices_by, Slice};
+use crate::slices::{find_slices_by, FoundSlices, Slice};
 
 /// A test rejects the model when its p-value is below 1e-3: with the handful of tests applied
 /// to one fit, a model that does describe its data is called poor about once in 300–1000 fits,
@@ -78,6 +80,8 @@ pub struct Assessment {
     goodness_of_fit: GoodnessOfFit,
     /// What to try for a poor fit (robust loss, exact mode, what was measured).
     poor_fit_suggestions: Vec<Suggestion>,
+    /// The data's scan slices, which the report of full curves draws again.
+    slices: Arc<FoundSlices>,
 }
 
 impl Assessment {
@@ -95,6 +99,11 @@ impl Assessment {
         }
     }
 
+    /// The data's scan slices and the samples in none ([`scan_slices`]).
+    pub fn scan_slices(&self) -> &Arc<FoundSlices> {
+        &self.slices
+    }
+
     /// True when the model misses the data (the verdict will be `poor_fit`).
     pub fn is_poor_fit(&self) -> bool {
         self.ranking() == Some(Verdict::PoorFit)
@@ -104,8 +113,9 @@ impl Assessment {
 /// Assess a fit at its optimum (see [`Assessment`]).
 pub fn assess<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Assessment {
     let failed = failures(x);
-    let slices = scan_slices(x.data);
-    let g = goodness_of_fit(x, &slices);
+    let found = Arc::new(scan_slices(x.data));
+    let slices = &found.0;
+    let g = goodness_of_fit(x, slices);
     // Residuals at rounding level carry no noise for the tests to judge: the model is the data.
     let exact = x.worst_row_misfit.is_finite() && x.worst_row_misfit <= super::EXACT_MISFIT;
     let poor = if failed.is_empty() && !exact {
@@ -121,9 +131,10 @@ pub fn assess<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Assessment {
         exact: exact.then_some(x.worst_row_misfit),
         goodness_of_fit: g,
         poor_fit_suggestions: Vec::new(),
+        slices: found.clone(),
     };
     if a.is_poor_fit() {
-        a.poor_fit_suggestions = poor_fit_suggestions(x, &a.goodness_of_fit, &slices);
+        a.poor_fit_suggestions = poor_fit_suggestions(x, &a.goodness_of_fit, slices);
     }
     a
 }
@@ -349,10 +360,10 @@ fn loss_scale_failure<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Option<String>
     })
 }
 
-/// The data's scan slices (fixed incidence and one outgoing angle, swept in order), found as the
-/// report finds them.
-pub fn scan_slices(data: &FitData) -> Vec<Slice> {
-    find_slices_by(data.len(), |i| data.angles_deg(i)).0
+/// The data's scan slices (fixed incidence and one outgoing angle, swept in order) and the
+/// samples in none, found as the report finds them.
+pub fn scan_slices(data: &FitData) -> FoundSlices {
+    find_slices_by(data.len(), |i| data.angles_deg(i))
 }
 
 /// Goodness-of-fit statistics of the final residuals.

@@ -27,7 +27,7 @@ use crate::geometry::Angles;
 use crate::plot::{render, YScale};
 use crate::slices::decimate::stride_indices;
 pub use crate::slices::summary::{summary_rows, summary_samples, SUMMARY_SAMPLES};
-use crate::slices::{find_slices, samples_of, Slice, SliceKind};
+use crate::slices::{find_slices, samples_of, FoundSlices, Slice, SliceKind};
 pub use crate::slices::{MAX_PANELS, MAX_SLICE_POINTS};
 use figures::{
     channel_color, ConvergenceFigure, CorrelationFigure, CurvesFigure, PolarFigure, ProfileFigure,
@@ -133,7 +133,7 @@ pub fn write_report_with(dir: &Path, options: &ReportOptions) -> Result<ReportSu
         Err(e) => return Err(Error::io(&curves_path, e)),
     };
     set.keep_all_but(publish::is_report_file)?;
-    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), options)
+    let summary = write_report_of(set.staging(), &fit, curves.as_ref(), None, options)
         .map_err(|e| set.explain(e))?;
     set.publish()?;
     Ok(summary)
@@ -145,6 +145,7 @@ pub fn write_report_of(
     dir: &Path,
     fit: &FitJson,
     curves: Option<&Curves>,
+    slices: Option<&FoundSlices>,
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
     let family_model = FamilyModel::new(&fit.params, &fit.setup()?);
@@ -166,7 +167,8 @@ pub fn write_report_of(
     };
     let n_model = fit.params.n_channels();
     let model_ref: Option<&LobeModel> = if usable { Some(&model) } else { None };
-    let mut summary = render_curves_report(dir, fit, curves, model_ref, n_model, options)?;
+    let mut summary =
+        render_curves_report(dir, fit, curves, slices, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
 }
@@ -181,16 +183,18 @@ pub fn render_report(
     options: &ReportOptions,
 ) -> Result<ReportSummary> {
     let curves = Curves::from_rows(rows);
-    render_curves_report(dir, fit, Some(&curves), model, n_model, options)
+    render_curves_report(dir, fit, Some(&curves), None, model, n_model, options)
 }
 
 /// Render the report of `fit` and its `curves` into `dir`, evaluating `model` (with `n_model`
 /// channels) for the dense curves; `None` draws the fit column at the samples instead.
-/// Without curves only the parameter figures and the page are written.
+/// Without curves only the parameter figures and the page are written. `slices`: the curves'
+/// scan slices when the caller has them (found here otherwise).
 pub fn render_curves_report(
     dir: &Path,
     fit: &FitJson,
     curves: Option<&Curves>,
+    slices: Option<&FoundSlices>,
     model: Option<&LobeModel>,
     n_model: usize,
     options: &ReportOptions,
@@ -199,7 +203,10 @@ pub fn render_curves_report(
     // The figures of fit.json alone are drawn while the data's are (neither reads the other's).
     let mut parameters = ReportSummary::default();
     let (data, params) = rayon::join(
-        || data_part(dir, fit, curves, model, n_model, options, &mut summary),
+        || {
+            let curves = curves.map(|c| (c, slices));
+            data_part(dir, fit, curves, model, n_model, options, &mut summary)
+        },
         || parameter_figures(dir, fit, &mut parameters),
     );
     data?;
@@ -224,14 +231,14 @@ pub fn render_curves_report(
 fn data_part(
     dir: &Path,
     fit: &FitJson,
-    curves: Option<&Curves>,
+    curves: Option<(&Curves, Option<&FoundSlices>)>,
     model: Option<&LobeModel>,
     n_model: usize,
     options: &ReportOptions,
     summary: &mut ReportSummary,
 ) -> Result<()> {
     match curves {
-        Some(curves) => {
+        Some((curves, slices)) => {
             if fit.options.curves == CurvesMode::Summary {
                 let why = if fit.options.curves_reason.is_empty() {
                     "`--curves summary`".to_string()
@@ -245,7 +252,7 @@ fn data_part(
                     curves.n_samples()
                 ));
             }
-            data_figures(dir, fit, curves, model, n_model, options, summary)?;
+            data_figures(dir, fit, (curves, slices), model, n_model, options, summary)?;
         }
         None => summary.notes.push(match fit.options.curves {
             CurvesMode::None => "no curves.csv: the fit ran with `--curves none`, so only the parameters and the verdict are shown (rerun with `--curves summary` or `full` for figures of the data)".to_string(),
@@ -259,7 +266,7 @@ fn data_part(
 fn data_figures(
     dir: &Path,
     fit: &FitJson,
-    curves: &Curves,
+    (curves, found): (&Curves, Option<&FoundSlices>),
     model: Option<&LobeModel>,
     n_model: usize,
     options: &ReportOptions,
@@ -283,7 +290,14 @@ fn data_figures(
         .map(|(i, c)| (c.clone(), channel_color(c, i)))
         .collect();
     let samples = samples_of(curves);
-    let (slices, scattered) = find_slices(&samples);
+    let searched;
+    let (slices, scattered) = match found {
+        Some((slices, scattered)) => (slices, scattered),
+        None => {
+            searched = find_slices(&samples);
+            (&searched.0, &searched.1)
+        }
+    };
     summary.slices = slices.len();
     if scale == YScale::Log {
         let hidden = curves

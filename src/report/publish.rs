@@ -31,6 +31,7 @@ pub fn write_fit<P: Sync>(
                 dir,
                 &outcome.json,
                 curves.as_deref(),
+                outcome.curve_slices.as_deref(),
                 &super::ReportOptions::default(),
             ))
         });

@@ -27,7 +27,7 @@ pub enum SliceKind {
 }
 
 /// A set of samples sharing the incidence and one outgoing angle.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Slice {
     pub kind: SliceKind,
     pub theta_i: f64,
@@ -104,9 +104,12 @@ fn key(v: f64) -> i64 {
     (v * 1e6).round() as i64
 }
 
-/// Group `n` samples whose angles (degrees) `angles(i)` gives into slices; returns the slices
-/// (sorted by kind and fixed angles) and the indices of samples in no slice.
-pub fn find_slices_by(n: usize, angles: impl Fn(usize) -> [f64; 4]) -> (Vec<Slice>, Vec<usize>) {
+/// The slices of a set of samples (sorted by kind and fixed angles) and the indices of the
+/// samples in no slice, as [`find_slices_by`] finds them.
+pub type FoundSlices = (Vec<Slice>, Vec<usize>);
+
+/// Group `n` samples whose angles (degrees) `angles(i)` gives into slices.
+pub fn find_slices_by(n: usize, angles: impl Fn(usize) -> [f64; 4]) -> FoundSlices {
     // Incidence groups by one sort (in key order, members in sample order, as a map would
     // give them) rather than a map of a Vec per group: scattered data has a group per sample.
     let finite = |i: usize| angles(i).iter().all(|a| a.is_finite());

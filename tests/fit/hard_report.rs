@@ -55,3 +55,38 @@ fn slices_of_scattered_samples_are_found_in_linear_time() {
     assert_eq!(n_slices + n_scattered.min(1), 1, "{n_slices} slices");
     assert_eq!(n_scattered, 1_000_000);
 }
+
+/// A fit hands its report the verdict's scan slices instead of the report searching curves.csv's
+/// samples again (a sort of every sample): they must be exactly the slices that search finds, on
+/// scans (slices and leftover samples) and on scattered directions (no slice at all). Summary
+/// curves hold a subset of the samples, numbered apart from the data's, and hand none.
+#[test]
+fn a_fit_hands_its_report_the_slices_the_report_would_find() {
+    use crate::support;
+    use hairfit::families::marschner::fit::fit;
+    use hairfit::files::CurvesMode;
+    use hairfit::fit::FitOptions;
+    use hairfit::slices::samples_of;
+
+    let truth = support::fit::random_params(5, 1);
+    let mut scans = support::fit::azimuthal_scans();
+    // Two stray directions, in no slice.
+    scans.extend(support::fit::random_sphere(2, 9));
+    for (angles, has_slices) in [(scans, true), (support::fit::random_sphere(400, 2), false)] {
+        let data = support::fit::data(&truth, &angles, 0.02, 5);
+        let out = fit(&data, "slices", Default::default(), &FitOptions::default()).unwrap();
+        assert_eq!(out.json.options.curves, CurvesMode::Full);
+        let given = out.curve_slices.as_deref().expect("full curves carry their slices");
+        assert_eq!(given, &find_slices(&samples_of(&out.curves)));
+        assert_eq!(!given.0.is_empty(), has_slices, "{} slices", given.0.len());
+        assert!(!given.1.is_empty(), "the stray samples are in no slice");
+    }
+    let data = support::fit::data(&truth, &support::fit::azimuthal_scans(), 0.02, 5);
+    let options = FitOptions {
+        curves: Some(CurvesMode::Summary),
+        ..FitOptions::default()
+    };
+    let out = fit(&data, "summary", Default::default(), &options).unwrap();
+    assert_eq!(out.json.options.curves, CurvesMode::Summary);
+    assert!(out.curve_slices.is_none());
+}
