@@ -193,6 +193,11 @@ fn push_display_of(out: &mut Vec<u8>, d: &Decimal) {
 
 /// Append `v` as `format!("{v:e}")` writes it (finite `v`).
 pub fn push_exponent(out: &mut Vec<u8>, v: f64, buf: &mut DigitBuffer) {
+    // curves.csv's weight column is 1 on every row of an l2 fit.
+    if v == 1.0 {
+        out.extend_from_slice(b"1e0");
+        return;
+    }
     if tie_possible(v) {
         return push_exponent_of(out, &Decimal::of(v, buf));
     }
