@@ -167,8 +167,7 @@ pub fn write_report_of(
     };
     let n_model = fit.params.n_channels();
     let model_ref: Option<&LobeModel> = if usable { Some(&model) } else { None };
-    let mut summary =
-        render_curves_report(dir, fit, curves, slices, model_ref, n_model, options)?;
+    let mut summary = render_curves_report(dir, fit, curves, slices, model_ref, n_model, options)?;
     summary.notes.splice(0..0, pre_notes);
     Ok(summary)
 }

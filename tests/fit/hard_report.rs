@@ -76,7 +76,10 @@ fn a_fit_hands_its_report_the_slices_the_report_would_find() {
         let data = support::fit::data(&truth, &angles, 0.02, 5);
         let out = fit(&data, "slices", Default::default(), &FitOptions::default()).unwrap();
         assert_eq!(out.json.options.curves, CurvesMode::Full);
-        let given = out.curve_slices.as_deref().expect("full curves carry their slices");
+        let given = out
+            .curve_slices
+            .as_deref()
+            .expect("full curves carry their slices");
         assert_eq!(given, &find_slices(&samples_of(&out.curves)));
         assert_eq!(!given.0.is_empty(), has_slices, "{} slices", given.0.len());
         assert!(!given.1.is_empty(), "the stray samples are in no slice");

@@ -34,6 +34,8 @@ use crate::families::shared::logistic::{logistic_scale, trimmed_logistic, trimme
 use crate::families::shared::quadrature::{GaussLegendre, WidthRule};
 use crate::geometry::angles::wrap;
 
+use super::nodes::{node_sums, NodeLobe, Piece};
+
 /// Smallest azimuthal roughness β_N the family accepts (radial smoothness 0.95): the accuracy
 /// of [`lobe`] is tested down to here (tests/families/frostbite_azimuthal.rs).
 pub const BETA_N_MIN: f64 = 0.05;
@@ -103,23 +105,7 @@ impl<T: DualNum<f64>> Logistic<T> {
         }
     }
 
-    /// `e/(1 + e)²` with `e = exp(−k|d|)` at `k = 1/s` (f64), and its first two derivatives in
-    /// k halved as Taylor coefficients: `D_s(d) = norm·(f₀ + f₁δ + f₂δ²)` for `k = k₀ + δ`.
-    /// Summing these three in f64 over the nodes and forming the number type once per lobe
-    /// gives the value and the first and second derivatives of the sum exactly, where the
-    /// number type at every node cost a dual `exp` and division per node.
-    #[inline]
-    fn taylor(&self, d: f64) -> [f64; 3] {
-        let x = d.abs();
-        let e = (-(self.inv_s.re() * x)).exp();
-        let q = 1.0 / (1.0 + e);
-        let f0 = e * q * q;
-        let f1 = -x * f0 * (1.0 - e) * q;
-        let f2 = 0.5 * x * x * f0 * (1.0 - 4.0 * e + e * e) * q * q;
-        [f0, f1, f2]
-    }
-
-    /// `norm·(f₀ + f₁δ + f₂δ²)`, `δ = 1/s − 1/s₀` (zero in value; see [`Logistic::taylor`]).
+    /// `norm·(f₀ + f₁δ + f₂δ²)`, `δ = 1/s − 1/s₀` (zero in value; the `f` are the node sums of `nodes::taylor`).
     fn series(&self, f: [f64; 3]) -> T {
         let delta = self.inv_s.clone() - self.inv_s.re();
         let series = (delta.clone() * f[2] + f[1]) * delta + f[0];
@@ -325,7 +311,7 @@ fn lobe_sums<T: DualNum<f64>>(p: usize, phi: f64, x: f64, logistic: &Logistic<T>
     }
     let largest = segments.iter().map(|s| s.size).fold(0.0, f64::max);
     let rule = gauss_legendre();
-    let mut total = [0.0; 3];
+    let mut pieces = Vec::new();
     for seg in segments.iter().filter(|s| s.size >= NEGLIGIBLE * largest) {
         let (a, b, g0) = (seg.a, seg.b, seg.g0);
         // ℓ: the γ-distance over which u moves by s at the anchor, ½|u''|ℓ² + |u'|ℓ = s.
@@ -345,34 +331,27 @@ fn lobe_sums<T: DualNum<f64>>(p: usize, phi: f64, x: f64, logistic: &Logistic<T>
         };
         let va = -((g0 - a).min(reach) / ell).asinh();
         let vb = ((b - g0).min(reach) / ell).asinh();
-        let pieces = ((vb - va) / V_PIECE).ceil().max(1.0) as usize;
-        let step = (vb - va) / pieces as f64;
-        for i in 0..pieces {
+        let n_pieces = ((vb - va) / V_PIECE).ceil().max(1.0) as usize;
+        let step = (vb - va) / n_pieces as f64;
+        for i in 0..n_pieces {
             let w1 = va + step * i as f64;
             let w2 = w1 + step;
             let extent = ell * (w2.sinh() - w1.sinh());
             let parts = (extent / GAMMA_PIECE).ceil().max(1.0) as usize;
             let sub = (w2 - w1) / parts as f64;
-            for j in 0..parts {
-                let mid = w1 + sub * (j as f64 + 0.5);
-                let half = 0.5 * sub;
-                for (&xn, &wn) in rule.nodes.iter().zip(&rule.weights) {
-                    let v = mid + half * xn;
-                    let ev = v.exp();
-                    let (sinh, cosh) = (0.5 * (ev - ev.recip()), 0.5 * (ev + ev.recip()));
-                    let g = g0 + ell * sinh;
-                    if g <= -FRAC_PI_2 || g >= FRAC_PI_2 {
-                        continue;
-                    }
-                    // ½∫ … cos γ dγ, dγ = ℓ cosh v dv.
-                    let weight = 0.5 * half * wn * ell * cosh * g.cos();
-                    let f = logistic.taylor(wrap(lobe.u(g)));
-                    for (t, fk) in total.iter_mut().zip(f) {
-                        *t += fk * weight;
-                    }
-                }
-            }
+            pieces.extend((0..parts).map(|j| Piece {
+                mid: w1 + sub * (j as f64 + 0.5),
+                half: 0.5 * sub,
+                g0,
+                ell,
+            }));
         }
     }
-    total
+    let node_lobe = NodeLobe {
+        p: lobe.p,
+        phi: lobe.phi,
+        x: lobe.x,
+        inv_s: logistic.inv_s.re(),
+    };
+    node_sums(node_lobe, &pieces, &rule.nodes, &rule.weights)
 }

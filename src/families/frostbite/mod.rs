@@ -16,6 +16,7 @@
 
 pub mod azimuthal;
 pub mod export;
+mod nodes;
 
 use std::f64::consts::PI;
 

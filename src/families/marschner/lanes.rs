@@ -19,16 +19,11 @@ use wide::f64x4;
 use super::{evaluate_into, scattering_batch, Angles, ModelConfig, Params, Prepared, RootMode};
 
 #[cfg(target_arch = "x86_64")]
-mod avx2;
-#[cfg(target_arch = "x86_64")]
-mod avx512;
+use crate::families::shared::lanes::{avx2, avx512};
+use crate::families::shared::lanes::{functions, vector};
 mod cubic;
-mod functions;
 mod kernel;
-#[cfg(target_arch = "x86_64")]
-mod register;
 mod steps;
-mod vector;
 use kernel::Lanes;
 use vector::{Lane, Pair, MAX_LANES};
 

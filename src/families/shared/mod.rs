@@ -4,11 +4,13 @@
 //! - [`bessel`]: the exponentially scaled `I₀` that `M` needs;
 //! - [`logistic`]: the trimmed logistic of pbrt-v4's `N_p` and its roughness map;
 //! - [`quadrature`]: cached Gauss–Legendre rules for the width integral over h;
-//! - [`half_angle`]: the half angle of the real-time families' R Fresnel.
+//! - [`half_angle`]: the half angle of the real-time families' R Fresnel;
+//! - `lanes`: f64 vectors (SSE2, AVX2, AVX-512) and their exp, sin/cos, asin for hot loops.
 
 pub mod bessel;
 pub mod cylinder;
 pub mod half_angle;
+pub(crate) mod lanes;
 pub mod logistic;
 pub mod longitudinal;
 pub mod quadrature;

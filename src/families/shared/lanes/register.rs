@@ -53,7 +53,7 @@ macro_rules! register_operators {
         }
     };
 }
-pub(super) use register_operators;
+pub(crate) use register_operators;
 
 /// The [`Lane`](super::vector::Lane) items of a one-register type `$t` over `$reg` with `$n`
 /// lanes that are one intrinsic each: `LANES`, `Array`, `ZERO`, `ONE`, `splat`, `new` (an
@@ -129,4 +129,4 @@ macro_rules! register_lane_items {
         }
     };
 }
-pub(super) use register_lane_items;
+pub(crate) use register_lane_items;

@@ -108,7 +108,7 @@ fn two_to<V: Lane>(k: V) -> V {
 
 /// Largest integer ≤ x, for |x| < 2⁵¹.
 #[inline(always)]
-pub(super) fn floor<V: Lane>(x: V) -> V {
+pub(crate) fn floor<V: Lane>(x: V) -> V {
     let r = x.round();
     r - (r.cmp_gt(x) & V::ONE)
 }
@@ -117,7 +117,7 @@ pub(super) fn floor<V: Lane>(x: V) -> V {
 /// (truncation 6e-18 relative), scaled by `2^n` in two halves so that subnormal results come
 /// out as libm's. Below −746 it is 0, above 710 ∞; NaN stays NaN.
 #[inline(always)]
-pub(super) fn exp<V: Lane>(x: V) -> V {
+pub(crate) fn exp<V: Lane>(x: V) -> V {
     // Comparisons with NaN are false, so NaN passes the clamp.
     let x = x.cmp_lt(V::splat(-746.0)).blend(V::splat(-746.0), x);
     let x = x.cmp_gt(V::splat(710.0)).blend(V::splat(710.0), x);
@@ -131,7 +131,7 @@ pub(super) fn exp<V: Lane>(x: V) -> V {
 /// `(sin x, cos x)`: `x = n π/2 + r` with `|r| ≤ π/4`, both Taylor series (to r¹⁷ and r¹⁶:
 /// truncation below 1e-17), then the quadrant `n mod 4` swaps and signs them.
 #[inline(always)]
-pub(super) fn sin_cos<V: Lane>(x: V) -> (V, V) {
+pub(crate) fn sin_cos<V: Lane>(x: V) -> (V, V) {
     let n = (x * FRAC_2_PI).round();
     let r = ((x - n * PIO2_1) - n * PIO2_2) - n * PIO2_3;
     let z = r * r;
@@ -169,7 +169,7 @@ fn asin_halves<V: Lane>(a: V) -> (V, V, V, V) {
 /// 1 ulp, where `π/2 − 2p` directly was 2: the glint's φ_c depends on it, and a narrow glint
 /// amplifies φ_c's error by 1/w_c.
 #[inline(always)]
-pub(super) fn asin<V: Lane>(x: V) -> V {
+pub(crate) fn asin<V: Lane>(x: V) -> V {
     let (s, z, r, big) = asin_halves(x.abs());
     let w = s & V::splat(f64::from_bits(0xFFFF_FFFF_0000_0000));
     // At |x| = 1, s = w = 0: c is 0 (and NaN stays NaN through z).
@@ -181,7 +181,7 @@ pub(super) fn asin<V: Lane>(x: V) -> V {
 }
 
 #[inline(always)]
-pub(super) fn acos<V: Lane>(x: V) -> V {
+pub(crate) fn acos<V: Lane>(x: V) -> V {
     let (s, _, r, big) = asin_halves(x.abs());
     let p = s.mul_add(r, s);
     let negative = x.cmp_lt(V::ZERO);
@@ -193,7 +193,7 @@ pub(super) fn acos<V: Lane>(x: V) -> V {
 
 /// The functions above as methods of every [`Lane`] (`x.exp()`, `x.sin_cos()`, …), as the
 /// kernel's formulas write them.
-pub(super) trait LaneFunctions: Lane {
+pub(crate) trait LaneFunctions: Lane {
     #[inline(always)]
     fn exp(self) -> Self {
         exp(self)

@@ -18,10 +18,10 @@ use super::vector::Lane;
 
 /// Eight f64 lanes in an AVX-512 register (see the module's safety note).
 #[derive(Clone, Copy)]
-pub(super) struct F64x8(__m512d);
+pub(crate) struct F64x8(__m512d);
 
 /// Whether this CPU runs [`F64x8`].
-pub(super) fn available() -> bool {
+pub(crate) fn available() -> bool {
     std::arch::is_x86_feature_detected!("avx512f")
         && std::arch::is_x86_feature_detected!("avx512dq")
 }

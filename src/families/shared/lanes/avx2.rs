@@ -17,10 +17,10 @@ use super::vector::Lane;
 
 /// Four f64 lanes in an AVX register (see the module's safety note).
 #[derive(Clone, Copy)]
-pub(super) struct F64x4(__m256d);
+pub(crate) struct F64x4(__m256d);
 
 /// Whether this CPU runs [`F64x4`].
-pub(super) fn available() -> bool {
+pub(crate) fn available() -> bool {
     std::arch::is_x86_feature_detected!("avx2")
 }
 

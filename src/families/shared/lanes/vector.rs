@@ -12,10 +12,10 @@ use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 use wide::{f64x4, u64x4, CmpEq, CmpGe, CmpGt, CmpLe, CmpLt, CmpNe};
 
 /// The most lanes any [`Lane`] type has.
-pub(super) const MAX_LANES: usize = 8;
+pub(crate) const MAX_LANES: usize = 8;
 
 /// `LANES` f64 lanes; masks are vectors whose set lanes have every bit set.
-pub(super) trait Lane:
+pub(crate) trait Lane:
     Copy
     + Add<Output = Self>
     + Sub<Output = Self>
@@ -150,7 +150,7 @@ impl Lane for f64x4 {
 /// Two vectors side by side as one of twice the lanes: the same operations on each half, so
 /// the same bits as the halves alone; two independent chains of work for the CPU to overlap.
 #[derive(Clone, Copy)]
-pub(super) struct Pair<V>(V, V);
+pub(crate) struct Pair<V>(V, V);
 
 macro_rules! pair_binary {
     ($trait:ident, $method:ident) => {
