@@ -320,17 +320,7 @@ fn curves_of<F: Forward>(
 ) -> Curves {
     let nc = data.n_channels();
     let fwd = ev.forward;
-    let nan = CurveValues {
-        data: f64::NAN,
-        sigma: f64::NAN,
-        fit: f64::NAN,
-        fit_r: f64::NAN,
-        fit_tt: f64::NAN,
-        fit_trt: f64::NAN,
-        residual: f64::NAN,
-        weight: f64::NAN,
-    };
-    let mut values = vec![nan; samples.len() * nc];
+    let mut values = vec![CurveValues::MISSING; samples.len() * nc];
     // Per-lobe values a chunk of samples at a time (a family may run them on its lanes).
     values
         .par_chunks_mut(CURVE_CHUNK * nc.max(1))

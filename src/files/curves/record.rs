@@ -142,3 +142,17 @@ pub struct CurveValues {
     pub residual: f64,
     pub weight: f64,
 }
+
+impl CurveValues {
+    /// Every number missing (empty cells), until a row is filled in.
+    pub const MISSING: CurveValues = CurveValues {
+        data: f64::NAN,
+        sigma: f64::NAN,
+        fit: f64::NAN,
+        fit_r: f64::NAN,
+        fit_tt: f64::NAN,
+        fit_trt: f64::NAN,
+        residual: f64::NAN,
+        weight: f64::NAN,
+    };
+}
