@@ -280,16 +280,18 @@ fn lobe_sums<T: DualNum<f64>>(p: usize, phi: f64, x: f64, logistic: &Logistic<T>
         let (ua, ub) = (lobe.u(ga), lobe.u(gb));
         let (lo, hi) = (ua.min(ub), ua.max(ub));
         // The kinks u = π + 2πk inside the piece, in γ order.
-        let mut cuts = vec![(ga, ua)];
+        // A handful of kinks: the cuts, sorted in place, are one allocation.
+        let mut cuts = Vec::with_capacity(8);
+        cuts.push((ga, ua));
         let first = ((lo - PI) / TAU).ceil() as i64;
         let last = ((hi - PI) / TAU).floor() as i64;
-        let mut kinks: Vec<(f64, f64)> = (first..=last)
-            .map(|k| PI + TAU * k as f64)
-            .filter(|&t| t > lo && t < hi)
-            .map(|t| (lobe.solve(t, (ga, ua), (gb, ub)), t))
-            .collect();
-        kinks.sort_by(|l, r| l.0.total_cmp(&r.0));
-        cuts.extend(kinks);
+        cuts.extend(
+            (first..=last)
+                .map(|k| PI + TAU * k as f64)
+                .filter(|&t| t > lo && t < hi)
+                .map(|t| (lobe.solve(t, (ga, ua), (gb, ub)), t)),
+        );
+        cuts[1..].sort_by(|l, r| l.0.total_cmp(&r.0));
         cuts.push((gb, ub));
         for c in cuts.windows(2) {
             let ((a, u_a), (b, u_b)) = (c[0], c[1]);
@@ -311,7 +313,7 @@ fn lobe_sums<T: DualNum<f64>>(p: usize, phi: f64, x: f64, logistic: &Logistic<T>
     }
     let largest = segments.iter().map(|s| s.size).fold(0.0, f64::max);
     let rule = gauss_legendre();
-    let mut pieces = Vec::new();
+    let mut pieces = Vec::with_capacity(16);
     for seg in segments.iter().filter(|s| s.size >= NEGLIGIBLE * largest) {
         let (a, b, g0) = (seg.a, seg.b, seg.g0);
         // ℓ: the γ-distance over which u moves by s at the anchor, ½|u''|ℓ² + |u'|ℓ = s.
