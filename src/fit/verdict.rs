@@ -114,8 +114,7 @@ impl Assessment {
 pub fn assess<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Assessment {
     let failed = failures(x);
     let found = Arc::new(scan_slices(x.data));
-    let slices = &found.0;
-    let g = goodness_of_fit(x, slices);
+    let g = goodness_of_fit(x, &found.0);
     // Residuals at rounding level carry no noise for the tests to judge: the model is the data.
     let exact = x.worst_row_misfit.is_finite() && x.worst_row_misfit <= super::EXACT_MISFIT;
     let poor = if failed.is_empty() && !exact {
@@ -131,10 +130,10 @@ pub fn assess<F: Forward>(x: &Evidence<'_, '_, '_, F>) -> Assessment {
         exact: exact.then_some(x.worst_row_misfit),
         goodness_of_fit: g,
         poor_fit_suggestions: Vec::new(),
-        slices: found.clone(),
+        slices: found,
     };
     if a.is_poor_fit() {
-        a.poor_fit_suggestions = poor_fit_suggestions(x, &a.goodness_of_fit, slices);
+        a.poor_fit_suggestions = poor_fit_suggestions(x, &a.goodness_of_fit, &a.slices.0);
     }
     a
 }
