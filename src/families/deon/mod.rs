@@ -13,7 +13,8 @@ use std::sync::{Arc, OnceLock};
 
 use num_dual::DualNum;
 
-mod gradient;
+mod detector;
+mod held;
 
 use crate::families::shared::cylinder::{
     attenuations, exit_azimuth, fresnel, transmittance, ExitRefraction,
@@ -173,7 +174,8 @@ impl<T: DualNum<f64>> WrappedGaussian<T> {
 /// `out[c][k]` for the directions `a`, integrated as `how` says. Per node: one Fresnel, one
 /// `asin`, one detector per order (all channel independent), then per channel one `exp` for
 /// `T`. The residual adds `Σ_{3≤p≤P} A_p D(φ − Φ_p)` and the orders above P as
-/// `Σ_{p>P} A_p/(2π)`.
+/// `Σ_{p>P} A_p/(2π)`. Passes whose η carries a derivative take it here; every other pass
+/// takes [`held`]'s `f64` loop, the same sums with the detectors on the lanes.
 pub fn add_azimuthal<T: DualNum<f64>>(
     p: &TableParams<T>,
     a: &Angles,
@@ -260,8 +262,49 @@ pub fn scatter_with<T: DualNum<f64>>(
     how: &Integration,
     out: &mut [Terms<T>],
 ) {
-    add_azimuthal(p, a, on, how, out);
+    add_width_integral(p, a, &held_part(p, a, how), on, how, None, out);
     apply_longitudinal(p, a, on, out);
+}
+
+/// The width integral's θ_d part at `a` for the values of `p`.
+fn held_part<T: DualNum<f64>>(p: &TableParams<T>, a: &Angles, how: &Integration) -> held::Held {
+    let sigma_a: Vec<f64> = (0..p.n_channels).map(|c| p.get(SIGMA_A, c).re()).collect();
+    held::Held::new(p.get(ETA, 0).re(), &sigma_a, azimuthal_angles(a).0, how)
+}
+
+/// Adds the width integral of every term `on` at `a` to `out`, `held` its θ_d part. Where η
+/// carries no derivative (every value pass, and a gradient pass `pass` that does not seed it)
+/// in `f64` with derivatives by hand ([`held::add_azimuthal`]); else in the number type
+/// ([`add_azimuthal`]), its values then replaced by the `f64` loop's, so that every pass's
+/// values are the value pass's bits.
+fn add_width_integral<T: DualNum<f64>>(
+    p: &TableParams<T>,
+    a: &Angles,
+    held: &held::Held,
+    on: TermSet,
+    how: &Integration,
+    pass: Option<DualPass>,
+    out: &mut [Terms<T>],
+) {
+    let phi = azimuthal_angles(a).1;
+    let values_only = DualPass {
+        screening: false,
+        seeded: 0,
+    };
+    match pass {
+        _ if T::NDERIV == 0 => held::add_azimuthal(p, held, phi, on, values_only, out),
+        Some(pass) if !pass.seeds(ETA) => held::add_azimuthal(p, held, phi, on, pass, out),
+        _ => {
+            add_azimuthal(p, a, on, how, out);
+            let mut values = zero_terms::<f64>(p.n_channels);
+            held::add_azimuthal(&p.map(|x| x.re()), held, phi, on, values_only, &mut values);
+            for (o, v) in out.iter_mut().zip(&values) {
+                for (o, &v) in o.iter_mut().zip(v) {
+                    *o = o.clone() - o.re() + v;
+                }
+            }
+        }
+    }
 }
 
 /// Multiply each term `on` of `out` (its width integral) by its longitudinal factor `M_k / cos θ_i`.
@@ -420,7 +463,7 @@ impl TableFamily for DEon {
     }
 
     /// With η held a gradient pass's width integral is the value pass's f64 loop plus a few
-    /// products per node (`gradient`), and its values are the value pass's bits.
+    /// products per node (`held`), and its values are the value pass's bits.
     fn cheap_gradients(seeded: u32) -> bool {
         seeded & (1 << ETA) == 0
     }
@@ -438,7 +481,7 @@ impl TableFamily for DEon {
     }
 
     /// [`DEon::scatter_each`] or `screen_each` with the width integral's derivatives taken by
-    /// hand in `f64` where they can be ([`gradient::add_azimuthal`]).
+    /// hand in `f64` where they can be ([`held::add_azimuthal`]).
     fn dual_each<T: DualNum<f64>>(
         p: &TableParams<T>,
         angles: &[Angles],
@@ -474,27 +517,18 @@ fn scatter_shared<T: DualNum<f64>>(
     order.sort_unstable();
     let mut shared = zero_terms::<T>(p.n_channels);
     let mut terms = zero_terms::<T>(p.n_channels);
-    // With η held a gradient pass takes the integral by hand, its θ_d part (`gradient::Held`)
-    // built once per θ_d: the sort puts each θ_d's groups together.
-    let by_hand = pass.filter(|pass| T::NDERIV > 0 && !pass.seeds(ETA));
-    let sigma_a: Vec<f64> = (0..p.n_channels).map(|c| p.get(SIGMA_A, c).re()).collect();
-    let mut held: Option<(u64, gradient::Held)> = None;
+    // The integral's θ_d part (`held::Held`) is built once per θ_d: the sort puts each θ_d's
+    // groups together.
+    let mut held: Option<(u64, held::Held)> = None;
     for group in order.chunk_by(|x, y| x.0 == y.0) {
         clear_terms(&mut shared);
         let a = &angles[group[0].1];
-        match by_hand {
-            Some(pass) => {
-                let (theta_d, phi) = azimuthal_angles(a);
-                let key = group[0].0 .0;
-                if held.as_ref().is_none_or(|h| h.0 != key) {
-                    let eta = p.get(ETA, 0).re();
-                    held = Some((key, gradient::Held::new(eta, &sigma_a, theta_d, how)));
-                }
-                let (_, h) = held.as_ref().expect("just built");
-                gradient::add_azimuthal(p, h, phi, on, how, pass, &mut shared)
-            }
-            None => add_azimuthal(p, a, on, how, &mut shared),
+        let key = group[0].0 .0;
+        if held.as_ref().is_none_or(|h| h.0 != key) {
+            held = Some((key, held_part(p, a, how)));
         }
+        let (_, h) = held.as_ref().expect("just built");
+        add_width_integral(p, a, h, on, how, pass, &mut shared);
         for &(_, i) in group {
             terms.clone_from_slice(&shared);
             apply_longitudinal(p, &angles[i], on, &mut terms);
