@@ -92,7 +92,8 @@ unsafe fn weighted_avx2(
 }
 
 /// A rule whose length is not a multiple of the lanes ends in a vector padded with zeros,
-/// whose lanes are dropped; each lane's result depends on its own node only.
+/// whose lanes are dropped; each lane's result depends on its own node only. (No closures
+/// here: a closure is a function of its own, compiled without the caller's target features.)
 #[inline(always)]
 fn kernel<V: Lane>(
     det: Detector,
@@ -102,16 +103,49 @@ fn kernel<V: Lane>(
     value: &mut [f64],
     mut slope: Option<&mut [f64]>,
 ) {
-    for start in (0..exits.len()).step_by(V::LANES) {
-        let len = (exits.len() - start).min(V::LANES);
-        let lane = |v: &[f64], l: usize| if l < len { v[start + l] } else { 0.0 };
-        let x = wrap(V::splat(phi) - V::from_fn(|l| lane(exits, l)));
-        let w = V::from_fn(|l| lane(weights, l));
-        let (d, dd) = at(det, x, slope.is_some());
-        value[start..start + len].copy_from_slice(&(d * w).to_array().as_ref()[..len]);
-        if let Some(slope) = slope.as_deref_mut() {
-            slope[start..start + len].copy_from_slice(&(dd * w).to_array().as_ref()[..len]);
-        }
+    let n = V::LANES;
+    let full = exits.len() / n * n;
+    for start in (0..full).step_by(n) {
+        let (e, w) = (&exits[start..][..n], &weights[start..][..n]);
+        let (e, w) = (V::new(array(e)), V::new(array(w)));
+        nodes(det, phi, e, w, start, n, value, slope.as_deref_mut());
+    }
+    if full < exits.len() {
+        let mut e = V::Array::default();
+        let mut w = V::Array::default();
+        let len = exits.len() - full;
+        e.as_mut()[..len].copy_from_slice(&exits[full..]);
+        w.as_mut()[..len].copy_from_slice(&weights[full..]);
+        let (e, w) = (V::new(e), V::new(w));
+        nodes(det, phi, e, w, full, len, value, slope);
+    }
+}
+
+/// `V::Array` holding `v` (of `LANES` values).
+#[inline(always)]
+fn array<A: Default + AsMut<[f64]>>(v: &[f64]) -> A {
+    let mut a = A::default();
+    a.as_mut().copy_from_slice(v);
+    a
+}
+
+/// The first `len` nodes from `start`, with exit azimuths `e` and weights `w`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn nodes<V: Lane>(
+    det: Detector,
+    phi: f64,
+    e: V,
+    w: V,
+    start: usize,
+    len: usize,
+    value: &mut [f64],
+    slope: Option<&mut [f64]>,
+) {
+    let (d, dd) = at(det, wrap(V::splat(phi) - e), slope.is_some());
+    value[start..][..len].copy_from_slice(&(d * w).to_array().as_ref()[..len]);
+    if let Some(slope) = slope {
+        slope[start..][..len].copy_from_slice(&(dd * w).to_array().as_ref()[..len]);
     }
 }
 
@@ -144,8 +178,12 @@ fn at<V: Lane>(det: Detector, x: V, with_slope: bool) -> (V, V) {
     let central = x2 * h;
     let mut sum = (-central).exp();
     let mut moment = sum * x2;
+    // Image k of a lane is `x − 2πk·sign(x)`: k = 1 is the one across the nearer end of
+    // [−π, π], k = −1 the one across the farther end, which only a wide detector sees
+    // (4π²h ≥ 40 above the central exponent for β ≤ 40°). Both sides' lanes share a vector.
+    let toward = V::splat(TAU).copysign(x);
     for k in IMAGES {
-        let xk = x + TAU * k;
+        let xk = x - toward * k;
         let xk2 = xk * xk;
         let exponent = xk2 * h;
         let near = (exponent - central).cmp_lt(V::splat(NEGLIGIBLE_EXPONENT));

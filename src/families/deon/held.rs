@@ -7,6 +7,7 @@
 //! the value pass's bits. Everything of a node but the detector depends on θ_d alone; it is
 //! built once per θ_d ([`Held`]); the detectors run on the lanes ([`super::detector`]).
 
+use std::cell::Cell;
 use std::f64::consts::PI;
 
 use num_dual::DualNum;
@@ -38,15 +39,18 @@ pub(super) fn add_azimuthal<T: DualNum<f64>>(
     out: &mut [Terms<T>],
 ) {
     let beta_n = p.get(BETA_N, 0);
-    let mut n = vec![[Grad::default(); RESIDUAL + 1]; p.n_channels];
+    let mut integrals = held.integrals.take();
+    integrals.clear();
+    integrals.resize(p.n_channels, [Grad::default(); RESIDUAL + 1]);
+    let n = &mut integrals;
     // dx: a line's derivative parts in `T` (real part exactly 0), where the pass seeds it.
     let d_beta = (T::NDERIV > 0 && pass.seeds(BETA_N)).then(|| beta_n.clone() - beta_n.re());
     let wanted = Wanted {
         beta_n: d_beta.is_some(),
         sigma_a: T::NDERIV > 0 && pass.seeds(SIGMA_A),
     };
-    width_integral(held, beta_n.re(), phi, on, wanted, &mut n);
-    for (c, (o, n)) in out.iter_mut().zip(&n).enumerate() {
+    width_integral(held, beta_n.re(), phi, on, wanted, n);
+    for (c, (o, n)) in out.iter_mut().zip(n.iter()).enumerate() {
         let s = p.get(SIGMA_A, c);
         let d_sigma = (T::NDERIV > 0 && pass.seeds(SIGMA_A)).then(|| s.clone() - s.re());
         for k in (0..=RESIDUAL).filter(|&k| on.has(k)) {
@@ -60,6 +64,7 @@ pub(super) fn add_azimuthal<T: DualNum<f64>>(
             o[k] += v;
         }
     }
+    held.integrals.set(integrals);
 }
 
 /// The part of the width integral a pass holds fixed at one θ_d: per node the Fresnel value and
@@ -81,6 +86,10 @@ pub(super) struct Held {
     lines: Vec<f64>,
     orders: usize,
     n: usize,
+    /// Scratch of [`width_integral`] (the weighted detectors and their slopes) and of
+    /// [`add_azimuthal`] (each channel's integrals), kept between the pairs of one θ_d.
+    detectors: Cell<Vec<f64>>,
+    integrals: Cell<Vec<[Grad; RESIDUAL + 1]>>,
 }
 
 /// Line indices within a channel's lines of [`Held`].
@@ -103,6 +112,8 @@ impl Held {
             lines: Vec::new(),
             orders,
             n,
+            detectors: Cell::default(),
+            integrals: Cell::default(),
         };
         held.lines = vec![0.0; sigma_a.len() * held.lines_per_channel() * n];
         let mut node_lines = vec![0.0; held.lines_per_channel()];
@@ -195,8 +206,11 @@ fn width_integral(
     let highest = if on.has(RESIDUAL) { held.orders - 1 } else { 2 };
     let n = held.n;
     // Weighted detectors per order and node, order-major: values, then ∂/∂β_N.
-    let mut values = vec![0.0; (highest + 1) * n];
-    let mut slopes = vec![0.0; if with_slopes { values.len() } else { 0 }];
+    let mut detectors = held.detectors.take();
+    let len = (highest + 1) * n;
+    detectors.clear();
+    detectors.resize(if with_slopes { 2 * len } else { len }, 0.0);
+    let (values, slopes) = detectors.split_at_mut(len);
     for order in (0..=highest).filter(|&k| on.has(k.min(RESIDUAL))) {
         let at = order * n..(order + 1) * n;
         detector::weighted(
@@ -208,6 +222,7 @@ fn width_integral(
             with_slopes.then(|| &mut slopes[at]),
         );
     }
+    let (values, slopes) = (&*values, &*slopes);
     let d = |order: usize| &values[order * n..][..n];
     let dd = |order: usize| &slopes[order * n..][..n];
     // `(Σ A·D, Σ A·∂D/∂β, Σ ∂A/∂σ·D)` of one attenuation line pair and one order's detectors.
@@ -261,6 +276,7 @@ fn width_integral(
             o[RESIDUAL] = r;
         }
     }
+    held.detectors.set(detectors);
 }
 
 /// `Σ aᵢbᵢ` in eight running sums (which the compiler keeps in vector registers), added up at
