@@ -37,6 +37,15 @@ impl Detector {
     }
 }
 
+/// One order's nodes as the detector reads them: their exit azimuths `Φ_n` and weights.
+#[derive(Clone, Copy)]
+struct Nodes<'a> {
+    det: Detector,
+    phi: f64,
+    exits: &'a [f64],
+    weights: &'a [f64],
+}
+
 /// `value[n] = w_n·D(φ − Φ_n)` and `slope[n] = w_n·∂D/∂β` at every node `n`, where `exits`
 /// holds the nodes' exit azimuths `Φ_n` of one order and `weights` their weights; `slope` is
 /// left alone when `None`.
@@ -49,66 +58,57 @@ pub(super) fn weighted(
     slope: Option<&mut [f64]>,
 ) {
     assert!(exits.len() == weights.len() && value.len() == exits.len());
+    let nodes = Nodes {
+        det,
+        phi,
+        exits,
+        weights,
+    };
     #[cfg(target_arch = "x86_64")]
     {
         if avx512::available() {
             // SAFETY: the CPU has AVX-512F and AVX-512DQ.
-            return unsafe { weighted_avx512(det, phi, exits, weights, value, slope) };
+            return unsafe { weighted_avx512(nodes, value, slope) };
         }
         if avx2::available() {
             // SAFETY: the CPU has AVX2.
-            return unsafe { weighted_avx2(det, phi, exits, weights, value, slope) };
+            return unsafe { weighted_avx2(nodes, value, slope) };
         }
     }
-    kernel::<f64x4>(det, phi, exits, weights, value, slope)
+    kernel::<f64x4>(nodes, value, slope)
 }
 
 /// [`kernel`] compiled for AVX-512 (every helper is `#[inline(always)]`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,avx512f,avx512dq")]
-unsafe fn weighted_avx512(
-    det: Detector,
-    phi: f64,
-    exits: &[f64],
-    weights: &[f64],
-    value: &mut [f64],
-    slope: Option<&mut [f64]>,
-) {
-    kernel::<avx512::F64x8>(det, phi, exits, weights, value, slope)
+unsafe fn weighted_avx512(nodes: Nodes, value: &mut [f64], slope: Option<&mut [f64]>) {
+    kernel::<avx512::F64x8>(nodes, value, slope)
 }
 
 /// [`kernel`] on two AVX2 registers, compiled for AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn weighted_avx2(
-    det: Detector,
-    phi: f64,
-    exits: &[f64],
-    weights: &[f64],
-    value: &mut [f64],
-    slope: Option<&mut [f64]>,
-) {
-    kernel::<Pair<avx2::F64x4>>(det, phi, exits, weights, value, slope)
+unsafe fn weighted_avx2(nodes: Nodes, value: &mut [f64], slope: Option<&mut [f64]>) {
+    kernel::<Pair<avx2::F64x4>>(nodes, value, slope)
 }
 
 /// A rule whose length is not a multiple of the lanes ends in a vector padded with zeros,
 /// whose lanes are dropped; each lane's result depends on its own node only. (No closures
 /// here: a closure is a function of its own, compiled without the caller's target features.)
 #[inline(always)]
-fn kernel<V: Lane>(
-    det: Detector,
-    phi: f64,
-    exits: &[f64],
-    weights: &[f64],
-    value: &mut [f64],
-    mut slope: Option<&mut [f64]>,
-) {
+fn kernel<V: Lane>(nodes: Nodes, value: &mut [f64], mut slope: Option<&mut [f64]>) {
+    let Nodes {
+        det,
+        phi,
+        exits,
+        weights,
+    } = nodes;
     let n = V::LANES;
     let full = exits.len() / n * n;
     for start in (0..full).step_by(n) {
         let (e, w) = (&exits[start..][..n], &weights[start..][..n]);
         let (e, w) = (V::new(array(e)), V::new(array(w)));
-        nodes(det, phi, e, w, start, n, value, slope.as_deref_mut());
+        some_nodes(det, phi, e, w, start, n, value, slope.as_deref_mut());
     }
     if full < exits.len() {
         let mut e = V::Array::default();
@@ -117,7 +117,7 @@ fn kernel<V: Lane>(
         e.as_mut()[..len].copy_from_slice(&exits[full..]);
         w.as_mut()[..len].copy_from_slice(&weights[full..]);
         let (e, w) = (V::new(e), V::new(w));
-        nodes(det, phi, e, w, full, len, value, slope);
+        some_nodes(det, phi, e, w, full, len, value, slope);
     }
 }
 
@@ -132,7 +132,7 @@ fn array<A: Default + AsMut<[f64]>>(v: &[f64]) -> A {
 /// The first `len` nodes from `start`, with exit azimuths `e` and weights `w`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn nodes<V: Lane>(
+fn some_nodes<V: Lane>(
     det: Detector,
     phi: f64,
     e: V,
@@ -251,18 +251,20 @@ mod tests {
                     k(&mut v, &mut s);
                     runs.push((v, s));
                 };
-                run(&|v, s| kernel::<f64x4>(det, phi, &exits, &weights, v, Some(s)));
+                let nodes = Nodes {
+                    det,
+                    phi,
+                    exits: &exits,
+                    weights: &weights,
+                };
+                run(&|v, s| kernel::<f64x4>(nodes, v, Some(s)));
                 #[cfg(target_arch = "x86_64")]
                 {
                     if avx2::available() {
-                        run(&|v, s| unsafe {
-                            weighted_avx2(det, phi, &exits, &weights, v, Some(s))
-                        });
+                        run(&|v, s| unsafe { weighted_avx2(nodes, v, Some(s)) });
                     }
                     if avx512::available() {
-                        run(&|v, s| unsafe {
-                            weighted_avx512(det, phi, &exits, &weights, v, Some(s))
-                        });
+                        run(&|v, s| unsafe { weighted_avx512(nodes, v, Some(s)) });
                     }
                 }
                 for (v, s) in &runs {
