@@ -175,7 +175,8 @@ impl<T: DualNum<f64>> WrappedGaussian<T> {
 /// `asin`, one detector per order (all channel independent), then per channel one `exp` for
 /// `T`. The residual adds `Σ_{3≤p≤P} A_p D(φ − Φ_p)` and the orders above P as
 /// `Σ_{p>P} A_p/(2π)`. Passes whose η carries a derivative take it here; every other pass
-/// takes [`held`]'s `f64` loop, the same sums with the detectors on the lanes.
+/// takes [`held`]'s `f64` loop: the same rule, its detectors on the lanes and its node sums
+/// as dot products (within 1e-14 of this one).
 pub fn add_azimuthal<T: DualNum<f64>>(
     p: &TableParams<T>,
     a: &Angles,
