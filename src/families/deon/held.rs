@@ -84,6 +84,9 @@ pub(super) struct Held {
     /// `A_p`, `∂A_p/∂σ_a` of p = 3..=highest, then the geometric tail `A_P·TF/(1 − TF)·w/(2π)`
     /// and its ∂/∂σ_a (0 where TF = 1).
     lines: Vec<f64>,
+    /// Per channel the tail line's sum over the nodes and its ∂/∂σ_a: the part of the residual
+    /// that does not depend on φ.
+    tail_sums: Vec<(f64, f64)>,
     orders: usize,
     n: usize,
     /// Scratch of [`width_integral`] (the weighted detectors and their slopes) and of
@@ -110,6 +113,7 @@ impl Held {
             weights: how.rule.nodes.iter().map(|node| node.weight).collect(),
             fresnel: Vec::with_capacity(n),
             lines: Vec::new(),
+            tail_sums: Vec::new(),
             orders,
             n,
             detectors: Cell::default(),
@@ -134,6 +138,13 @@ impl Held {
                 }
             }
         }
+        let tail = CHAIN + 2 * (orders - RESIDUAL);
+        held.tail_sums = (0..sigma_a.len())
+            .map(|c| {
+                let sum = |line: usize| held.line(c, line).iter().sum::<f64>();
+                (sum(tail), sum(tail + 1))
+            })
+            .collect();
         held
     }
 
@@ -268,10 +279,10 @@ fn width_integral(
                 r.beta_n += t.beta_n;
                 r.sigma_a += t.sigma_a;
             }
-            let tail = CHAIN + 2 * (held.orders - RESIDUAL);
-            r.v += held.line(c, tail).iter().sum::<f64>();
+            let (tail, d_tail) = held.tail_sums[c];
+            r.v += tail;
             if wanted.sigma_a {
-                r.sigma_a += held.line(c, tail + 1).iter().sum::<f64>();
+                r.sigma_a += d_tail;
             }
             o[RESIDUAL] = r;
         }
