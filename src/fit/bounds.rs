@@ -32,6 +32,16 @@ impl Bound {
         }
     }
 
+    /// How much flatter the transform is at `u` than at its steepest: `max |dx/du| / |dx/du|`
+    /// (1 for the identity; infinite where it is flat, on the bound itself).
+    pub fn flatness(&self, u: f64) -> f64 {
+        let steepest = match *self {
+            Bound::Free | Bound::Lower(_) => 1.0,
+            Bound::Both(lo, hi) => (hi - lo) / 2.0,
+        };
+        steepest / self.derivative(u).abs()
+    }
+
     /// Internal `u` of a natural value (clamped into the bounds first).
     pub fn to_internal(&self, x: f64) -> f64 {
         match *self {
@@ -112,6 +122,26 @@ mod tests {
         assert!((b.to_internal_near(b.to_natural(u), u) - u).abs() < 1e-9);
         let u = std::f64::consts::PI - 0.4 - 2.0 * std::f64::consts::TAU;
         assert!((b.to_internal_near(b.to_natural(u), u) - u).abs() < 1e-9);
+    }
+
+    /// Flatness is 1 where the transform is steepest (everywhere for the identity, mid-range for
+    /// both bounds, far above a lower bound), grows as 1/|cos u| or √(u²+1)/|u| toward a bound
+    /// and is infinite on it.
+    #[test]
+    fn flatness_is_one_where_steepest_and_grows_onto_the_bound() {
+        use std::f64::consts::FRAC_PI_2;
+        let both = Bound::Both(5.0, 90.0);
+        assert_eq!(Bound::Free.flatness(-3.0), 1.0);
+        assert_eq!(both.flatness(0.0), 1.0);
+        assert!((Bound::Lower(0.0).flatness(1e8) - 1.0).abs() < 1e-12);
+        for d in [1e-1f64, 1e-3, 1e-6] {
+            let want = 1.0 / d.sin();
+            let got = both.flatness(-FRAC_PI_2 + d);
+            assert!((got / want - 1.0).abs() < 1e-9, "{d}: {got} vs {want}");
+            let want = (d * d + 1.0).sqrt() / d;
+            assert!((Bound::Lower(0.0).flatness(d) / want - 1.0).abs() < 1e-12);
+        }
+        assert!(Bound::Lower(0.0).flatness(0.0).is_infinite());
     }
 
     #[test]

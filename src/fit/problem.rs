@@ -111,6 +111,8 @@ impl<F: Forward> crate::lm::LeastSquares for LsqProblem<'_, '_, F> {
             .ev
             .linearize_internal(u.as_slice(), scale, self.cancel.as_deref())
             .ok_or_else(|| argmin::core::Error::msg("interrupted"))?;
-        Ok(lin.into_lm())
+        let mut lin = lin.into_lm();
+        lin.flatness = Some(self.ev.flatness(u.as_slice()));
+        Ok(lin)
     }
 }

@@ -22,9 +22,18 @@ impl LevenbergMarquardt {
             System::Dense { matrix, .. } => column_norms(matrix),
             System::Blocks(b) => b.column_norms(),
         };
+        // A column whose parameter sits where its transform is flat (on its bound) is scaled as
+        // if the transform were at its steepest: by its own norm, that coordinate's steps would
+        // be as many times larger than the others' as the transform is flatter, and every one
+        // rejected, so a run starting there (a profile's re-fit of a fit with a parameter on
+        // its bound) stopped where it started.
+        let col_norms = match &lin.flatness {
+            Some(f) => col_norms.zip_map(f, |c, f| if f > 1.0 { c * f } else { c }),
+            None => col_norms,
+        };
         let n = col_norms.len();
         if self.diag.len() != n {
-            self.diag = col_norms.map(|c| if c > 0.0 { c } else { 1.0 });
+            self.diag = col_norms.map(|c| if c > 0.0 && c.is_finite() { c } else { 1.0 });
         } else {
             self.diag.zip_apply(&col_norms, |d, c| *d = d.max(c));
         }

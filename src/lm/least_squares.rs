@@ -17,6 +17,11 @@ pub struct Linearized {
     pub system: System,
     /// Number of residuals `m` (sets the rounding-level singular-value cutoff).
     pub rows: usize,
+    /// Per column, how much flatter than its steepest the problem's parameter transform is at
+    /// this point (≥ 1), where a column's norm says less than it would elsewhere: a bounded
+    /// parameter sitting on its bound. The solver scales such a column as if the transform were
+    /// at its steepest. `None` (or 1): the column norms as they are.
+    pub flatness: Option<DVector<f64>>,
 }
 
 /// How a linearisation stores `(M, t)`.
@@ -88,6 +93,7 @@ where
         let matrix = self.jacobian(x)?;
         Ok(Linearized {
             rows: r.len(),
+            flatness: None,
             system: System::Dense {
                 matrix,
                 residuals: r,

@@ -217,3 +217,60 @@ fn other_families_options_are_refused() {
     ]));
     assert!(e.contains("beta_n_deg"), "{e}");
 }
+
+/// A fit with a free parameter on its bound profiles the others by re-fits that must move them:
+/// each 68% end must lie where a fit with that parameter fixed there is Δχ² = 1 above the
+/// optimum (in the fit's χ² unit, its reduced χ²). The data: a brown fibre traced by hairfit,
+/// which d'Eon fits poorly with β_N on its 5° bound. Before the solver scaled an on-bound
+/// coordinate as if its transform were at its steepest, every re-fit stopped at its start, and
+/// σ_a[2]'s ends sat at Δχ² ≈ 0.65–0.67 (the interval a fifth too narrow). Tolerance 0.05: a
+/// crossing is accepted within ~2% of Δχ² = 1, and both fits converge far tighter than that.
+#[test]
+fn profile_ends_with_a_parameter_on_its_bound_are_where_fixed_fits_put_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("traced.csv");
+    hairfit_ok(&[
+        "trace",
+        "--fiber",
+        p(&cli::shipped("fiber_brown.json")),
+        "--rig",
+        "azimuthal:incidences=15,30,45",
+        "--rays",
+        "200000",
+        "--output",
+        p(&data),
+    ]);
+    let fit_with = |out: &str, extra: &[&str]| -> FitJson {
+        let out = dir.path().join(out);
+        let mut args = vec!["fit", p(&data), "--model", "deon", "--no-progress"];
+        args.extend_from_slice(extra);
+        args.extend(["--out", p(&out)]);
+        hairfit_ok(&args);
+        FitJson::load(&out.join("fit.json")).unwrap()
+    };
+    let free = fit_with("free", &["--intervals", "profile"]);
+    let param = |name: &str| free.parameters.iter().find(|q| q.name == name).unwrap();
+    assert!(
+        (param("beta_n_deg").value.unwrap() - 5.0).abs() < 1e-6,
+        "the case needs β_N on its bound: {:?}",
+        param("beta_n_deg").value
+    );
+    let chi2 = |json: &FitJson| json.goodness_of_fit.chi2.unwrap();
+    let unit = free.residuals.reduced_chi2.unwrap();
+    for name in ["sigma_a[2]", "alpha_deg"] {
+        let interval = param(name).interval_68.clone().unwrap();
+        for (side, end) in [("lower", interval.lower), ("upper", interval.upper)] {
+            let fix = format!("{name}={:?}", end.unwrap());
+            let fixed = fit_with(
+                &format!("{name}_{side}"),
+                &["--intervals", "linear", "--fix", &fix],
+            );
+            let dchi2 = (chi2(&fixed) - chi2(&free)) / unit;
+            assert!(
+                (dchi2 - 1.0).abs() < 0.05,
+                "{name}'s 68% {side} end {}: a fit fixed there is Δχ² = {dchi2:.4} above the optimum",
+                end.unwrap()
+            );
+        }
+    }
+}

@@ -7,6 +7,12 @@ use super::forward::{FitParam, Forward, ParamSet};
 use super::memo::PassMemo;
 use super::FitData;
 use crate::fit::bounds::Bound;
+use nalgebra::DVector;
+
+/// A parameter whose transform's slope is under 1/this of its steepest sits on its bound: within
+/// 2.5e-7 of its range of it (both bounds) or 5e-7 above it (a lower bound only). Elsewhere the solver scales its column by
+/// its norm as usual, so fits away from their bounds run exactly as before.
+pub const ON_BOUND_FLATNESS: f64 = 1e3;
 use crate::fit::loss::Loss;
 use crate::geometry::Angles;
 
@@ -212,6 +218,24 @@ impl<'f, F: Forward> Evaluator<'f, F> {
             ScaleMode::Projected
         };
         (x, dxdu, mode)
+    }
+
+    /// Per solver coordinate, the flatness of its bound transform at `u` where the parameter sits
+    /// on its bound (the transform's slope under [`ON_BOUND_FLATNESS`]⁻¹ of its steepest), else
+    /// 1: the LM solver's scaling reads it ([`crate::lm::Linearized::flatness`]). Explicit
+    /// scales are never bounded.
+    pub fn flatness(&self, u: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(
+            u.len(),
+            u.iter().enumerate().map(|(j, &v)| {
+                let f = self.bounds.get(j).map_or(1.0, |b| b.flatness(v));
+                if f > ON_BOUND_FLATNESS {
+                    f
+                } else {
+                    1.0
+                }
+            }),
+        )
     }
 
     /// Evaluate at solver parameters `u` (transforms applied; scale per `explicit_scale`).

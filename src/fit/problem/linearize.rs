@@ -131,7 +131,11 @@ impl Linearization {
         } else {
             System::Blocks(self.system)
         };
-        Linearized { system, rows }
+        Linearized {
+            system,
+            rows,
+            flatness: None,
+        }
     }
 }
 
