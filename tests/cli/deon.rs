@@ -258,7 +258,7 @@ fn profile_ends_with_a_parameter_on_its_bound_are_where_fixed_fits_put_them() {
     let chi2 = |json: &FitJson| json.goodness_of_fit.chi2.unwrap();
     let unit = free.residuals.reduced_chi2.unwrap();
     for name in ["sigma_a[2]", "alpha_deg"] {
-        let interval = param(name).interval_68.clone().unwrap();
+        let interval = param(name).interval_68.unwrap();
         for (side, end) in [("lower", interval.lower), ("upper", interval.upper)] {
             let fix = format!("{name}={:?}", end.unwrap());
             let fixed = fit_with(
