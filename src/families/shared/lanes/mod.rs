@@ -12,4 +12,5 @@ pub(crate) mod avx512;
 pub(crate) mod functions;
 #[cfg(target_arch = "x86_64")]
 mod register;
+pub(crate) mod slices;
 pub(crate) mod vector;
