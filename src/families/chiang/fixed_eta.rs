@@ -9,30 +9,21 @@
 //! through every node (the generic path, still used with `--free eta`) do several times the
 //! arithmetic for the same numbers. The tests check this path against the dual-number Jacobian.
 
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{FRAC_PI_2, PI};
 
 use num_dual::DualSVec64;
 
+use super::logistics::{weighted_logistics, LogisticShape};
 use super::longitudinal::{base_variance, longitudinal};
 use super::{
     combine, ChiangEffects, ChiangModel, ChiangParamName, ChiangParams, WidthScratch, WidthSet,
 };
 use crate::families::shared::cylinder::{attenuations, exit_azimuth, fresnel, ExitRefraction};
+use crate::families::shared::lanes::slices;
 use crate::families::shared::logistic::{logistic_scale, trimmed_logistic_norm};
 use crate::families::shared::quadrature::WidthNode;
 use crate::geometry::angles::wrap;
 use crate::geometry::Angles;
-
-/// `x` wrapped to [−π, π] by subtracting the nearest whole turn, not `rem_euclid` (whose fmod
-/// was a tenth of a fit's time): the arguments are within a few turns of 0, where this loses
-/// nothing. The nearest turn is `floor(x/2π + ½)` by truncating a shifted positive number (one
-/// instruction; `round` is a library call on the baseline x86-64 target).
-#[inline]
-fn wrap_near(x: f64) -> f64 {
-    const SHIFT: f64 = 64.0;
-    let turns = ((x * (1.0 / TAU) + (0.5 + SHIFT)) as i64) as f64 - SHIFT;
-    x - TAU * turns
-}
 
 /// `ds/dβ_n` of [`logistic_scale`].
 fn logistic_scale_slope(beta_n: f64) -> f64 {
@@ -48,7 +39,8 @@ struct ExitColumn {
     key: (u64, u64),
     weight: Vec<f64>,
     fresnel: Vec<f64>,
-    exit: Vec<[f64; 3]>,
+    /// The exit azimuths `Φ_p` of every node, by lobe p.
+    exit: [Vec<f64>; 3],
     /// `[A_1, A_2]` of node k, channel c at `k·n + c`.
     atten: Vec<[f64; 2]>,
     /// `[∂A_1/∂σ_a, ∂A_2/∂σ_a]`, same layout.
@@ -80,35 +72,48 @@ impl ExitColumn {
             key,
             weight: Vec::with_capacity(nodes),
             fresnel: Vec::with_capacity(nodes),
-            exit: Vec::with_capacity(nodes),
+            exit: std::array::from_fn(|_| Vec::with_capacity(nodes)),
             atten: Vec::with_capacity(if transmitted { nodes * n } else { 0 }),
             d_atten: Vec::with_capacity(if transmitted { nodes * n } else { 0 }),
             residual: vec![0.0; n],
             d_residual: vec![0.0; n],
         };
-        for node in &rule.lobes[..nodes] {
-            let (f, sin_gt) = exit.fresnel_and_sin_gamma_t(p.eta, node);
-            let gamma_t = sin_gt.asin();
+        let rule_nodes = &rule.lobes[..nodes];
+        let mut sin_gt = Vec::with_capacity(nodes);
+        for node in rule_nodes {
+            let (f, s) = exit.fresnel_and_sin_gamma_t(p.eta, node);
             col.weight.push(node.weight);
             col.fresnel.push(f);
-            col.exit.push(std::array::from_fn(|q| {
-                exit_azimuth(q, node.gamma, &gamma_t)
-            }));
-            if !transmitted {
-                continue;
+            sin_gt.push(s);
+        }
+        // γ_t and the transmittances on the lanes, every node at once.
+        let mut gamma_t = vec![0.0; nodes];
+        slices::asin(&sin_gt, &mut gamma_t);
+        for (node, gt) in rule_nodes.iter().zip(&gamma_t) {
+            for (q, exit) in col.exit.iter_mut().enumerate() {
+                exit.push(exit_azimuth(q, node.gamma, gt));
             }
-            let chord = exit.chord(sin_gt);
-            for c in 0..n {
-                let t = (-(p.sigma_a[c] * chord)).exp();
+        }
+        if !transmitted {
+            return col;
+        }
+        let chord: Vec<f64> = sin_gt.iter().map(|&s| exit.chord(s)).collect();
+        let mut t = vec![0.0; nodes];
+        col.atten.resize(nodes * n, [0.0; 2]);
+        col.d_atten.resize(nodes * n, [0.0; 2]);
+        for c in 0..n {
+            slices::exp_scaled(-p.sigma_a[c], &chord, &mut t);
+            for k in 0..nodes {
+                let (f, t, chord) = (col.fresnel[k], t[k], chord[k]);
                 // A₁ = (1−F)²T, A₂ = A₁TF as `attenuations`; A₃ (a division) only when used here.
                 let a1 = (1.0 - f) * (1.0 - f) * t;
                 let a2 = a1 * (t * f);
-                col.atten.push([a1, a2]);
-                col.d_atten.push([-chord * a1, -2.0 * chord * a2]);
+                col.atten[k * n + c] = [a1, a2];
+                col.d_atten[k * n + c] = [-chord * a1, -2.0 * chord * a2];
                 if residual {
                     let (a3, d3) = residual_term(t, f, chord);
-                    col.residual[c] += a3 * node.weight;
-                    col.d_residual[c] += d3 * node.weight;
+                    col.residual[c] += a3 * col.weight[k];
+                    col.d_residual[c] += d3 * col.weight[k];
                 }
             }
         }
@@ -121,11 +126,18 @@ impl ExitColumn {
         let n = p.sigma_a.len();
         let exit = ExitGeometry::new(p.eta, theta_r);
         let (mut value, mut slope) = (vec![0.0; n], vec![0.0; n]);
-        for node in nodes {
-            let (f, sin_gt) = exit.fresnel_and_sin_gamma_t(p.eta, node);
-            let chord = exit.chord(sin_gt);
-            for ((sigma, v), d) in p.sigma_a.iter().zip(&mut value).zip(&mut slope) {
-                let (a3, d3) = residual_term((-(sigma * chord)).exp(), f, chord);
+        let (fresnel, chord): (Vec<f64>, Vec<f64>) = nodes
+            .iter()
+            .map(|node| {
+                let (f, sin_gt) = exit.fresnel_and_sin_gamma_t(p.eta, node);
+                (f, exit.chord(sin_gt))
+            })
+            .unzip();
+        let mut t = vec![0.0; nodes.len()];
+        for ((sigma, v), d) in p.sigma_a.iter().zip(&mut value).zip(&mut slope) {
+            slices::exp_scaled(-sigma, &chord, &mut t);
+            for (k, node) in nodes.iter().enumerate() {
+                let (a3, d3) = residual_term(t[k], fresnel[k], chord[k]);
                 *v += a3 * node.weight;
                 *d += d3 * node.weight;
             }
@@ -189,65 +201,41 @@ struct LobeTable {
     d_beta_n: Vec<[f64; 3]>,
 }
 
-/// The logistic's scale and normalisation at β_n, with what their derivatives need.
-struct Logistic {
-    inv_s: f64,
-    norm: f64,
-    /// `∂ ln norm/∂s = (2t/sinh 2t − 1)/s`, `t = π/(2s)`.
-    d_ln_norm: f64,
-    /// `∂s/∂β_n`.
-    ds: f64,
+/// The logistic's scale and normalisation at β_n, with what their derivatives need
+/// (`∂ ln norm/∂s = (2t/sinh 2t − 1)/s`, `t = π/(2s)`).
+fn logistic_shape(beta_n: f64) -> LogisticShape {
+    let s = logistic_scale(&beta_n);
+    let t = FRAC_PI_2 / s;
+    // 2t/sinh 2t → 0 for small s (sinh overflows to ∞ harmlessly), → 1 for large s.
+    let ratio = if t < 1e-8 {
+        1.0
+    } else {
+        2.0 * t / (2.0 * t).sinh()
+    };
+    LogisticShape {
+        inv_s: s.recip(),
+        norm: trimmed_logistic_norm(&s),
+        d_ln_norm: (ratio - 1.0) / s,
+        ds: logistic_scale_slope(beta_n),
+    }
 }
 
-impl Logistic {
-    fn new(beta_n: f64) -> Self {
-        let s = logistic_scale(&beta_n);
-        let t = FRAC_PI_2 / s;
-        // 2t/sinh 2t → 0 for small s (sinh overflows to ∞ harmlessly), → 1 for large s.
-        let ratio = if t < 1e-8 {
-            1.0
-        } else {
-            2.0 * t / (2.0 * t).sinh()
-        };
-        Logistic {
-            inv_s: s.recip(),
-            norm: trimmed_logistic_norm(&s),
-            d_ln_norm: (ratio - 1.0) / s,
-            ds: logistic_scale_slope(beta_n),
-        }
-    }
-
-    /// `ℓ(x)` for `x` wrapped to [−π, π], by [`Logistic::value_and_slope`]'s operations (values
-    /// with and without derivatives agree bit for bit).
-    #[inline]
-    fn value(&self, x: f64) -> f64 {
-        let u = x.abs() * self.inv_s;
-        let e = (-u).exp();
-        let inv_d = (e + 1.0).recip();
-        e * self.norm * inv_d * inv_d
-    }
-
-    /// `ℓ(x)` and `∂ℓ/∂β_n` for `x` wrapped to [−π, π]:
-    /// `∂ℓ/∂s = ℓ·(∂ ln norm/∂s + u·tanh(u/2)/s)` with `u = |x|/s`.
-    #[inline]
-    fn value_and_slope(&self, x: f64) -> (f64, f64) {
-        // trimmed_logistic's formula, keeping e^{−u} for the slope (one division).
-        let u = x.abs() * self.inv_s;
-        let e = (-u).exp();
-        let inv_d = (e + 1.0).recip();
-        let l = e * self.norm * inv_d * inv_d;
-        let slope = l * (self.d_ln_norm + u * (1.0 - e) * inv_d * self.inv_s) * self.ds;
-        (l, slope)
-    }
+/// Per lobe, the weighted logistic of every node and its β_n-derivative
+/// ([`super::logistics::weighted_logistics`]), reused across exit directions.
+#[derive(Default)]
+struct LogisticScratch {
+    value: [Vec<f64>; 3],
+    slope: [Vec<f64>; 3],
 }
 
 fn lobe_table(
     col: &ExitColumn,
     effects: &ChiangEffects,
-    logistic: &Logistic,
+    logistic: LogisticShape,
     n: usize,
     phi: f64,
     want_slopes: bool,
+    scratch: &mut LogisticScratch,
 ) -> LobeTable {
     let mut t = LobeTable {
         lobes: vec![[0.0; 3]; n],
@@ -256,24 +244,31 @@ fn lobe_table(
     };
     let on = [effects.r, effects.tt, effects.trt];
     let transmitted = !col.atten.is_empty();
-    let mut lobe = [0.0; 3];
-    let mut d_lobe = [0.0; 3];
-    for (k, &w) in col.weight.iter().enumerate() {
-        for q in 0..3 {
-            if on[q] {
-                let x = wrap_near(-col.exit[k][q] - phi);
-                let (l, dl) = if want_slopes {
-                    logistic.value_and_slope(x)
-                } else {
-                    (logistic.value(x), 0.0)
-                };
-                lobe[q] = l * w;
-                d_lobe[q] = dl * w;
-            }
+    let nodes = col.weight.len();
+    let lobes = on.iter().zip(&col.exit);
+    for ((value, slope), (&lobe_on, exit)) in
+        scratch.value.iter_mut().zip(&mut scratch.slope).zip(lobes)
+    {
+        value.clear();
+        slope.clear();
+        value.resize(if lobe_on { nodes } else { 0 }, 0.0);
+        slope.resize(if lobe_on && want_slopes { nodes } else { 0 }, 0.0);
+        if lobe_on {
+            weighted_logistics(
+                logistic,
+                phi,
+                exit,
+                &col.weight,
+                value,
+                want_slopes.then_some(&mut slope[..]),
+            );
         }
+    }
+    let (lv, ls) = (&scratch.value, &scratch.slope);
+    let slope_at = |q: usize, k: usize| if want_slopes { ls[q][k] } else { 0.0 };
+    for (k, &f) in col.fresnel.iter().enumerate() {
         if effects.r {
-            let f = col.fresnel[k];
-            let (r, dr) = (f * lobe[0], f * d_lobe[0]);
+            let (r, dr) = (f * lv[0][k], f * slope_at(0, k));
             for c in 0..n {
                 t.lobes[c][0] += r;
                 t.d_beta_n[c][0] += dr;
@@ -287,9 +282,9 @@ fn lobe_table(
             let da = col.d_atten[k * n + c];
             for q in 1..3 {
                 if on[q] {
-                    t.lobes[c][q] += a[q - 1] * lobe[q];
-                    t.d_sigma[c][q] += da[q - 1] * lobe[q];
-                    t.d_beta_n[c][q] += a[q - 1] * d_lobe[q];
+                    t.lobes[c][q] += a[q - 1] * lv[q][k];
+                    t.d_sigma[c][q] += da[q - 1] * lv[q][k];
+                    t.d_beta_n[c][q] += a[q - 1] * slope_at(q, k);
                 }
             }
         }
@@ -324,7 +319,7 @@ pub fn batch(
     }
     let effects = &model.effects;
     let want_slopes = grad.is_some();
-    let logistic = Logistic::new(params.beta_n);
+    let logistic = logistic_shape(params.beta_n);
     // Samples by exit direction (θ_r, |φ|) — θ_r first, so one column serves a run of keys.
     let key = |a: &Angles| (a.theta_r, wrap(a.phi_r - a.phi_i).abs());
     let mut order: Vec<usize> = (0..angles.len()).collect();
@@ -345,6 +340,7 @@ pub fn batch(
     // A composite rule's `Ā₃` per θ_r: (θ_r bits, [Ā₃, ∂Ā₃/∂σ_a] per channel).
     let mut residual: Option<(u64, [Vec<f64>; 2])> = None;
     let mut table: Option<((u64, u64), LobeTable)> = None;
+    let mut logistics = LogisticScratch::default();
     for &i in &order {
         let a = &angles[i];
         let (theta_r, phi) = key(a);
@@ -371,7 +367,7 @@ pub fn batch(
         let col = column.as_ref().expect("set above");
         let bits = (theta_r.to_bits(), phi.to_bits());
         if table.as_ref().is_none_or(|(k, _)| *k != bits) {
-            let t = lobe_table(col, effects, &logistic, n, phi, want_slopes);
+            let t = lobe_table(col, effects, logistic, n, phi, want_slopes, &mut logistics);
             table = Some((bits, t));
         }
         let t = &table.as_ref().expect("set above").1;
@@ -448,17 +444,10 @@ mod tests {
     /// Values agree with the dual-free batch to rounding, derivatives with the dual-number
     /// Jacobian to 1e-12 relative (the same quantities, summed in the same order; only the
     /// derivative formulas differ in their rounding), for every term switch and β_n from the
-    /// narrow-peak to the wide end.
-    #[test]
-    fn wrap_near_takes_the_nearest_turn() {
-        for x in [0.0, 3.0, -3.0, 3.2, -3.2, 7.0, -7.0, 20.0, -20.0, 1e-300] {
-            let w = wrap_near(x);
-            assert!(w.abs() <= PI + 1e-12, "{x} → {w}");
-            let turns = (x - w) / TAU;
-            assert!((turns - turns.round()).abs() < 1e-12, "{x} → {w}");
-        }
-    }
-
+    /// narrow-peak to the wide end. This path's `asin` (γ_t) and `exp` are the lanes' (within
+    /// 1 ulp of libm), so its exit azimuths differ by a few ulp (~1e-15 rad), and a logistic of
+    /// width s moves by that over s: values agree to max(1e-14, 2e-15/s) relative (1.2e-13 at
+    /// β_n = 0.05).
     #[test]
     fn matches_the_dual_number_jacobian() {
         let free = [
@@ -486,9 +475,11 @@ mod tests {
                 let mut got = vec![0.0; want.len()];
                 let mut grad = vec![0.0; want.len() * free.len()];
                 batch(&p, &model, &a, &free, &mut got, Some(&mut grad));
+                let s = crate::families::shared::logistic::logistic_scale(&beta_n);
+                let tolerance = (2e-15 / s).max(1e-14);
                 for k in 0..want.len() {
                     assert!(
-                        (got[k] - plain[k]).abs() <= 1e-14 * plain[k].abs(),
+                        (got[k] - plain[k]).abs() <= tolerance * plain[k].abs(),
                         "{terms} β_n {beta_n} row {k}: {} vs {}",
                         got[k],
                         plain[k]

@@ -42,6 +42,7 @@ pub mod file;
 pub mod fit;
 pub mod fixed_eta;
 pub mod jacobian;
+mod logistics;
 pub mod longitudinal;
 pub mod variant;
 pub mod width;
