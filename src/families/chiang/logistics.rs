@@ -6,14 +6,9 @@
 
 use std::f64::consts::TAU;
 
-use wide::f64x4;
-
 use crate::families::shared::lanes::functions::LaneFunctions;
+use crate::families::shared::lanes::slices::dispatch;
 use crate::families::shared::lanes::vector::Lane;
-#[cfg(target_arch = "x86_64")]
-use crate::families::shared::lanes::vector::Pair;
-#[cfg(target_arch = "x86_64")]
-use crate::families::shared::lanes::{avx2, avx512};
 
 /// The trimmed logistic at one β_n: `ℓ(x) = norm·e/(1 + e)²`, `e = exp(−|x|/s)`, and what its
 /// β_n-derivative needs, `∂ℓ/∂β_n = ℓ·(∂ ln norm/∂s + u·tanh(u/2)/s)·∂s/∂β_n`, `u = |x|/s`.
@@ -27,60 +22,21 @@ pub(super) struct LogisticShape {
     pub ds: f64,
 }
 
-/// `value[k] = w_k·ℓ(−Φ_k − φ)` for every node `k` (`exit` the nodes' exit azimuths `Φ_k`,
-/// `weight` their weights, `value` as long), and with `slope` its β_n-derivative likewise. The
-/// values do not depend on whether slopes are asked for.
-pub(super) fn weighted_logistics(
-    shape: LogisticShape,
-    phi: f64,
-    exit: &[f64],
-    weight: &[f64],
-    value: &mut [f64],
-    slope: Option<&mut [f64]>,
-) {
-    assert!(exit.len() == weight.len() && value.len() == exit.len());
-    assert!(slope.as_ref().is_none_or(|s| s.len() == exit.len()));
-    #[cfg(target_arch = "x86_64")]
-    {
-        if avx512::available() {
-            // SAFETY: the CPU has AVX-512F and AVX-512DQ.
-            return unsafe { logistics_avx512(shape, phi, exit, weight, value, slope) };
-        }
-        if avx2::available() {
-            // SAFETY: the CPU has AVX2.
-            return unsafe { logistics_avx2(shape, phi, exit, weight, value, slope) };
-        }
-    }
-    logistics::<f64x4>(shape, phi, exit, weight, value, slope)
-}
-
-/// [`logistics`] compiled for AVX-512 (every helper is `#[inline(always)]`).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,avx512f,avx512dq")]
-unsafe fn logistics_avx512(
-    shape: LogisticShape,
-    phi: f64,
-    exit: &[f64],
-    weight: &[f64],
-    value: &mut [f64],
-    slope: Option<&mut [f64]>,
-) {
-    logistics::<avx512::F64x8>(shape, phi, exit, weight, value, slope)
-}
-
-/// [`logistics`] on two AVX2 registers, compiled for AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn logistics_avx2(
-    shape: LogisticShape,
-    phi: f64,
-    exit: &[f64],
-    weight: &[f64],
-    value: &mut [f64],
-    slope: Option<&mut [f64]>,
-) {
-    logistics::<Pair<avx2::F64x4>>(shape, phi, exit, weight, value, slope)
-}
+dispatch!(
+    /// `value[k] = w_k·ℓ(−Φ_k − φ)` for every node `k` (`exit` the nodes' exit azimuths `Φ_k`,
+    /// `weight` their weights, `value` as long), and with `slope` its β_n-derivative likewise.
+    /// The values do not depend on whether slopes are asked for.
+    pub(super) weighted_logistics,
+    logistics,
+    (
+        shape: LogisticShape,
+        phi: f64,
+        exit: &[f64],
+        weight: &[f64],
+        value: &mut [f64],
+        slope: Option<&mut [f64]>
+    )
+);
 
 #[inline(always)]
 fn logistics<V: Lane>(
@@ -91,6 +47,8 @@ fn logistics<V: Lane>(
     value: &mut [f64],
     mut slope: Option<&mut [f64]>,
 ) {
+    assert!(exit.len() == weight.len() && value.len() == exit.len());
+    assert!(slope.as_ref().is_none_or(|s| s.len() == exit.len()));
     let lanes = V::LANES;
     let mut start = 0;
     while start < exit.len() {
@@ -123,7 +81,10 @@ fn wrap<V: Lane>(x: V) -> V {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(target_arch = "x86_64")]
+    use crate::families::shared::lanes::{avx2, avx512, vector::Pair};
     use std::f64::consts::PI;
+    use wide::f64x4;
 
     /// The scalar formula, with libm's `exp`.
     fn scalar(shape: LogisticShape, x: f64) -> (f64, f64) {

@@ -3,22 +3,19 @@
 //! `sin/cos` of every element, on the widest register this CPU has. Every register gives the
 //! same bits (the functions are written once over [`Lane`]).
 
-use wide::f64x4;
-
 use super::functions::LaneFunctions;
 use super::vector::Lane;
-#[cfg(target_arch = "x86_64")]
-use super::vector::Pair;
-#[cfg(target_arch = "x86_64")]
-use super::{avx2, avx512};
 
-/// Defines `$name(args…)` dispatching to `$kernel::<V>` compiled for AVX-512, AVX2 or `wide`.
+/// Defines `$name(args…)` dispatching to `$kernel::<V>` compiled for AVX-512, AVX2 or `wide`
+/// (the kernel generic over [`Lane`], `#[inline(always)]`, so its lane operations are single
+/// instructions in each copy). Used where it is defined, by the families' kernels too.
 macro_rules! dispatch {
-    ($(#[$doc:meta])* $name:ident, $kernel:ident, ($($arg:ident: $ty:ty),*)) => {
+    ($(#[$doc:meta])* $vis:vis $name:ident, $kernel:ident, ($($arg:ident: $ty:ty),*)) => {
         $(#[$doc])*
-        pub(crate) fn $name($($arg: $ty),*) {
+        $vis fn $name($($arg: $ty),*) {
             #[cfg(target_arch = "x86_64")]
             {
+                use $crate::families::shared::lanes::{avx2, avx512, vector::Pair};
                 #[target_feature(enable = "avx2,avx512f,avx512dq")]
                 unsafe fn on_avx512($($arg: $ty),*) {
                     $kernel::<avx512::F64x8>($($arg),*)
@@ -36,26 +33,27 @@ macro_rules! dispatch {
                     return unsafe { on_avx2($($arg),*) };
                 }
             }
-            $kernel::<f64x4>($($arg),*)
+            $kernel::<wide::f64x4>($($arg),*)
         }
     };
 }
+pub(crate) use dispatch;
 
 dispatch!(
     /// `out[k] = exp(a·x[k])`.
-    exp_scaled,
+    pub(crate) exp_scaled,
     exp_scaled_on,
     (a: f64, x: &[f64], out: &mut [f64])
 );
 dispatch!(
     /// `out[k] = asin(x[k])`.
-    asin,
+    pub(crate) asin,
     asin_on,
     (x: &[f64], out: &mut [f64])
 );
 dispatch!(
     /// `sin[k], cos[k] = sin x[k], cos x[k]`.
-    sin_cos,
+    pub(crate) sin_cos,
     sin_cos_on,
     (x: &[f64], sin: &mut [f64], cos: &mut [f64])
 );
@@ -104,6 +102,7 @@ fn sin_cos_on<V: Lane>(x: &[f64], sin: &mut [f64], cos: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use wide::f64x4;
 
     /// Each slice function equals its lane function element by element on the portable
     /// register (bit for bit, partial registers included): the dispatch and the padding lose
